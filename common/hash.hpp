@@ -1,0 +1,48 @@
+// Small deterministic 64-bit hashing used for scene fingerprints and content hashes.
+// Not cryptographic; stable across processes and builds (no std::hash).
+#pragma once
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <string_view>
+
+namespace occ {
+
+inline uint64_t mix64(uint64_t x) {  // splitmix64 finaliser
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ULL;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebULL;
+  x ^= x >> 31;
+  return x;
+}
+
+class Hasher {
+ public:
+  explicit Hasher(uint64_t seed = 0x6f63637377697463ULL) : h_(seed) {}
+  void u64(uint64_t v) { h_ = mix64(h_ ^ (v + 0x9e3779b97f4a7c15ULL + (h_ << 6) + (h_ >> 2))); }
+  void u32(uint32_t v) { u64(v); }
+  void f64(double v) { u64(std::bit_cast<uint64_t>(v == 0.0 ? 0.0 : v)); }
+  void f32(float v) { u64(std::bit_cast<uint32_t>(v == 0.0f ? 0.0f : v)); }
+  void bytes(const void* data, size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    u64(n);
+    while (n >= 8) {
+      uint64_t w;
+      std::memcpy(&w, p, 8);
+      u64(w);
+      p += 8;
+      n -= 8;
+    }
+    uint64_t tail = 0;
+    std::memcpy(&tail, p, n);
+    u64(tail);
+  }
+  void str(std::string_view s) { bytes(s.data(), s.size()); }
+  uint64_t value() const { return mix64(h_); }
+
+ private:
+  uint64_t h_;
+};
+
+}  // namespace occ

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs everything occswitch needs from Debian packages. Idempotent: only missing
+# packages are installed, so a second run costs one dpkg query.
+set -euo pipefail
+
+PKGS=(
+  build-essential cmake pkg-config
+  libegl-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev   # headless GL: EGL + OSMesa (Mesa llvmpipe)
+  libglm-dev                                               # vector math
+  libboost-dev libboost-system-dev                         # Boost.Asio transport
+  libtinygltf-dev nlohmann-json3-dev libstb-dev            # glTF 2.0 loading (+ PNG via stb)
+  libmeshoptimizer-dev                                     # simplifier for LOD/HLOD
+  libgtest-dev libgmock-dev                                # tests
+  gnuplot-nox                                              # plots in benchmarks
+  iproute2 python3                                         # netlab / scripts
+)
+
+missing=()
+for p in "${PKGS[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+
+echo "setup: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "setup: done"
