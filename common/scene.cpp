@@ -1,0 +1,120 @@
+#include "common/scene.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "common/hash.hpp"
+
+namespace occ {
+
+Aabb Mesh::box() const {
+  Aabb b;
+  for (uint32_t i : indices) b.grow(glm::dvec3(positions[i]));
+  return b;
+}
+
+Aabb Scene::bounds() const {
+  std::vector<Aabb> mesh_boxes(meshes.size());
+  for (size_t m = 0; m < meshes.size(); ++m) mesh_boxes[m] = meshes[m].box();
+  Aabb b;
+  for (const Object& o : objects) b.grow(mesh_boxes[o.mesh].transformed(o.transform));
+  return b;
+}
+
+uint64_t Scene::triangle_count() const {
+  uint64_t n = 0;
+  for (const Object& o : objects) n += meshes[o.mesh].triangle_count();
+  return n;
+}
+
+uint64_t Scene::content_hash() const {
+  Hasher h;
+  h.u64(meshes.size());
+  for (const Mesh& m : meshes) {
+    h.bytes(m.positions.data(), m.positions.size() * sizeof(glm::vec3));
+    h.bytes(m.indices.data(), m.indices.size() * sizeof(uint32_t));
+  }
+  h.u64(objects.size());
+  for (const Object& o : objects) {
+    h.u32(o.mesh);
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) h.f64(o.transform[c][r]);
+  }
+  return h.value();
+}
+
+void compute_normals(Mesh& mesh) {
+  std::vector<glm::dvec3> acc(mesh.positions.size(), glm::dvec3(0.0));
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+    glm::dvec3 pa(mesh.positions[a]), pb(mesh.positions[b]), pc(mesh.positions[c]);
+    glm::dvec3 n = glm::cross(pb - pa, pc - pa);  // length = 2 * area: area weighting
+    acc[a] += n;
+    acc[b] += n;
+    acc[c] += n;
+  }
+  mesh.normals.resize(mesh.positions.size());
+  for (size_t i = 0; i < acc.size(); ++i) {
+    double l = glm::length(acc[i]);
+    mesh.normals[i] = l > 0 ? glm::vec3(acc[i] / l) : glm::vec3(0, 1, 0);
+  }
+}
+
+namespace {
+
+// Recursively splits triangles [begin, end) of `order` at the median centroid along the longest
+// axis of the centroid bounds until each part has at most max_tris; appends clusters in order.
+void split_range(const Mesh& m, const std::vector<glm::dvec3>& centroid, std::vector<uint32_t>& order,
+                 size_t begin, size_t end, uint32_t max_tris, std::vector<std::pair<size_t, size_t>>& out) {
+  if (end - begin <= max_tris) {
+    out.emplace_back(begin, end);
+    return;
+  }
+  Aabb cb;
+  for (size_t i = begin; i < end; ++i) cb.grow(centroid[order[i]]);
+  glm::dvec3 e = cb.extent();
+  int axis = (e.x >= e.y && e.x >= e.z) ? 0 : (e.y >= e.z ? 1 : 2);
+  size_t mid = begin + (end - begin) / 2;
+  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                   [&](uint32_t a, uint32_t b) {
+                     double ca = centroid[a][axis], cb2 = centroid[b][axis];
+                     return ca < cb2 || (ca == cb2 && a < b);  // total order: deterministic
+                   });
+  split_range(m, centroid, order, begin, mid, max_tris, out);
+  split_range(m, centroid, order, mid, end, max_tris, out);
+}
+
+}  // namespace
+
+void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
+  max_triangles = std::max<uint32_t>(max_triangles, 1);
+  for (Mesh& m : scene.meshes) {
+    m.clusters.clear();
+    const size_t tris = m.indices.size() / 3;
+    if (tris == 0) continue;
+    std::vector<std::pair<size_t, size_t>> ranges;
+    if (tris <= max_triangles) {
+      ranges.emplace_back(0, tris);
+    } else {
+      std::vector<glm::dvec3> centroid(tris);
+      for (size_t t = 0; t < tris; ++t)
+        centroid[t] = (glm::dvec3(m.positions[m.indices[3 * t]]) +
+                       glm::dvec3(m.positions[m.indices[3 * t + 1]]) +
+                       glm::dvec3(m.positions[m.indices[3 * t + 2]])) / 3.0;
+      std::vector<uint32_t> order(tris);
+      std::iota(order.begin(), order.end(), 0u);
+      split_range(m, centroid, order, 0, tris, max_triangles, ranges);
+      std::vector<uint32_t> reordered(m.indices.size());
+      for (size_t i = 0; i < tris; ++i)
+        std::copy_n(m.indices.begin() + 3 * order[i], 3, reordered.begin() + 3 * i);
+      m.indices.swap(reordered);
+    }
+    for (auto [b, e] : ranges) {
+      MeshCluster c{uint32_t(3 * b), uint32_t(3 * (e - b)), {}};
+      for (size_t i = 3 * b; i < 3 * e; ++i) c.box.grow(glm::dvec3(m.positions[m.indices[i]]));
+      m.clusters.push_back(c);
+    }
+  }
+}
+
+}  // namespace occ

@@ -1,0 +1,119 @@
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "common/hierarchy.hpp"
+
+using namespace occ;
+
+namespace {
+// A grid of unit cubes, one mesh shared by all objects, plus one big tessellated plane mesh.
+Scene grid_scene(int n, int plane_res) {
+  Scene s;
+  Mesh cube;
+  for (int i = 0; i < 8; ++i) cube.positions.push_back({float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
+  cube.indices = {0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3};
+  compute_normals(cube);
+  s.meshes.push_back(cube);
+  Mesh plane;
+  for (int z = 0; z <= plane_res; ++z)
+    for (int x = 0; x <= plane_res; ++x) plane.positions.push_back({float(x), 0.f, float(z)});
+  for (int z = 0; z < plane_res; ++z)
+    for (int x = 0; x < plane_res; ++x) {
+      uint32_t a = z * (plane_res + 1) + x, b = a + 1, c = a + plane_res + 1, d = c + 1;
+      plane.indices.insert(plane.indices.end(), {a, c, b, b, c, d});
+    }
+  compute_normals(plane);
+  s.meshes.push_back(plane);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Object o;
+      o.mesh = 0;
+      o.transform = glm::translate(glm::dmat4(1.0), glm::dvec3(3.0 * i, 0, 3.0 * j));
+      s.objects.push_back(o);
+    }
+  s.objects.push_back(Object{1, glm::translate(glm::dmat4(1.0), glm::dvec3(0, -1, 0)), "plane"});
+  return s;
+}
+}  // namespace
+
+TEST(Hierarchy, SameInputGivesSameIdsAndFingerprint) {
+  Scene a = grid_scene(12, 64), b = grid_scene(12, 64);
+  Hierarchy ha = Hierarchy::build(a, {}), hb = Hierarchy::build(b, {});
+  EXPECT_EQ(ha.fingerprint(), hb.fingerprint());
+  ASSERT_EQ(ha.size(), hb.size());
+  for (size_t i = 0; i < ha.size(); ++i) EXPECT_EQ(ha.node(i).box, hb.node(i).box);
+}
+
+TEST(Hierarchy, ChangedParameterOrGeometryChangesFingerprint) {
+  Scene a = grid_scene(6, 16), b = grid_scene(6, 16), c = grid_scene(6, 16);
+  BuildParams p4;
+  p4.arity = 4;
+  c.objects[3].transform[3][0] += 0.001;
+  uint64_t fa = Hierarchy::build(a, {}).fingerprint();
+  EXPECT_NE(fa, Hierarchy::build(b, p4).fingerprint());
+  EXPECT_NE(fa, Hierarchy::build(c, {}).fingerprint());
+}
+
+TEST(Hierarchy, IdsAreDenseBreadthFirstAndSubtreesContiguous) {
+  Scene s = grid_scene(10, 8);
+  Hierarchy h = Hierarchy::build(s, {});
+  uint64_t tris = 0;
+  for (const Item& it : h.items()) tris += it.triangles;
+  EXPECT_EQ(tris, s.triangle_count());
+  EXPECT_EQ(h.node(0).item_count, h.items().size());
+  std::set<uint32_t> covered;
+  for (uint32_t id = 0; id < h.size(); ++id) {
+    const HNode& n = h.node(id);
+    if (id > 0) {
+      EXPECT_GE(n.depth, h.node(id - 1).depth);  // BFS: depth never decreases
+    }
+    if (n.leaf()) {
+      EXPECT_LE(n.item_count, h.params().leaf_items);
+      for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) covered.insert(i);
+      continue;
+    }
+    EXPECT_LE(n.child_count, h.params().arity);
+    uint32_t next = n.first_item, child_items = 0;
+    for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
+      const HNode& ch = h.node(c);
+      EXPECT_EQ(ch.parent, id);
+      EXPECT_EQ(ch.first_item, next);  // children partition the parent's item range in order
+      next += ch.item_count;
+      child_items += ch.item_count;
+      EXPECT_TRUE(n.box.contains(ch.box.min) && n.box.contains(ch.box.max));
+    }
+    EXPECT_EQ(child_items, n.item_count);
+  }
+  EXPECT_EQ(covered.size(), h.items().size());
+}
+
+TEST(Hierarchy, BigMeshIsSplitIntoSpatialClusters) {
+  Scene s = grid_scene(1, 100);  // plane: 20000 triangles
+  BuildParams p;
+  p.cluster_triangles = 1000;
+  Hierarchy h = Hierarchy::build(s, p);
+  const Mesh& plane = s.meshes[1];
+  ASSERT_GE(plane.clusters.size(), 20u);
+  double area_sum = 0;
+  uint32_t indices = 0;
+  for (const MeshCluster& c : plane.clusters) {
+    EXPECT_LE(c.index_count / 3, 1000u);
+    EXPECT_EQ(c.first_index, indices);
+    indices += c.index_count;
+    area_sum += c.box.extent().x * c.box.extent().z;
+  }
+  EXPECT_EQ(indices, plane.indices.size());
+  EXPECT_LT(area_sum, 100.0 * 100.0 * 1.5);  // spatial: cluster boxes barely overlap
+  EXPECT_EQ(h.items().size(), 1 + plane.clusters.size());
+}
+
+TEST(Hierarchy, EmptySceneHasARootLeaf) {
+  Scene s;
+  Hierarchy h = Hierarchy::build(s, {});
+  ASSERT_EQ(h.size(), 1u);
+  EXPECT_TRUE(h.node(0).leaf());
+  EXPECT_EQ(h.node(0).item_count, 0u);
+}

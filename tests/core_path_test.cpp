@@ -1,0 +1,79 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "common/camera_path.hpp"
+#include "common/error.hpp"
+
+using namespace occ;
+
+namespace {
+const Aabb kBounds{{-50, 0, -20}, {50, 30, 20}};
+const Viewport kVp{320, 240};
+
+std::string write_tmp(const std::string& name, const std::string& text) {
+  auto p = std::filesystem::temp_directory_path() / ("occ_path_" + std::to_string(::getpid()) + "_" + name);
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+std::string error_of(const std::string& spec) {
+  try {
+    load_camera_path(spec, kBounds, kVp);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(CameraPath, GeneratedPathsHaveRequestedLengthAndValidCameras) {
+  for (const char* spec : {"orbit:7", "walk:20", "fly:5"}) {
+    auto path = load_camera_path(spec, kBounds, kVp);
+    ASSERT_EQ(path.size(), std::stoul(std::string(spec).substr(std::string(spec).find(':') + 1)));
+    for (const Camera& c : path) {
+      EXPECT_FALSE(c.invalid_reason()) << spec;
+      EXPECT_NEAR(c.aspect, 320.0 / 240.0, 1e-12);
+    }
+  }
+}
+
+TEST(CameraPath, WalkStaysAtEyeHeightInsideTheScene) {
+  for (const Camera& c : load_camera_path("walk:30", kBounds, kVp)) {
+    EXPECT_NEAR(c.eye.y, 1.7, 1e-9);
+    EXPECT_TRUE(kBounds.contains(c.eye));
+  }
+}
+
+TEST(CameraPath, CsvRoundTripsThroughSave) {
+  auto path = load_camera_path("orbit:5", kBounds, kVp);
+  std::string f = write_tmp("rt.csv", "");
+  save_camera_path(f, path);
+  auto again = load_camera_path(f, kBounds, kVp);
+  ASSERT_EQ(again.size(), path.size());
+  for (size_t i = 0; i < path.size(); ++i) {
+    EXPECT_NEAR(glm::length(again[i].eye - path[i].eye), 0.0, 1e-9);
+    EXPECT_NEAR(glm::dot(again[i].forward(), path[i].forward()), 1.0, 1e-12);
+    EXPECT_DOUBLE_EQ(again[i].near_dist, path[i].near_dist);
+  }
+}
+
+TEST(CameraPath, BadSpecsAndRowsNameTheProblem) {
+  EXPECT_NE(error_of("walk:0").find("frame count"), std::string::npos);
+  EXPECT_NE(error_of("orbit:x").find("frame count"), std::string::npos);
+  EXPECT_NE(error_of("/nonexistent/p.csv").find("cannot open"), std::string::npos);
+  std::string nan_row = write_tmp("nan.csv", "frame,eye_x\n0,0,1,nan,0,0,0,0,1,0,60\n");
+  EXPECT_NE(error_of(nan_row).find("line 2: column eye_z: 'nan' is not a finite number"), std::string::npos) << error_of(nan_row);
+  std::string short_row = write_tmp("short.csv", "0,0,1,2,0,0,0,0,1,0\n");
+  EXPECT_NE(error_of(short_row).find("line 1: expected 11 or 13 columns, got 10"), std::string::npos);
+  std::string order = write_tmp("order.csv", "0,0,1,5,0,0,0,0,1,0,60\n2,0,1,5,0,0,0,0,1,0,60\n");
+  EXPECT_NE(error_of(order).find("line 2: frame 2 out of order"), std::string::npos);
+  std::string same = write_tmp("same.csv", "0,1,1,1,1,1,1,0,1,0,60\n");
+  EXPECT_NE(error_of(same).find("eye equals target"), std::string::npos);
+  std::string near0 = write_tmp("near.csv", "0,0,1,5,0,0,0,0,1,0,60,0,100\n");
+  EXPECT_NE(error_of(near0).find("line 1: near <= 0"), std::string::npos);
+  std::string empty = write_tmp("empty.csv", "# nothing\n");
+  EXPECT_NE(error_of(empty).find("no camera rows"), std::string::npos);
+}
