@@ -1,0 +1,101 @@
+#include "common/culling.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace occ {
+
+bool visible_without_query(const Aabb& box, const Camera& cam) {
+  const double ty = std::tan(cam.fovy_rad * 0.5), tx = ty * cam.aspect;
+  // Distance from the eye to the farthest corner of the near rectangle, with a little slack.
+  const double reach = cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-6);
+  return box.distance2(cam.eye) <= reach * reach;
+}
+
+std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats) {
+  CullStats local;
+  CullStats& st = stats ? *stats : local;
+  const Frustum fr = cam.frustum();
+  std::vector<uint32_t> out, stack{0};
+  while (!stack.empty()) {
+    uint32_t id = stack.back();
+    stack.pop_back();
+    const HNode& n = h.node(id);
+    ++st.nodes_visited;
+    Containment c = fr.classify(n.box);
+    if (c == Containment::Outside) {
+      ++st.frustum_culled;
+      continue;
+    }
+    if (n.leaf()) {
+      if (n.item_count > 0) out.push_back(id);
+      continue;
+    }
+    for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) stack.push_back(ch);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                    const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
+  CullStats local;
+  CullStats& st = stats ? *stats : local;
+  const Frustum fr = cam.frustum();
+  std::vector<uint32_t> out, level{0}, next;
+  std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
+  std::vector<uint32_t> visible;
+  while (!level.empty()) {
+    pending.clear();
+    visible.clear();
+    for (uint32_t id : level) {
+      const HNode& n = h.node(id);
+      ++st.nodes_visited;
+      if (n.item_count == 0) continue;
+      if (fr.classify(n.box) == Containment::Outside) {
+        ++st.frustum_culled;
+      } else if (visible_without_query(n.box, cam)) {
+        ++st.near_visible;
+        visible.push_back(id);
+      } else {
+        pending.emplace_back(id, q.issue(n.box));
+        ++st.queries;
+      }
+    }
+    if (!pending.empty()) ++st.levels;
+    for (auto [id, handle] : pending) {
+      if (q.result(handle) > 0)
+        visible.push_back(id);
+      else
+        ++st.occluded;
+    }
+    q.end_batch();
+    next.clear();
+    std::sort(visible.begin(), visible.end());
+    for (uint32_t id : visible) {
+      const HNode& n = h.node(id);
+      if (n.leaf()) {
+        out.push_back(id);
+        if (on_visible) on_visible(id);
+      } else {
+        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) next.push_back(ch);
+      }
+    }
+    level.swap(next);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes) {
+  std::vector<uint32_t> items;
+  for (uint32_t id : nodes) {
+    const HNode& n = h.node(id);
+    for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) items.push_back(i);
+  }
+  std::sort(items.begin(), items.end());
+  items.erase(std::unique(items.begin(), items.end()), items.end());
+  return items;
+}
+
+}  // namespace occ

@@ -1,0 +1,58 @@
+// Culling logic, independent of GL: hierarchical frustum culling and the HC traversal of the
+// occlusion switch (paper Algorithm 4.1, breadth-first with a level of queries in flight at once,
+// 4.7.1). The occlusion test itself sits behind OcclusionQueries: the GL implementation renders
+// boxes against the depth buffer; tests use a CPU fake.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "common/camera.hpp"
+#include "common/hierarchy.hpp"
+
+namespace occ {
+
+class OcclusionQueries {
+ public:
+  virtual ~OcclusionQueries() = default;
+  // Starts an occlusion query for `box` against the current depth buffer; returns a handle.
+  virtual uint32_t issue(const Aabb& box) = 0;
+  // Samples of that box that passed the depth test (blocks until known).
+  virtual uint64_t result(uint32_t handle) = 0;
+  // Every result of the batch was read: handles may be recycled.
+  virtual void end_batch() {}
+};
+
+// True when a ray from the eye could enter `box` before reaching the near plane (the eye is in
+// or on the box, or the box crosses the near plane close to the eye). A query would then
+// rasterise only far faces or nothing and could report 0 samples although the content shows, so
+// such boxes are visible without a query.
+bool visible_without_query(const Aabb& box, const Camera& cam);
+
+struct CullStats {
+  uint32_t nodes_visited = 0;
+  uint32_t frustum_culled = 0;     // nodes rejected by the frustum test
+  uint32_t queries = 0;            // occlusion queries issued
+  uint32_t occluded = 0;           // nodes whose query returned 0 samples
+  uint32_t near_visible = 0;       // nodes decided visible without a query
+  uint32_t levels = 0;             // query batches (levels) issued
+};
+
+// Leaves whose boxes are not outside the frustum, in ascending id order.
+std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats = nullptr);
+
+// HardwareCull: breadth-first, one level at a time. For every node of a level: frustum test,
+// then either visible_without_query() or an occlusion query; all queries of the level are issued
+// before any result is read. Children of visible interior nodes form the next level; each
+// visible leaf is reported through on_visible as soon as its level's results are in (streaming).
+// Returns the visible leaves in ascending id order.
+std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                    const std::function<void(uint32_t)>& on_visible,
+                                    CullStats* stats = nullptr);
+
+// The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
+// identically in every renderer).
+std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes);
+
+}  // namespace occ

@@ -1,0 +1,128 @@
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "common/culling.hpp"
+
+using namespace occ;
+
+namespace {
+
+// Unit cubes on an n x n grid in the xz plane, one object each.
+Scene cube_grid(int n, double spacing) {
+  Scene s;
+  Mesh cube;
+  for (int i = 0; i < 8; ++i) cube.positions.push_back({float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
+  cube.indices = {0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3};
+  compute_normals(cube);
+  s.meshes.push_back(cube);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      s.objects.push_back({0, glm::translate(glm::dmat4(1.0), glm::dvec3(spacing * i, 0, spacing * j)), ""});
+  return s;
+}
+
+// Fake occlusion: a box passes when it contains one of the "visible points". Records the call
+// sequence to check batching.
+struct FakeQueries : OcclusionQueries {
+  std::vector<glm::dvec3> visible_points;
+  std::vector<Aabb> boxes;
+  std::vector<char> events;  // 'i' issue, 'r' result, 'e' end of batch
+  uint32_t issue(const Aabb& b) override {
+    events.push_back('i');
+    boxes.push_back(b);
+    return uint32_t(boxes.size() - 1);
+  }
+  uint64_t result(uint32_t h) override {
+    events.push_back('r');
+    uint64_t n = 0;
+    for (auto& p : visible_points) n += boxes[h].contains(p);
+    return n;
+  }
+  void end_batch() override { events.push_back('e'); }
+};
+
+Camera overview(const Aabb& b) {
+  return Camera::look_at(b.center() + glm::dvec3(0, b.diagonal(), 0.01), b.center(), {0, 1, 0}, 90, 1, 0.1, 1e4);
+}
+
+}  // namespace
+
+TEST(Culling, FrustumCullKeepsOnlyLeavesInView) {
+  Scene s = cube_grid(10, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  Camera cam = Camera::look_at({-5, 0.5, 0.5}, {-10, 0.5, 0.5}, {0, 1, 0}, 60, 1, 0.1, 100);  // looking away
+  CullStats st;
+  EXPECT_TRUE(frustum_cull(h, cam, &st).empty());
+  EXPECT_GT(st.frustum_culled, 0u);
+  auto all = frustum_cull(h, overview(h.node(0).box));
+  EXPECT_EQ(items_of_nodes(h, all).size(), h.items().size());
+}
+
+TEST(Culling, HardwareCullReturnsExactlyLeavesContainingVisiblePoints) {
+  Scene s = cube_grid(12, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  FakeQueries q;
+  q.visible_points = {{0.5, 0.5, 0.5}, {9.5, 0.5, 30.5}, {33.5, 0.5, 33.5}};
+  std::vector<uint32_t> streamed;
+  CullStats st;
+  auto vis = hardware_cull(h, overview(h.node(0).box), q, [&](uint32_t id) { streamed.push_back(id); }, &st);
+  ASSERT_EQ(vis.size(), 3u);
+  std::sort(streamed.begin(), streamed.end());
+  EXPECT_EQ(streamed, vis);
+  for (uint32_t id : vis) {
+    EXPECT_TRUE(h.node(id).leaf());
+    bool has_point = false;
+    for (auto& p : q.visible_points) has_point |= h.node(id).box.contains(p);
+    EXPECT_TRUE(has_point);
+  }
+  EXPECT_EQ(st.queries, q.boxes.size());
+  EXPECT_LT(st.queries, h.size());  // occluded subtrees were not descended
+  EXPECT_EQ(st.levels, h.depth());
+}
+
+TEST(Culling, QueriesOfALevelAreAllIssuedBeforeAnyResultIsRead) {
+  Scene s = cube_grid(8, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  FakeQueries q;
+  for (int i = 0; i < 8; ++i) q.visible_points.push_back({3.0 * i + 0.5, 0.5, 0.5});
+  hardware_cull(h, overview(h.node(0).box), q, nullptr);
+  // Events look like i..i r..r e  i..i r..r e ...: within a batch no 'i' follows an 'r'.
+  bool reading = false;
+  for (char e : q.events) {
+    if (e == 'r') reading = true;
+    if (e == 'e') reading = false;
+    if (e == 'i') EXPECT_FALSE(reading);
+  }
+}
+
+TEST(Culling, BoxContainingTheEyeIsVisibleWithoutQuery) {
+  Scene s = cube_grid(4, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  FakeQueries q;  // no visible points: every query says occluded
+  Camera inside = Camera::look_at({0.5, 0.5, 0.5}, {0.5, 0.5, -5}, {0, 1, 0}, 60, 1, 0.01, 100);
+  CullStats st;
+  auto vis = hardware_cull(h, inside, q, nullptr, &st);
+  ASSERT_EQ(vis.size(), 1u);
+  EXPECT_TRUE(h.node(vis[0]).box.contains(inside.eye));
+  EXPECT_GT(st.near_visible, 0u);
+  for (const Aabb& b : q.boxes) {
+    EXPECT_FALSE(b.contains(inside.eye));
+  }
+}
+
+TEST(Culling, BoxCrossingTheNearPlaneNextToTheEyeIsVisibleWithoutQuery) {
+  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90, 1, 1.0, 100);
+  EXPECT_TRUE(visible_without_query(Aabb{{0.5, 0.5, -2}, {3, 3, -0.9}}, cam));  // reaches inside near
+  EXPECT_TRUE(visible_without_query(Aabb{{1.0, 1.0, -3}, {2, 2, -1.0}}, cam));  // touches near corner
+  EXPECT_FALSE(visible_without_query(Aabb{{-1, -1, -3}, {1, 1, -2}}, cam));
+}
+
+TEST(Culling, ItemsOfNodesAreSortedAndUnique) {
+  Scene s = cube_grid(5, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  std::vector<uint32_t> nodes{0, 3, 1};
+  auto items = items_of_nodes(h, nodes);
+  EXPECT_EQ(items.size(), h.items().size());
+  EXPECT_TRUE(std::is_sorted(items.begin(), items.end()));
+}
