@@ -5,7 +5,7 @@ set -euo pipefail
 
 PKGS=(
   build-essential cmake pkg-config
-  libegl-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev   # headless GL: EGL + OSMesa (Mesa llvmpipe)
+  libegl-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev libgl-dev   # headless GL: EGL + OSMesa (Mesa llvmpipe)
   libglm-dev                                               # vector math
   libboost-dev libboost-system-dev                         # Boost.Asio transport
   libtinygltf-dev nlohmann-json3-dev libstb-dev            # glTF 2.0 loading (+ PNG via stb)

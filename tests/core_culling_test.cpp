@@ -92,7 +92,9 @@ TEST(Culling, QueriesOfALevelAreAllIssuedBeforeAnyResultIsRead) {
   for (char e : q.events) {
     if (e == 'r') reading = true;
     if (e == 'e') reading = false;
-    if (e == 'i') EXPECT_FALSE(reading);
+    if (e == 'i') {
+      EXPECT_FALSE(reading);
+    }
   }
 }
 

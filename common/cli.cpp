@@ -1,0 +1,150 @@
+#include "common/cli.hpp"
+
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+#include "common/error.hpp"
+
+namespace occ {
+
+Cli::Cli(std::string program, std::string usage, std::string description)
+    : program_(std::move(program)), usage_(std::move(usage)), description_(std::move(description)) {}
+
+void Cli::flag(const std::string& name, bool* out, const std::string& help) {
+  opts_.push_back({name, "", help, false, [out](const std::string&) { *out = true; }, ""});
+}
+
+void Cli::option(const std::string& name, std::string* out, const std::string& value, const std::string& help) {
+  opts_.push_back({name, value, help, true, [out](const std::string& v) { *out = v; }, *out});
+}
+
+void Cli::option(const std::string& name, int* out, long min, long max, const std::string& help) {
+  integer(name, out, min, max, help);
+}
+
+void Cli::option(const std::string& name, uint32_t* out, long min, long max, const std::string& help) {
+  integer(name, out, min, max, help);
+}
+
+template <class T>
+void Cli::integer(const std::string& name, T* out, long min, long max, const std::string& help) {
+  opts_.push_back({name, "N", help, true,
+                   [=](const std::string& v) {
+                     size_t used = 0;
+                     long n = 0;
+                     try {
+                       n = std::stol(v, &used);
+                     } catch (...) {
+                       used = 0;
+                     }
+                     if (used == 0 || used != v.size())
+                       throw InputError("--" + name + " '" + v + "': not a whole number");
+                     if (n < min || n > max)
+                       throw InputError("--" + name + " '" + v + "': must be " + std::to_string(min) + ".." +
+                                        std::to_string(max));
+                     *out = T(n);
+                   },
+                   std::to_string(*out)});
+}
+
+void Cli::option(const std::string& name, double* out, double min, double max, const std::string& help) {
+  std::ostringstream def;
+  def << *out;
+  opts_.push_back({name, "X", help, true,
+                   [=](const std::string& v) {
+                     size_t used = 0;
+                     double x = NAN;
+                     try {
+                       x = std::stod(v, &used);
+                     } catch (...) {
+                       used = 0;
+                     }
+                     if (used == 0 || used != v.size() || !std::isfinite(x))
+                       throw InputError("--" + name + " '" + v + "': not a finite number");
+                     if (x < min || x > max) {
+                       std::ostringstream r;
+                       r << "--" << name << " '" << v << "': must be in [" << min << ", " << max << "]";
+                       throw InputError(r.str());
+                     }
+                     *out = x;
+                   },
+                   def.str()});
+}
+
+void Cli::choice(const std::string& name, std::string* out, std::vector<std::string> words, const std::string& help) {
+  std::string alts;
+  for (auto& w : words) alts += (alts.empty() ? "" : "|") + w;
+  opts_.push_back({name, alts, help, true,
+                   [=](const std::string& v) {
+                     for (auto& w : words)
+                       if (v == w) {
+                         *out = v;
+                         return;
+                       }
+                     throw InputError("--" + name + " '" + v + "': expected one of " + alts);
+                   },
+                   *out});
+}
+
+void Cli::multi(const std::string& name, std::vector<std::string>* out, const std::string& value,
+                const std::string& help) {
+  opts_.push_back({name, value, help, true, [out](const std::string& v) { out->push_back(v); }, ""});
+}
+
+bool Cli::parse(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::cout << help();
+      return false;
+    }
+    if (a.rfind("--", 0) != 0) throw InputError("unexpected argument '" + a + "' (see " + program_ + " --help)");
+    std::string name = a.substr(2), value;
+    bool inline_value = false;
+    if (auto eq = name.find('='); eq != std::string::npos) {
+      value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+      inline_value = true;
+    }
+    const Opt* opt = nullptr;
+    for (const Opt& o : opts_)
+      if (o.name == name) opt = &o;
+    if (!opt) throw InputError("unknown flag --" + name + " (see " + program_ + " --help)");
+    if (opt->takes_value && !inline_value) {
+      if (i + 1 >= argc) throw InputError("--" + name + " needs a value (" + opt->value + ")");
+      value = argv[++i];
+    } else if (!opt->takes_value && inline_value) {
+      throw InputError("--" + name + " takes no value");
+    }
+    opt->set(value);
+  }
+  return true;
+}
+
+std::string Cli::help() const {
+  std::ostringstream o;
+  o << "usage: " << program_ << " " << usage_ << "\n\n" << description_ << "\n\noptions:\n";
+  for (const Opt& opt : opts_) {
+    std::string left = "  --" + opt.name + (opt.takes_value ? " " + opt.value : "");
+    o << left << std::string(left.size() < 30 ? 30 - left.size() : 1, ' ') << opt.help;
+    if (opt.takes_value && !opt.default_text.empty()) o << " (default " << opt.default_text << ")";
+    o << "\n";
+  }
+  o << "  --help                      this text\n";
+  return o.str();
+}
+
+int run_main(const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace occ

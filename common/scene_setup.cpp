@@ -1,0 +1,39 @@
+#include "common/scene_setup.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+#include "common/scene_io.hpp"
+
+namespace occ {
+
+void add_scene_options(Cli& cli, SceneOptions& o) {
+  cli.option("scene", &o.spec, "SPEC",
+             "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), layout:NXxNZ:file");
+  cli.option("arity", &o.build.arity, 2, 64, "hierarchy: max children per node");
+  cli.option("leaf-items", &o.build.leaf_items, 1, 1024, "hierarchy: max items per leaf");
+  cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,
+             "hierarchy: meshes above this many triangles are split into spatial clusters");
+}
+
+LoadedScene load_and_build(const SceneOptions& opts, const std::string& who) {
+  auto t0 = std::chrono::steady_clock::now();
+  LoadedScene ls{load_scene(opts.spec), {}};
+  auto t1 = std::chrono::steady_clock::now();
+  ls.hierarchy = Hierarchy::build(ls.scene, opts.build);
+  auto t2 = std::chrono::steady_clock::now();
+  auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "%s: scene %s: %zu objects, %zu meshes, %.3f M triangles, %zu items, %zu nodes, depth %u, "
+                "fingerprint %016llx (load %.0f ms, build %.0f ms)",
+                who.c_str(), opts.spec.c_str(), ls.scene.objects.size(), ls.scene.meshes.size(),
+                ls.scene.triangle_count() / 1e6, ls.hierarchy.items().size(), ls.hierarchy.size(),
+                ls.hierarchy.depth(), static_cast<unsigned long long>(ls.hierarchy.fingerprint()), ms(t0, t1),
+                ms(t1, t2));
+  std::cerr << buf << "\n";
+  return ls;
+}
+
+}  // namespace occ

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Configures and builds occswitch into build/ (or $OCC_BUILD_DIR). Extra args go to cmake configure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${OCC_BUILD_DIR:-build}
+if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] || [ $# -gt 0 ]; then
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
+fi
+cmake --build "$BUILD_DIR" -j"$(nproc)"

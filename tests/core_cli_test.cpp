@@ -1,0 +1,56 @@
+#include <gtest/gtest.h>
+
+#include "common/cli.hpp"
+#include "common/error.hpp"
+
+using namespace occ;
+
+namespace {
+struct Args {
+  std::vector<std::string> s;
+  std::vector<char*> v;
+  Args(std::initializer_list<const char*> a) : s(a.begin(), a.end()) {
+    for (auto& x : s) v.push_back(x.data());
+  }
+  int argc() { return int(v.size()); }
+  char** argv() { return v.data(); }
+};
+
+std::string error_of(Cli& cli, Args a) {
+  try {
+    cli.parse(a.argc(), a.argv());
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(Cli, ParsesEveryKindAndRejectsBadValuesByName) {
+  int width = 64;
+  double tau = 0;
+  bool ref = false;
+  std::string mode = "lockstep", out;
+  Cli cli("prog", "[options]", "test");
+  cli.option("width", &width, 16, 16384, "w");
+  cli.option("pixel-error", &tau, 0, 1000, "tau");
+  cli.flag("reference", &ref, "r");
+  cli.choice("camera-mode", &mode, {"latest", "lockstep"}, "m");
+  cli.option("out", &out, "DIR", "o");
+  Args ok{"prog", "--width", "320", "--pixel-error=2.5", "--reference", "--camera-mode", "latest", "--out", "x"};
+  ASSERT_TRUE(cli.parse(ok.argc(), ok.argv()));
+  EXPECT_EQ(width, 320);
+  EXPECT_EQ(tau, 2.5);
+  EXPECT_TRUE(ref);
+  EXPECT_EQ(mode, "latest");
+  EXPECT_EQ(out, "x");
+  EXPECT_EQ(error_of(cli, {"prog", "--width", "0"}), "--width '0': must be 16..16384");
+  EXPECT_EQ(error_of(cli, {"prog", "--width", "100000"}), "--width '100000': must be 16..16384");
+  EXPECT_EQ(error_of(cli, {"prog", "--width", "12x"}), "--width '12x': not a whole number");
+  EXPECT_EQ(error_of(cli, {"prog", "--pixel-error", "nan"}), "--pixel-error 'nan': not a finite number");
+  EXPECT_EQ(error_of(cli, {"prog", "--bogus"}), "unknown flag --bogus (see prog --help)");
+  EXPECT_EQ(error_of(cli, {"prog", "--camera-mode", "x"}), "--camera-mode 'x': expected one of latest|lockstep");
+  EXPECT_EQ(error_of(cli, {"prog", "--out"}), "--out needs a value (DIR)");
+  EXPECT_EQ(error_of(cli, {"prog", "stray"}), "unexpected argument 'stray' (see prog --help)");
+  EXPECT_NE(cli.help().find("--camera-mode latest|lockstep"), std::string::npos);
+}
