@@ -1,0 +1,546 @@
+// Making scenes (contract in scene_io.hpp): glTF 2.0 via tinygltf with full validation, the
+// procedural city, grid layouts, and the --scene spec parser.
+#include "common/scene_io.hpp"
+
+#include <tiny_gltf.h>
+
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <iostream>
+#include <map>
+#include <numeric>
+#include <tuple>
+
+#include "common/city.hpp"
+#include "common/error.hpp"
+#include "common/hash.hpp"
+
+namespace occ {
+namespace {
+
+// ------------------------------------------------------------------------------------- glTF
+
+std::string num(size_t v) { return std::to_string(v); }
+
+// tinygltf's multi-line messages as one line.
+std::string one_line(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  for (size_t p; (p = s.find('\n')) != std::string::npos;) s.replace(p, 1, "; ");
+  return s;
+}
+
+std::vector<unsigned char> read_file(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(path + ": cannot open file: " + std::strerror(errno));
+  std::vector<unsigned char> data;
+  unsigned char chunk[1 << 16];
+  size_t n;
+  while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) data.insert(data.end(), chunk, chunk + n);
+  bool failed = std::ferror(f);
+  int err = errno;
+  std::fclose(f);
+  if (failed) throw InputError(path + ": cannot read file: " + std::strerror(err));
+  return data;
+}
+
+// Geometry only: images are neither decoded nor required.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                void*) {
+  return true;
+}
+
+// Does [offset, offset + (count-1) * stride + elem) fit in size bytes? Overflow-safe; stride >= elem.
+bool fits(size_t offset, size_t count, size_t stride, size_t elem, size_t size) {
+  if (count == 0) return offset <= size;
+  if (offset > size || elem > size - offset) return false;
+  return count - 1 <= (size - offset - elem) / stride;
+}
+
+// count elements, stride bytes apart, all inside their buffer.
+struct Strided {
+  const unsigned char* data;
+  size_t count, stride;
+  const unsigned char* operator[](size_t i) const { return data + i * stride; }
+};
+
+// Turns a parsed tinygltf model into a Scene. Every index and byte range is checked before use;
+// failures throw InputError "<file>: <where>: <what>".
+class GltfReader {
+ public:
+  GltfReader(const tinygltf::Model& model, std::string file) : m_(model), file_(std::move(file)) {}
+
+  Scene read() {
+    check_node_forest();
+    std::vector<std::pair<int, glm::dmat4>> stack;  // (node, parent's world transform)
+    const std::vector<int> roots = root_nodes();
+    for (auto r = roots.rbegin(); r != roots.rend(); ++r) stack.emplace_back(*r, glm::dmat4(1.0));
+    while (!stack.empty()) {  // depth-first, children in file order
+      auto [n, parent] = stack.back();
+      stack.pop_back();
+      const tinygltf::Node& node = m_.nodes[n];
+      const glm::dmat4 world = parent * local_transform(node, n);
+      if (node.mesh != -1) add_objects(node, n, world);
+      for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
+    }
+    if (skipped_ > 0)
+      std::cerr << file_ << ": skipped " << skipped_ << " non-triangle primitives (lines/points)\n";
+    return std::move(scene_);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+    throw InputError(file_ + ": " + where + ": " + what);
+  }
+
+  template <class T>
+  const T& at(const std::vector<T>& v, int i, const char* kind, const char* plural,
+              const std::string& where) const {
+    if (i < 0 || size_t(i) >= v.size())
+      fail(where, std::string(kind) + " " + std::to_string(i) + " out of range (" + num(v.size()) + " " +
+                      plural + ")");
+    return v[size_t(i)];
+  }
+
+  // glTF requires disjoint strict trees: at most one parent per node, no cycles. Fills parent_.
+  void check_node_forest() {
+    parent_.assign(m_.nodes.size(), -1);
+    for (size_t n = 0; n < m_.nodes.size(); ++n)
+      for (int c : m_.nodes[n].children) {
+        at(m_.nodes, c, "child node", "nodes", "node " + num(n));
+        if (parent_[size_t(c)] != -1)
+          fail("node " + num(size_t(c)),
+               "has two parents (nodes " + num(size_t(parent_[size_t(c)])) + " and " + num(n) + ")");
+        parent_[size_t(c)] = int(n);
+      }
+    // With single parents, a node is in a cycle iff walking up never reaches a root.
+    std::vector<uint8_t> state(m_.nodes.size(), 0);  // 0 unseen, 1 on the current walk, 2 reaches a root
+    for (size_t n = 0; n < m_.nodes.size(); ++n) {
+      std::vector<int> walk;
+      int j = int(n);
+      for (; j != -1 && state[size_t(j)] == 0; j = parent_[size_t(j)]) {
+        state[size_t(j)] = 1;
+        walk.push_back(j);
+      }
+      if (j != -1 && state[size_t(j)] == 1) fail("node " + num(size_t(j)), "the node hierarchy has a cycle");
+      for (int w : walk) state[size_t(w)] = 2;
+    }
+  }
+
+  // Roots of the default scene, else of scene 0, else every parentless node.
+  std::vector<int> root_nodes() const {
+    if (m_.scenes.empty() && m_.defaultScene == -1) {
+      std::vector<int> roots;
+      for (size_t n = 0; n < m_.nodes.size(); ++n)
+        if (parent_[n] == -1) roots.push_back(int(n));
+      return roots;
+    }
+    const int s = m_.defaultScene != -1 ? m_.defaultScene : 0;
+    const tinygltf::Scene& scene = at(m_.scenes, s, "scene", "scenes", "default scene");
+    const std::string where = "scene " + std::to_string(s);
+    for (int r : scene.nodes) {
+      at(m_.nodes, r, "node", "nodes", where);
+      if (parent_[size_t(r)] != -1)
+        fail(where,
+             "root node " + std::to_string(r) + " is a child of node " + num(size_t(parent_[size_t(r)])));
+    }
+    return scene.nodes;
+  }
+
+  // matrix, or translation * rotation * scale (glTF column-major, quaternion x y z w).
+  glm::dmat4 local_transform(const tinygltf::Node& node, int n) const {
+    const std::string where = "node " + std::to_string(n);
+    auto check_size = [&](const std::vector<double>& v, size_t size, const char* what) {
+      if (!v.empty() && v.size() != size)
+        fail(where, std::string(what) + " must have " + num(size) + " numbers");
+    };
+    check_size(node.matrix, 16, "matrix");
+    check_size(node.translation, 3, "translation");
+    check_size(node.rotation, 4, "rotation");
+    check_size(node.scale, 3, "scale");
+    glm::dmat4 local(1.0);
+    if (!node.matrix.empty()) {
+      local = glm::make_mat4(node.matrix.data());
+    } else {
+      if (!node.translation.empty()) local = glm::translate(local, glm::make_vec3(node.translation.data()));
+      if (!node.rotation.empty()) {
+        const auto& r = node.rotation;
+        local *= glm::mat4_cast(glm::normalize(glm::dquat(r[3], r[0], r[1], r[2])));
+      }
+      if (!node.scale.empty()) local = glm::scale(local, glm::make_vec3(node.scale.data()));
+    }
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        if (!std::isfinite(local[c][r])) fail(where, "transform is not finite");
+    return local;
+  }
+
+  void add_objects(const tinygltf::Node& node, int n, const glm::dmat4& world) {
+    const std::string where = "node " + std::to_string(n);
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        if (!std::isfinite(world[c][r])) fail(where, "world transform is not finite");
+    at(m_.meshes, node.mesh, "mesh", "meshes", where);
+    auto [it, fresh] = mesh_cache_.try_emplace(node.mesh);
+    if (fresh) {
+      const tinygltf::Mesh& mesh = m_.meshes[size_t(node.mesh)];
+      for (size_t p = 0; p < mesh.primitives.size(); ++p) it->second.push_back(build_mesh(node.mesh, int(p)));
+    }
+    const std::string name = node.name.empty() ? where : node.name;
+    for (int m : it->second)
+      if (m >= 0) scene_.objects.push_back(Object{uint32_t(m), world, name});
+  }
+
+  const tinygltf::Accessor& accessor(int index, const std::string& where) const {
+    return at(m_.accessors, index, "accessor", "accessors", where);
+  }
+
+  // The elements of accessor `index` (elem bytes each) after checking its views and bounds.
+  Strided elements(int index, size_t elem, const std::string& where) const {
+    const tinygltf::Accessor& a = accessor(index, where);
+    const std::string an = "accessor " + std::to_string(index);
+    if (a.sparse.isSparse) fail(where, an + ": sparse accessors are not supported");
+    if (a.bufferView == -1) fail(where, an + " has no buffer view");
+    const tinygltf::BufferView& bv =
+        at(m_.bufferViews, a.bufferView, "buffer view", "buffer views", where + ": " + an);
+    const std::string bvn = "buffer view " + std::to_string(a.bufferView);
+    const tinygltf::Buffer& buf = at(m_.buffers, bv.buffer, "buffer", "buffers", where + ": " + bvn);
+    if (!fits(bv.byteOffset, 1, bv.byteLength, bv.byteLength, buf.data.size()))
+      fail(where, bvn + " reads past the end of buffer " + std::to_string(bv.buffer));
+    const size_t stride = bv.byteStride ? bv.byteStride : elem;
+    if (stride < elem)
+      fail(where, bvn + ": byteStride " + num(stride) + " is smaller than the element size " + num(elem));
+    if (!fits(a.byteOffset, a.count, stride, elem, bv.byteLength))
+      fail(where, an + " reads past the end of " + bvn);
+    return {buf.data.data() + bv.byteOffset + a.byteOffset, a.count, stride};
+  }
+
+  // A float VEC3 attribute with finite values.
+  std::vector<glm::vec3> read_vec3(int index, const std::string& attr, const std::string& where) const {
+    const tinygltf::Accessor& a = accessor(index, where);
+    const std::string an = attr + " accessor " + std::to_string(index);
+    if (a.type != TINYGLTF_TYPE_VEC3 || a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || a.normalized)
+      fail(where, an + " must be float VEC3");
+    const Strided e = elements(index, sizeof(glm::vec3), where);
+    std::vector<glm::vec3> out(e.count);
+    for (size_t i = 0; i < e.count; ++i) {
+      std::memcpy(&out[i], e[i], sizeof(glm::vec3));
+      if (!std::isfinite(out[i].x) || !std::isfinite(out[i].y) || !std::isfinite(out[i].z))
+        fail(where, an + ": element " + num(i) + " is not finite");
+    }
+    return out;
+  }
+
+  // An unsigned 8/16/32-bit SCALAR accessor.
+  std::vector<uint32_t> read_indices(int index, const std::string& where) const {
+    const tinygltf::Accessor& a = accessor(index, where);
+    const int ct = a.componentType;
+    const size_t size = ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE    ? 1
+                        : ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 2
+                        : ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT   ? 4
+                                                                       : 0;
+    if (a.type != TINYGLTF_TYPE_SCALAR || size == 0)
+      fail(where, "index accessor " + std::to_string(index) + " must be an unsigned byte/short/int SCALAR");
+    const Strided e = elements(index, size, where);
+    std::vector<uint32_t> out(e.count);
+    for (size_t i = 0; i < e.count; ++i) {  // little-endian host, like the float reads
+      if (size == 1) {
+        out[i] = *e[i];
+      } else if (size == 2) {
+        uint16_t v;
+        std::memcpy(&v, e[i], 2);
+        out[i] = v;
+      } else {
+        std::memcpy(&out[i], e[i], 4);
+      }
+    }
+    return out;
+  }
+
+  // Mesh for primitive p of glTF mesh mi: its index in scene_.meshes, or -1 if it draws no
+  // triangles (points/lines are counted in skipped_). Strips and fans become triangle lists.
+  int build_mesh(int mi, int p) {
+    const tinygltf::Mesh& gm = m_.meshes[size_t(mi)];
+    const tinygltf::Primitive& prim = gm.primitives[size_t(p)];
+    const std::string where = "mesh " + std::to_string(mi) + " primitive " + std::to_string(p);
+    if (prim.mode >= TINYGLTF_MODE_POINTS && prim.mode <= TINYGLTF_MODE_LINE_STRIP) {
+      ++skipped_;
+      return -1;
+    }
+    if (prim.mode < TINYGLTF_MODE_TRIANGLES || prim.mode > TINYGLTF_MODE_TRIANGLE_FAN)
+      fail(where, "mode " + std::to_string(prim.mode) + " is not a glTF primitive mode");
+    const auto pos = prim.attributes.find("POSITION");
+    if (pos == prim.attributes.end()) fail(where, "no POSITION attribute");
+
+    Mesh mesh;
+    mesh.name = (gm.name.empty() ? "mesh " + std::to_string(mi) : gm.name) +
+                (gm.primitives.size() > 1 ? " primitive " + std::to_string(p) : "");
+    mesh.positions = read_vec3(pos->second, "POSITION", where);
+    const size_t vertices = mesh.positions.size();
+    if (vertices > UINT32_MAX) fail(where, "more than 2^32 vertices");
+    std::vector<uint32_t> v(prim.indices != -1 ? read_indices(prim.indices, where)
+                                               : std::vector<uint32_t>(vertices));
+    if (prim.indices == -1) std::iota(v.begin(), v.end(), 0u);
+    for (uint32_t i : v)
+      if (i >= vertices) fail(where, "index " + std::to_string(i) + " >= vertex count " + num(vertices));
+
+    // Triangle lists per the glTF spec's strip/fan definitions (winding preserved).
+    if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
+      if (v.size() % 3 != 0) fail(where, "index count " + num(v.size()) + " is not a multiple of 3");
+      mesh.indices = std::move(v);
+    } else {
+      for (size_t i = 0; i + 2 < v.size(); ++i) {
+        if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+          mesh.indices.insert(mesh.indices.end(), {v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]});
+        else
+          mesh.indices.insert(mesh.indices.end(), {v[i + 1], v[i + 2], v[0]});
+      }
+    }
+    if (mesh.indices.empty()) return -1;
+
+    if (const auto nrm = prim.attributes.find("NORMAL"); nrm != prim.attributes.end()) {
+      mesh.normals = read_vec3(nrm->second, "NORMAL", where);
+      if (mesh.normals.size() != vertices)
+        fail(where, "NORMAL count " + num(mesh.normals.size()) + " != POSITION count " + num(vertices));
+    } else {
+      compute_normals(mesh);
+    }
+    scene_.meshes.push_back(std::move(mesh));
+    return int(scene_.meshes.size() - 1);
+  }
+
+  const tinygltf::Model& m_;
+  std::string file_;
+  Scene scene_;
+  std::vector<int> parent_;                     // per node, -1 for roots
+  std::map<int, std::vector<int>> mesh_cache_;  // glTF mesh -> scene mesh per primitive (-1: none)
+  int skipped_ = 0;                             // non-triangle primitives of used meshes
+};
+
+// ------------------------------------------------------------------------------------- city
+
+// splitmix64: identical sequence on every platform and standard library.
+class Rng {
+ public:
+  explicit Rng(uint64_t seed) : s_(seed) {}
+  int uniform(int lo, int hi) { return lo + int(mix64(s_ += 0x9e3779b97f4a7c15ULL) % uint64_t(hi - lo + 1)); }
+
+ private:
+  uint64_t s_;
+};
+
+// Appends a rows x cols grid of quads spanning origin + [0,1] u + [0,1] v, front (CCW) side
+// facing cross(u, v).
+void add_grid(Mesh& m, glm::vec3 origin, glm::vec3 u, glm::vec3 v, int rows, int cols) {
+  const glm::vec3 normal = glm::normalize(glm::cross(u, v));
+  const auto base = uint32_t(m.positions.size());
+  for (int r = 0; r <= rows; ++r)
+    for (int c = 0; c <= cols; ++c) {
+      m.positions.push_back(origin + u * (float(c) / float(cols)) + v * (float(r) / float(rows)));
+      m.normals.push_back(normal);
+    }
+  auto at = [&](int r, int c) { return base + uint32_t(r * (cols + 1) + c); };
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      m.indices.insert(m.indices.end(),
+                       {at(r, c), at(r, c + 1), at(r + 1, c + 1), at(r, c), at(r + 1, c + 1), at(r + 1, c)});
+}
+
+// A w x d box building of `floors` floors with its corner at the origin (x in [0,w], z in [0,d]).
+// Each facade is a window grid of (floors * detail) rows x (bays * detail) columns, with one
+// window bay per facade under 15 m and two otherwise; the roof is one quad, there is no floor.
+// Triangles: 4 * rows * detail * (bays(w) + bays(d)) + 2.
+Mesh building_mesh(int w, int d, int floors, int detail) {
+  Mesh m;
+  m.name = "building " + std::to_string(w) + "x" + std::to_string(d) + "x" + std::to_string(floors);
+  const auto fw = float(w), fd = float(d), h = float(floors * city::kFloorHeight);
+  const glm::vec3 up(0, h, 0);
+  const int rows = floors * detail;
+  auto cols = [&](int len) { return (len < 15 ? 1 : 2) * detail; };
+  add_grid(m, {0, 0, fd}, {fw, 0, 0}, up, rows, cols(w));    // +z
+  add_grid(m, {fw, 0, 0}, {-fw, 0, 0}, up, rows, cols(w));   // -z
+  add_grid(m, {fw, 0, fd}, {0, 0, -fd}, up, rows, cols(d));  // +x
+  add_grid(m, {0, 0, 0}, {0, 0, fd}, up, rows, cols(d));     // -x
+  add_grid(m, up, {0, 0, fd}, {fw, 0, 0}, 1, 1);             // roof, +y
+  return m;
+}
+
+void check_range(const std::string& where, const char* what, int v, int lo, int hi) {
+  if (v < lo || v > hi)
+    throw InputError(where + ": " + what + " must be " + std::to_string(lo) + ".." + std::to_string(hi) +
+                     " (got " + std::to_string(v) + ")");
+}
+
+// Limits of the city parameters (also enforced on --scene specs).
+constexpr int kMaxBlocks = 1000, kMaxBuildings = 64, kMaxFloors = 200, kMaxDetail = 16, kMaxCopies = 1000;
+
+// ------------------------------------------------------------------------------------- specs
+
+// A decimal integer in [lo, hi]: the whole of `text`.
+int parse_int(const std::string& spec, const char* what, std::string_view text, int lo, int hi) {
+  int v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size() || v < lo || v > hi)
+    throw InputError("--scene '" + spec + "': " + what + " must be " + std::to_string(lo) + ".." +
+                     std::to_string(hi) + " (got '" + std::string(text) + "')");
+  return v;
+}
+
+// "AxB" with both in [1, hi].
+std::pair<int, int> parse_dims(const std::string& spec, const char* what, std::string_view text, int hi) {
+  const size_t x = text.find('x');
+  if (x == std::string_view::npos)
+    throw InputError("--scene '" + spec + "': " + what + " must be <X>x<Z>, e.g. 10x10 (got '" +
+                     std::string(text) + "')");
+  return {parse_int(spec, what, text.substr(0, x), 1, hi), parse_int(spec, what, text.substr(x + 1), 1, hi)};
+}
+
+bool ends_with_ci(const std::string& s, std::string_view suffix) {
+  if (s.size() < suffix.size()) return false;
+  for (size_t i = 0; i < suffix.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i]) return false;
+  return true;
+}
+
+}  // namespace
+
+Scene load_gltf(const std::string& path) {
+  const std::vector<unsigned char> bytes = read_file(path);
+  if (bytes.size() > UINT_MAX) throw InputError(path + ": file larger than 4 GiB");
+  // .glb / .gltf by extension, anything else by the binary magic.
+  const bool binary = ends_with_ci(path, ".glb") || (!ends_with_ci(path, ".gltf") && bytes.size() >= 4 &&
+                                                     std::memcmp(bytes.data(), "glTF", 4) == 0);
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skip_image, nullptr);
+  tinygltf::Model model;
+  std::string err, warn;
+  const std::string base = std::filesystem::path(path).parent_path().string();
+  bool ok = false;
+  try {  // tinygltf is third-party code: anything it throws is still bad input
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), base)
+                : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                             unsigned(bytes.size()), base);
+  } catch (const std::exception& e) {
+    err += e.what();
+  }
+  if (!ok || !err.empty())
+    throw InputError(path + ": invalid glTF: " + one_line(err.empty() ? "parse failed" : err) +
+                     (warn.empty() ? "" : " (warnings: " + one_line(warn) + ")"));
+  if (!warn.empty()) std::cerr << path << ": warning: " << one_line(warn) << "\n";
+  Scene scene = GltfReader(model, path).read();
+  scene.source = path;
+  return scene;
+}
+
+// Lot (a, b) of block (i, j) holds building k = a * n + b with footprint w x d (10..20 m in 2 m
+// steps) at a random offset inside the lot and 1..floors_max floors; meshes are shared between
+// buildings of equal (w, d, floors). Each block also has a ground square (the block plus half of
+// the surrounding streets, so the ground tiles the city). Sizes (checked by the scene tests):
+//   city (10x10:4:12:2)   1700 objects,   500,488 triangles drawn
+//   city:20x20:4:16:2     6800 objects, 2,613,280 triangles drawn (the >= 2M scene)
+Scene generate_city(const CityParams& p) {
+  check_range("city", "blocks", p.blocks_x, 1, kMaxBlocks);
+  check_range("city", "blocks", p.blocks_z, 1, kMaxBlocks);
+  check_range("city", "buildings per block", p.buildings_per_block, 1, kMaxBuildings);
+  check_range("city", "floors", p.floors_max, 1, kMaxFloors);
+  check_range("city", "detail", p.detail, 1, kMaxDetail);
+
+  Scene scene;
+  scene.source = "city";
+  const auto pitch = float(city::block_pitch(p));
+  Mesh ground;
+  ground.name = "ground";
+  add_grid(ground, {0, 0, 0}, {0, 0, pitch}, {pitch, 0, 0}, 1, 1);
+  scene.meshes.push_back(std::move(ground));
+
+  Rng rng(p.seed);
+  std::map<std::tuple<int, int, int>, uint32_t> cache;  // (w, d, floors) -> mesh
+  const int n = p.buildings_per_block;
+  for (int i = 0; i < p.blocks_x; ++i)
+    for (int j = 0; j < p.blocks_z; ++j) {
+      const std::string block = "block " + std::to_string(i) + "," + std::to_string(j);
+      const Aabb area = city::block_area(p, i, j);
+      const glm::dvec3 corner = area.min - glm::dvec3(0.5 * city::kStreet, 0, 0.5 * city::kStreet);
+      scene.objects.push_back(Object{0, glm::translate(glm::dmat4(1.0), corner), block + " ground"});
+      for (int k = 0; k < n * n; ++k) {
+        const int w = 2 * rng.uniform(5, 10), d = 2 * rng.uniform(5, 10),
+                  floors = rng.uniform(1, p.floors_max);
+        const int ox = rng.uniform(0, int(city::kLot) - w), oz = rng.uniform(0, int(city::kLot) - d);
+        const glm::dvec3 lot = area.min + glm::dvec3(k / n, 0, k % n) * city::kLot;
+        auto [it, fresh] = cache.try_emplace({w, d, floors}, uint32_t(scene.meshes.size()));
+        if (fresh) scene.meshes.push_back(building_mesh(w, d, floors, p.detail));
+        scene.objects.push_back(Object{it->second,
+                                       glm::translate(glm::dmat4(1.0), lot + glm::dvec3(ox, 0, oz)),
+                                       block + " building " + std::to_string(k)});
+      }
+    }
+  return scene;
+}
+
+// Copy (i, j) is translated by (i * spacing_x, 0, j * spacing_z) from the asset's placement.
+Scene layout_grid(const Scene& asset, int nx, int nz, double gap) {
+  check_range("layout", "copies", nx, 1, kMaxCopies);
+  check_range("layout", "copies", nz, 1, kMaxCopies);
+  Scene scene;
+  scene.source = "layout " + std::to_string(nx) + "x" + std::to_string(nz) + " of " + asset.source;
+  scene.meshes = asset.meshes;
+  const glm::dvec3 spacing = asset.bounds().extent() * (1.0 + gap);
+  scene.objects.reserve(size_t(nx) * size_t(nz) * asset.objects.size());
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < nz; ++j) {
+      const glm::dmat4 t = glm::translate(glm::dmat4(1.0), glm::dvec3(i * spacing.x, 0, j * spacing.z));
+      const std::string prefix = "copy " + std::to_string(i) + "," + std::to_string(j) + "/";
+      for (const Object& o : asset.objects)
+        scene.objects.push_back(Object{o.mesh, t * o.transform, prefix + o.name});
+    }
+  return scene;
+}
+
+Scene load_scene(const std::string& spec) {
+  // Fields split at ':'; the last field keeps any further colons (layout paths).
+  auto split = [&](size_t max_fields) {
+    std::vector<std::string_view> f;
+    std::string_view rest = spec;
+    for (size_t c; f.size() + 1 < max_fields && (c = rest.find(':')) != std::string_view::npos;) {
+      f.push_back(rest.substr(0, c));
+      rest.remove_prefix(c + 1);
+    }
+    f.push_back(rest);
+    return f;
+  };
+  Scene scene;
+  if (spec.rfind("layout:", 0) == 0) {
+    const auto f = split(3);
+    if (f.size() != 3 || f[2].empty())
+      throw InputError("--scene '" + spec + "': expected layout:NXxNZ:path.gltf|.glb");
+    const auto [nx, nz] = parse_dims(spec, "copies", f[1], kMaxCopies);
+    scene = layout_grid(load_gltf(std::string(f[2])), nx, nz, 0.25);
+  } else if (spec == "city" || spec.rfind("city:", 0) == 0) {
+    const auto f = split(6);
+    if (f.size() > 5) throw InputError("--scene '" + spec + "': expected city[:BXxBZ[:N[:F[:D]]]]");
+    CityParams p;
+    if (f.size() > 1) std::tie(p.blocks_x, p.blocks_z) = parse_dims(spec, "blocks", f[1], kMaxBlocks);
+    if (f.size() > 2) p.buildings_per_block = parse_int(spec, "buildings per block", f[2], 1, kMaxBuildings);
+    if (f.size() > 3) p.floors_max = parse_int(spec, "floors", f[3], 1, kMaxFloors);
+    if (f.size() > 4) p.detail = parse_int(spec, "detail", f[4], 1, kMaxDetail);
+    scene = generate_city(p);
+  } else if (ends_with_ci(spec, ".gltf") || ends_with_ci(spec, ".glb")) {
+    scene = load_gltf(spec);
+  } else {
+    throw InputError("--scene '" + spec +
+                     "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
+                     "(blocks, buildings per block side, max floors, detail) or layout:NXxNZ:path.gltf|.glb");
+  }
+  scene.source = spec;
+  return scene;
+}
+
+}  // namespace occ

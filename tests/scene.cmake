@@ -1,1 +1,5 @@
-# scene tests
+# scene tests: glTF loading (real shared scenes, malformed and fuzzed files), city, layouts, specs
+occ_test(scene_test unit LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/scene_loading_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/scene_gltf_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/scene_generate_test.cpp)
