@@ -1,0 +1,231 @@
+// The RVG display client (paper 4.5): sends cameras to both switch nodes, receives the camera
+// actually used for frame f, the diff and EndOfFrame from the node doing HC(f), rebuilds and
+// verifies V_f, renders it and writes the frame and its statistics.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <numeric>
+
+#include "common/camera_path.hpp"
+#include "common/culling.hpp"
+#include "common/error.hpp"
+#include "common/gl/context.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "protocol/net/transport.hpp"
+#include "protocol/visible_set.hpp"
+#include "render_client/frame_output.hpp"
+#include "render_client/options.hpp"
+
+namespace occ {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using net::Millis;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+struct ClientFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class Client {
+ public:
+  explicit Client(const ClientOptions& o) : o_(o) {}
+
+  int run() {
+    LoadedScene ls = load_and_build(o_.scene, "render_client");
+    h_ = &ls.hierarchy;
+    path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
+    ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
+    std::cerr << "render_client: GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
+    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy);
+    leaf_count_ = 0;
+    for (const HNode& n : h_->nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
+    total_triangles_ = ls.scene.triangle_count();
+    connect();
+    int code = 0;
+    try {
+      loop();
+    } catch (const ClientFailure& e) {
+      std::cerr << "error: render_client: " << e.what() << "\n";
+      code = 1;
+    }
+    for (auto& c : nodes_)
+      if (c) code ? c->close_with_error("render client failed") : c->close("render client done");
+    summary();
+    return code;
+  }
+
+ private:
+  void connect() {
+    wire::Hello mine;
+    mine.role = wire::Role::render_client;
+    mine.viewport_width_px = uint32_t(o_.width);
+    mine.viewport_height_px = uint32_t(o_.height);
+    mine.scene_fingerprint = h_->fingerprint();
+    mine.arity = h_->params().arity;
+    mine.leaf_items = h_->params().leaf_items;
+    mine.cluster_triangles = h_->params().cluster_triangles;
+    mine.config_hash = o_.config.hash();
+    mine.name = "render_client";
+    for (const std::string& text : o_.connect) {
+      Endpoint e = parse_endpoint("connect", text);
+      auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
+      if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
+      auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, std::nullopt}, Millis(o_.timeout_ms));
+      if (!hello) throw std::runtime_error(hello.error());
+      auto& slot = nodes_[hello->node_id & 1];
+      if (slot) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));
+      slot = std::make_unique<net::Connection>(std::move(*conn));
+    }
+    std::cerr << "render_client: connected to switch node 0 (" << nodes_[0]->peer() << ") and 1 ("
+              << nodes_[1]->peer() << ")\n";
+  }
+
+  void send_camera(uint32_t number) {
+    sent_at_[number] = Clock::now();
+    wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height});
+    for (int k = 0; k < 2; ++k)
+      if (auto err = nodes_[k]->send(w))
+        throw ClientFailure("sending camera " + std::to_string(number) + " to switch node " + std::to_string(k) + ": " + *err);
+  }
+
+  net::Received receive_from(int node, uint32_t frame) {
+    net::Received r = nodes_[node]->receive(Millis(o_.timeout_ms));
+    if (r.ok()) return r;
+    std::string what = r.status == net::Received::Status::timeout
+                           ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms"
+                           : (r.status == net::Received::Status::closed ? "closed the connection: " : "failed: ") + r.reason;
+    throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(node) + " (" +
+                        nodes_[node]->peer() + ") " + what);
+  }
+
+  void loop() {
+    const bool lockstep = o_.config.camera_mode == "lockstep";
+    const uint32_t n = uint32_t(path_.size());
+    FrameOutput out(o_.out, !o_.no_images,
+                    {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
+                     "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms"});
+    VisibleSet visible(uint32_t(h_->size()));
+    DiffReceiver streams[2];
+    uint32_t next_camera = 0;
+    if (lockstep)
+      while (next_camera < std::min<uint32_t>(n, uint32_t(o_.lookahead))) send_camera(next_camera++);
+    else
+      send_camera(next_camera++);
+    start_ = Clock::now();
+    for (uint32_t frame = 0;; ++frame) {
+      const int k = int(hc_node_of_frame(frame));
+      const uint64_t bytes_before = nodes_[0]->stats().received.bytes + nodes_[1]->stats().received.bytes;
+      // 1. The camera HC used for this frame comes first.
+      net::Received r = receive_from(k, frame);
+      auto* wcam = std::get_if<wire::Camera>(&r.message);
+      if (!wcam) throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) +
+                                     " sent " + std::string(wire::type_name(wire::type_of(r.message))) + " before the camera");
+      if (wcam->frame >= n || !sent_at_.count(wcam->frame))
+        throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) +
+                            " used camera " + std::to_string(wcam->frame) + " that was never sent");
+      if (lockstep && wcam->frame != frame)
+        throw ClientFailure("frame " + std::to_string(frame) + ": lockstep, but switch node " + std::to_string(k) +
+                            " used camera " + std::to_string(wcam->frame));
+      const Camera cam = from_wire(*wcam);
+      // 2. Diff chunks, then EndOfFrame.
+      bool cleared = false;
+      wire::EndOfFrame eof;
+      for (;;) {
+        net::Received m = receive_from(k, frame);
+        if (o_.config.full_sets && !cleared) visible.clear();
+        cleared = true;
+        if (auto* d = std::get_if<wire::NodeDiff>(&m.message)) {
+          if (auto err = streams[k].on_diff(visible, *d)) throw ClientFailure("desync with switch node " + std::to_string(k) + ": " + *err);
+        } else if (auto* e = std::get_if<wire::EndOfFrame>(&m.message)) {
+          if (e->frame != frame)
+            throw ClientFailure("switch node " + std::to_string(k) + " ended frame " + std::to_string(e->frame) +
+                                ", expected " + std::to_string(frame));
+          if (auto err = streams[k].on_end_of_frame(visible, *e)) throw ClientFailure("desync with switch node " + std::to_string(k) + ": " + *err);
+          eof = *e;
+          break;
+        } else {
+          throw ClientFailure("frame " + std::to_string(frame) + ": unexpected " +
+                              std::string(wire::type_name(wire::type_of(m.message))) + " from switch node " + std::to_string(k));
+        }
+      }
+      // Keep the nodes busy: the next camera goes out before this frame is rendered.
+      if (lockstep ? next_camera < n : next_camera < n) send_camera(next_camera++);
+      // 3. Render V_f with the camera of frame f.
+      const Clock::time_point r0 = Clock::now();
+      std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
+      renderer_->begin_frame(cam, true);
+      DrawStats st = renderer_->draw_items(items_of_nodes(*h_, ids), SceneRenderer::Mode::Shaded);
+      ctx_->gl().Finish();
+      if (out.writes_images()) out.write_frame(frame, ctx_->read_rgba());
+      const Clock::time_point shown = Clock::now();
+      const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
+      const uint64_t bytes = nodes_[0]->stats().received.bytes + nodes_[1]->stats().received.bytes - bytes_before;
+      out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
+                     double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
+                     eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms});
+      frame_done_.push_back(shown);
+      visible_sum_ += visible.size();
+      bytes_sum_ += bytes;
+      tri_sum_ += st.triangles;
+      latency_.push_back(latency_ms);
+      hc_ms_ += eof.hc_us / 1000.0;
+      or_ms_ += eof.or_us / 1000.0;
+      rvg_ms_ += ms_between(r0, shown);
+      if (frame % 10 == 9) std::fprintf(stderr, "\rrender_client: frame %u (camera %u/%u)", frame + 1, wcam->frame + 1, n);
+      if (wcam->frame + 1 == n) break;
+    }
+    std::fprintf(stderr, "\n");
+  }
+
+  void summary() const {
+    const size_t frames = frame_done_.size();
+    if (frames == 0) return;
+    std::vector<double> intervals;
+    Clock::time_point prev = start_;
+    for (auto t : frame_done_) {
+      intervals.push_back(ms_between(prev, t));
+      prev = t;
+    }
+    std::vector<double> sorted_iv = intervals, lat = latency_;
+    std::sort(sorted_iv.begin(), sorted_iv.end());
+    std::sort(lat.begin(), lat.end());
+    const double wall_ms = ms_between(start_, frame_done_.back());
+    const double mean_v = double(visible_sum_) / frames;
+    std::printf(
+        "summary: frames=%zu mean_fps=%.2f median_fps=%.2f mean_bytes_per_frame=%.0f mean_visible=%.1f "
+        "leaves=%zu culled_pct=%.1f mean_triangles=%.0f triangles_culled_pct=%.1f latency_ms_mean=%.1f "
+        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f\n",
+        frames, 1000.0 * frames / wall_ms, 1000.0 / sorted_iv[frames / 2], double(bytes_sum_) / frames, mean_v,
+        leaf_count_, 100.0 * (1.0 - mean_v / std::max<size_t>(leaf_count_, 1)), double(tri_sum_) / frames,
+        100.0 * (1.0 - double(tri_sum_) / frames / std::max<uint64_t>(total_triangles_, 1)),
+        std::accumulate(lat.begin(), lat.end(), 0.0) / frames, lat[std::min(frames - 1, frames * 95 / 100)],
+        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames);
+  }
+
+  const ClientOptions& o_;
+  const Hierarchy* h_ = nullptr;
+  std::vector<Camera> path_;
+  std::unique_ptr<GlContext> ctx_;
+  std::unique_ptr<SceneRenderer> renderer_;
+  std::unique_ptr<net::Connection> nodes_[2];
+  std::map<uint32_t, Clock::time_point> sent_at_;
+  Clock::time_point start_;
+  std::vector<Clock::time_point> frame_done_;
+  std::vector<double> latency_;
+  size_t leaf_count_ = 0;
+  uint64_t total_triangles_ = 0, visible_sum_ = 0, bytes_sum_ = 0, tri_sum_ = 0;
+  double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
+};
+
+}  // namespace
+
+int run_cluster_client(const ClientOptions& o) { return Client(o).run(); }
+
+}  // namespace occ

@@ -1,0 +1,50 @@
+#include "render_client/frame_output.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "common/error.hpp"
+
+namespace occ {
+
+std::string frame_file_name(uint32_t frame) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "frame_%05u.png", frame);
+  return buf;
+}
+
+FrameOutput::FrameOutput(const std::string& dir, bool images, std::vector<std::string> columns)
+    : dir_(dir), images_(images), columns_(columns.size()) {
+  if (dir_.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(dir_, ec);
+  if (ec) throw InputError("--out '" + dir_ + "': cannot create directory: " + ec.message());
+  csv_.open(dir_ + "/stats.csv");
+  if (!csv_) throw InputError("--out '" + dir_ + "': cannot write stats.csv");
+  for (size_t i = 0; i < columns.size(); ++i) csv_ << (i ? "," : "") << columns[i];
+  csv_ << "\n";
+}
+
+void FrameOutput::write_frame(uint32_t frame, const Image& img) {
+  if (!writes_images()) return;
+  const std::string final_path = dir_ + "/" + frame_file_name(frame);
+  const std::string tmp = final_path + ".tmp.png";
+  write_png(tmp, img);
+  std::filesystem::rename(tmp, final_path);
+}
+
+void FrameOutput::write_row(const std::vector<double>& values) {
+  if (dir_.empty()) return;
+  for (size_t i = 0; i < values.size() && i < columns_; ++i) {
+    double v = values[i];
+    if (v == std::floor(v) && std::abs(v) < 1e15)
+      csv_ << (i ? "," : "") << static_cast<long long>(v);
+    else
+      csv_ << (i ? "," : "") << v;
+  }
+  csv_ << "\n";
+  csv_.flush();
+}
+
+}  // namespace occ

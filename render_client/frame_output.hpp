@@ -1,0 +1,31 @@
+// Where a renderer's frames go: DIR/frame_%05d.png (unless images are off) and DIR/stats.csv
+// with one row per frame. A frame's PNG is written to a temporary name and renamed, so a
+// frame file that exists is complete.
+#pragma once
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "common/image.hpp"
+
+namespace occ {
+
+class FrameOutput {
+ public:
+  // dir empty = nothing written. Creates dir. columns: the stats.csv header.
+  FrameOutput(const std::string& dir, bool images, std::vector<std::string> columns);
+  void write_frame(uint32_t frame, const Image& img);
+  void write_row(const std::vector<double>& values);  // one per column, in order
+  bool writes_images() const { return !dir_.empty() && images_; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+  bool images_;
+  size_t columns_;
+  std::ofstream csv_;
+};
+
+std::string frame_file_name(uint32_t frame);  // "frame_00042.png"
+
+}  // namespace occ

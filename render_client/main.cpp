@@ -1,0 +1,39 @@
+// render_client: the RVG display client of the occlusion switch, or (--reference) the
+// single-process reference renderer.
+#include "common/cli.hpp"
+#include "common/error.hpp"
+#include "render_client/options.hpp"
+
+int main(int argc, char** argv) {
+  return occ::run_main([&] {
+    occ::ClientOptions o;
+    occ::Cli cli("render_client",
+                 "--connect HOST:PORT --connect HOST:PORT [options]\n       render_client --reference [options]",
+                 "Drives the camera along a path, receives the visible set of every frame from the switch\n"
+                 "node doing HC, verifies it, renders it and writes frames and statistics. With --reference\n"
+                 "it renders the whole scene itself (no culling or frustum culling only): the ground truth.");
+    occ::add_scene_options(cli, o.scene);
+    cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
+    cli.option("out", &o.out, "DIR", "write DIR/frame_%05d.png and DIR/stats.csv");
+    cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
+    cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width in pixels");
+    cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height in pixels");
+    cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
+    cli.flag("reference", &o.reference, "single-process reference renderer");
+    cli.choice("cull", &o.cull, {"none", "frustum"}, "reference renderer: culling");
+    cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order)");
+    cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
+               "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");
+    cli.flag("full-sets", &o.config.full_sets, "nodes send all of V_f every frame instead of the diff");
+    cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
+    cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
+    if (!cli.parse(argc, argv)) return 0;
+    if (o.reference) {
+      if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
+      return occ::run_reference(o);
+    }
+    if (o.connect.size() != 2)
+      throw occ::InputError("give --connect twice (both switch nodes), or --reference (see render_client --help)");
+    return occ::run_cluster_client(o);
+  });
+}

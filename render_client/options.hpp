@@ -1,0 +1,33 @@
+// render_client's settings, shared by its two modes: the reference renderer (single process,
+// no culling or frustum culling: the ground truth every cluster frame is compared with) and the
+// RVG display client of the cluster.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "common/scene_setup.hpp"
+#include "switch_node/cluster.hpp"
+
+namespace occ {
+
+struct ClientOptions {
+  SceneOptions scene;
+  ClusterConfig config;
+  std::string path = "walk:60";
+  std::string out;
+  bool no_images = false;
+  int width = 512, height = 512;
+  std::string gl = "auto";
+  // reference mode
+  bool reference = false;
+  std::string cull = "frustum";
+  // cluster mode
+  std::vector<std::string> connect;  // the two switch nodes
+  int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame
+  int timeout_ms = 30000;
+};
+
+int run_reference(const ClientOptions& o);
+int run_cluster_client(const ClientOptions& o);
+
+}  // namespace occ

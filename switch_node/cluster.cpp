@@ -1,0 +1,64 @@
+#include "switch_node/cluster.hpp"
+
+#include "common/error.hpp"
+#include "common/hash.hpp"
+
+namespace occ {
+
+wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp) {
+  wire::Camera w;
+  w.frame = number;
+  for (int i = 0; i < 3; ++i) w.eye[i] = c.eye[i];
+  w.orientation[0] = c.orientation.w;
+  w.orientation[1] = c.orientation.x;
+  w.orientation[2] = c.orientation.y;
+  w.orientation[3] = c.orientation.z;
+  w.fovy_rad = c.fovy_rad;
+  w.aspect = c.aspect;
+  w.near_dist = c.near_dist;
+  w.far_dist = c.far_dist;
+  w.viewport_width_px = uint32_t(vp.width);
+  w.viewport_height_px = uint32_t(vp.height);
+  return w;
+}
+
+Camera from_wire(const wire::Camera& w) {
+  Camera c;
+  c.eye = {w.eye[0], w.eye[1], w.eye[2]};
+  c.orientation = glm::dquat(w.orientation[0], w.orientation[1], w.orientation[2], w.orientation[3]);
+  c.fovy_rad = w.fovy_rad;
+  c.aspect = w.aspect;
+  c.near_dist = w.near_dist;
+  c.far_dist = w.far_dist;
+  return c;
+}
+
+uint64_t ClusterConfig::hash() const {
+  Hasher h;
+  h.str(camera_mode);
+  h.u32(full_sets);
+  return h.value();
+}
+
+Endpoint parse_endpoint(const std::string& flag, const std::string& text) {
+  Endpoint e{"127.0.0.1", 0};
+  std::string port = text;
+  if (auto colon = text.rfind(':'); colon != std::string::npos) {
+    e.host = text.substr(0, colon);
+    port = text.substr(colon + 1);
+    if (e.host.empty()) throw InputError("--" + flag + " '" + text + "': empty host");
+  }
+  size_t used = 0;
+  long p = -1;
+  try {
+    p = std::stol(port, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used == 0 || used != port.size() || p < 0 || p > 65535)
+    throw InputError("--" + flag + " '" + text + "': expected HOST:PORT with PORT 0..65535");
+  e.port = uint16_t(p);
+  return e;
+}
+
+}  // namespace occ

@@ -1,0 +1,36 @@
+// What the three cluster processes share beyond the wire format: the camera conversion, the
+// settings that must agree (config hash in Hello), the switch schedule, and endpoint parsing.
+//
+// Schedule (paper Algorithm 4.2, DESIGN.md section 1). Frame f: node f % 2 performs HC(f) and
+// streams V_f as a diff against V_{f-1}; node (f+1) % 2 builds OR(f+1) from that stream. So
+// node k runs OR(k), HC(k), OR(k+2), HC(k+2), ... OR(f+1) draws V_{f-1} (which it holds) at
+// once and each added node as it arrives: the depth of any subset of real geometry is
+// conservative, and V_{f-1} ∪ δ+ = V_{f-1} ∪ V_f occludes at least as much as V_f.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "common/camera.hpp"
+#include "protocol/wire.hpp"
+
+namespace occ {
+
+wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp);
+Camera from_wire(const wire::Camera& w);
+
+struct ClusterConfig {
+  std::string camera_mode = "lockstep";  // lockstep | latest
+  bool full_sets = false;                // send all of V_f each frame instead of the diff
+  uint64_t hash() const;
+};
+
+struct Endpoint {
+  std::string host;
+  uint16_t port = 0;
+};
+// "HOST:PORT" or "PORT" (host 127.0.0.1); throws InputError naming the flag.
+Endpoint parse_endpoint(const std::string& flag, const std::string& text);
+
+inline uint32_t hc_node_of_frame(uint32_t frame) { return frame % 2; }
+
+}  // namespace occ

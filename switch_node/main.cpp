@@ -1,0 +1,32 @@
+// switch_node: one half of the occlusion switch. Run two (--id 0 and --id 1) and a render_client.
+#include "common/cli.hpp"
+#include "common/error.hpp"
+#include "switch_node/node.hpp"
+
+int main(int argc, char** argv) {
+  return occ::run_main([&] {
+    occ::NodeOptions o;
+    occ::Cli cli("switch_node", "--id 0|1 [--peer HOST:PORT] [options]",
+                 "One node of the occlusion switch: alternately renders the occluders (OR, depth only)\n"
+                 "and culls with hardware occlusion queries (HC), streaming visible-set diffs to the\n"
+                 "render client and to the other node. Node 0 listens for node 1 and the render client;\n"
+                 "node 1 connects to node 0 (--peer) and listens for the render client.");
+    cli.option("id", &o.id, 0, 1, "which node of the switch (HC on frames f with f % 2 == id)");
+    occ::add_scene_options(cli, o.scene);
+    cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width (must match the render client)");
+    cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height");
+    cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
+    cli.option("listen", &o.listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
+    cli.option("port-file", &o.port_file, "FILE", "write the listening port here");
+    cli.option("peer", &o.peer, "HOST:PORT", "node 1 only: switch node 0's address");
+    cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
+               "lockstep: camera f for frame f (reproducible); latest: newest camera");
+    cli.flag("full-sets", &o.config.full_sets, "send all of V_f every frame instead of the diff");
+    cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
+    cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer, a camera or a message");
+    if (!cli.parse(argc, argv)) return 0;
+    if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
+    if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");
+    return occ::run_switch_node(o);
+  });
+}

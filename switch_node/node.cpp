@@ -1,0 +1,285 @@
+#include "switch_node/node.hpp"
+
+#include <chrono>
+#include <iostream>
+#include <thread>
+
+#include "common/camera_buffer.hpp"
+#include "common/culling.hpp"
+#include "common/error.hpp"
+#include "common/gl/box_query.hpp"
+#include "common/gl/context.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "protocol/net/transport.hpp"
+#include "protocol/visible_set.hpp"
+
+namespace occ {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using net::Millis;
+
+uint32_t micros_since(Clock::time_point t0) {
+  return uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count());
+}
+
+struct NodeFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class SwitchNode {
+ public:
+  explicit SwitchNode(const NodeOptions& o) : o_(o), who_("switch_node " + std::to_string(o.id)) {}
+
+  int run() {
+    LoadedScene ls = load_and_build(o_.scene, who_);
+    h_ = &ls.hierarchy;
+    ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
+    std::cerr << who_ << ": GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
+    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy);
+    querier_ = std::make_unique<BoxQuerier>(*ctx_);
+    connect();
+    std::thread camera_thread([this] { receive_cameras(); });
+    int code = 0;
+    try {
+      loop();
+    } catch (const NodeFailure& e) {
+      std::cerr << "error: " << who_ << ": " << e.what() << "\n";
+      code = 1;
+    }
+    if (code != 0) {
+      peer_->close_with_error(who_ + " failed");
+      rvg_->close_with_error(who_ + " failed");
+    } else {
+      peer_->close("done");
+    }
+    rvg_->close(code ? "failed" : "done");
+    camera_thread.join();
+    print_summary();
+    return code;
+  }
+
+ private:
+  wire::Hello hello() const {
+    wire::Hello h;
+    h.role = wire::Role::switch_node;
+    h.node_id = uint8_t(o_.id);
+    h.viewport_width_px = uint32_t(o_.width);
+    h.viewport_height_px = uint32_t(o_.height);
+    h.scene_fingerprint = h_->fingerprint();
+    h.arity = h_->params().arity;
+    h.leaf_items = h_->params().leaf_items;
+    h.cluster_triangles = h_->params().cluster_triangles;
+    h.config_hash = o_.config.hash();
+    h.name = who_;
+    return h;
+  }
+
+  void connect() {
+    Endpoint listen = parse_endpoint("listen", o_.listen);
+    auto listener = net::Listener::open(listen.port, listen.host);
+    if (!listener) throw std::runtime_error(who_ + ": cannot listen on " + o_.listen + ": " + listener.error());
+    if (!o_.port_file.empty())
+      if (auto err = net::write_port_file(o_.port_file, listener->port()))
+        throw InputError("--port-file '" + o_.port_file + "': " + *err);
+    std::cerr << who_ << ": listening on " << listener->address() << ":" << listener->port() << "\n";
+    const Millis timeout(o_.timeout_ms);
+    const wire::Hello mine = hello();
+    if (o_.id == 1) {
+      Endpoint pe = parse_endpoint("peer", o_.peer);
+      auto conn = net::Connection::connect(pe.host, pe.port, timeout);
+      if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
+      auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, uint8_t(0)}, timeout);
+      if (!hello) throw std::runtime_error(who_ + ": " + hello.error());
+      peer_ = std::make_unique<net::Connection>(std::move(*conn));
+      auto rvg = listener->accept_peer(mine, {wire::Role::render_client, std::nullopt}, timeout);
+      if (!rvg) throw std::runtime_error(who_ + ": no render client: " + rvg.error());
+      rvg_ = std::make_unique<net::Connection>(std::move(rvg->connection));
+    } else {
+      // Node 0 accepts both the render client and switch node 1, in whatever order they come.
+      while (!peer_ || !rvg_) {
+        auto p = listener->accept_peer(mine, {}, timeout);
+        if (!p) throw std::runtime_error(who_ + ": waiting for peers: " + p.error());
+        const bool is_node1 = p->hello.role == wire::Role::switch_node && p->hello.node_id == 1;
+        const bool is_rvg = p->hello.role == wire::Role::render_client;
+        auto& slot = is_node1 ? peer_ : rvg_;
+        if ((!is_node1 && !is_rvg) || slot) {
+          p->connection.close_with_error("unexpected peer: " + std::string(wire::role_name(p->hello.role)) + " " +
+                                         std::to_string(p->hello.node_id));
+          continue;
+        }
+        slot = std::make_unique<net::Connection>(std::move(p->connection));
+      }
+    }
+    std::cerr << who_ << ": connected: peer " << peer_->peer() << ", render client " << rvg_->peer() << "\n";
+  }
+
+  // Camera-receiver thread (paper Fig. 2): every camera from the render client goes into the
+  // buffer; its Bye or failure closes the buffer.
+  void receive_cameras() {
+    for (;;) {
+      net::Received r = rvg_->receive(Millis(1000));
+      if (r.status == net::Received::Status::timeout) continue;
+      if (r.ok()) {
+        if (auto* c = std::get_if<wire::Camera>(&r.message)) {
+          cameras_.put({c->frame, from_wire(*c)});
+          continue;
+        }
+        rvg_->close_with_error(std::string("unexpected ") + std::string(wire::type_name(wire::type_of(r.message))) +
+                               " from the render client");
+        cameras_.close("render client sent an unexpected message");
+        return;
+      }
+      rvg_bye_ = r.status == net::Received::Status::closed;
+      cameras_.close(rvg_bye_ ? "render client closed: " + r.reason : "render client failed: " + r.reason);
+      return;
+    }
+  }
+
+  void send_both(const wire::Message& m) {
+    if (auto err = rvg_->send(m)) throw NodeFailure("sending to the render client: " + *err);
+    if (auto err = peer_->send(m)) throw NodeFailure("sending to switch node " + std::to_string(1 - o_.id) + ": " + *err);
+  }
+
+  std::vector<uint32_t> sorted(const VisibleSet& s) const {
+    std::vector<uint32_t> ids(s.ids().begin(), s.ids().end());
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  }
+
+  void loop() {
+    const Millis timeout(o_.timeout_ms);
+    VisibleSet visible(uint32_t(h_->size()));
+    DiffReceiver stream;  // diffs of the other node's HC frames
+    std::optional<uint32_t> last_camera;
+    for (uint32_t frame = uint32_t(o_.id);; frame += 2) {
+      // ---- OR(frame): camera, clear depth, draw V_{frame-2} then V_{frame-1}'s additions.
+      std::string why;
+      std::optional<NumberedCamera> cam =
+          o_.config.camera_mode == "lockstep"
+              ? cameras_.take(frame, timeout, &why)
+              : cameras_.take_latest(last_camera ? *last_camera + 1 : 0, timeout, &why);
+      if (!cam) {
+        if (rvg_bye_) return;  // the render client finished
+        throw NodeFailure("frame " + std::to_string(frame) + ": " + why);
+      }
+      last_camera = cam->number;
+      const Clock::time_point or_start = Clock::now();
+      renderer_->begin_frame(cam->camera, false);
+      std::vector<uint8_t> drawn(h_->size(), 0);
+      std::vector<uint32_t> ids = sorted(visible);
+      for (uint32_t id : ids) drawn[id] = 1;
+      renderer_->draw_nodes(ids, SceneRenderer::Mode::DepthOnly);
+      if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn)) return;
+      const uint32_t or_us = micros_since(or_start);
+
+      // ---- HC(frame): camera to the render client first, then cull and stream the diff.
+      if (auto err = rvg_->send(to_wire(cam->number, cam->camera, {o_.width, o_.height})))
+        throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + *err);
+      const Clock::time_point hc_start = Clock::now();
+      hc_frame(frame, cam->camera, visible, or_us, hc_start);
+    }
+  }
+
+  // Applies and draws the other node's diff of `frame` until its EndOfFrame. Returns false when
+  // the other node closed cleanly instead (the run is over).
+  bool receive_stream(uint32_t frame, VisibleSet& visible, DiffReceiver& stream, std::vector<uint8_t>& drawn) {
+    bool cleared = false;  // full-sets mode: the frame's first message replaces the set
+    auto start_frame = [&] {
+      if (o_.config.full_sets && !cleared) visible.clear();
+      cleared = true;
+    };
+    for (;;) {
+      net::Received r = peer_->receive(Millis(o_.timeout_ms));
+      if (r.status == net::Received::Status::closed) return false;
+      if (!r.ok())
+        throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
+                          peer_->peer() + ") " + (r.status == net::Received::Status::timeout ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms" : r.reason));
+      if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
+        start_frame();
+        if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
+        std::vector<uint32_t> fresh;
+        for (uint32_t id : d->added)
+          if (!drawn[id]) {
+            drawn[id] = 1;
+            fresh.push_back(id);
+          }
+        renderer_->draw_nodes(fresh, SceneRenderer::Mode::DepthOnly);
+      } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
+        start_frame();
+        if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
+        if (auto err = stream.on_end_of_frame(visible, *e)) throw NodeFailure("desync: " + *err);
+        return true;
+      } else {
+        throw NodeFailure("frame " + std::to_string(frame) + ": unexpected " +
+                          std::string(wire::type_name(wire::type_of(r.message))) + " from the other switch node");
+      }
+    }
+  }
+
+  void hc_frame(uint32_t frame, const Camera& cam, VisibleSet& visible, uint32_t or_us, Clock::time_point hc_start) {
+    const uint32_t b = uint32_t(o_.diff_chunk_ids);
+    std::vector<uint32_t> pending;
+    auto flush = [&](bool force) {
+      if (pending.empty() || (!force && pending.size() < b)) return;
+      send_both(wire::NodeDiff{frame, pending, {}});
+      pending.clear();
+    };
+    querier_->begin(cam);
+    CullStats stats;
+    SetDiff diff;
+    std::vector<uint32_t> leaves = hardware_cull(
+        *h_, cam, *querier_,
+        [&](uint32_t id) {
+          if (o_.config.full_sets || !visible.contains(id)) {
+            pending.push_back(id);
+            diff.added.push_back(id);
+            flush(false);
+          }
+        },
+        &stats);
+    querier_->end();
+    flush(true);
+    VisibleSet cur(uint32_t(h_->size()));
+    for (uint32_t id : leaves) cur.insert(id);
+    if (!o_.config.full_sets) {
+      for (uint32_t id : visible.ids())
+        if (!cur.contains(id)) diff.removed.push_back(id);
+      for (auto& chunk : wire::chunk_node_diff(frame, {}, diff.removed, b)) send_both(chunk);
+    }
+    wire::EndOfFrame eof = make_end_of_frame(frame, diff, cur);
+    eof.queries = stats.queries;
+    eof.or_us = or_us;
+    eof.hc_us = micros_since(hc_start);
+    for (uint32_t id : leaves) eof.triangles += h_->node(id).triangles;
+    send_both(eof);
+    visible = std::move(cur);
+    ++frames_;
+    queries_ += stats.queries;
+  }
+
+  void print_summary() const {
+    if (!rvg_ || !peer_) return;
+    auto r = rvg_->stats(), p = peer_->stats();
+    std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries, sent " << r.sent.bytes
+              << " B to the render client and " << p.sent.bytes << " B to the other node\n";
+  }
+
+  const NodeOptions& o_;
+  std::string who_;
+  const Hierarchy* h_ = nullptr;
+  std::unique_ptr<GlContext> ctx_;
+  std::unique_ptr<SceneRenderer> renderer_;
+  std::unique_ptr<BoxQuerier> querier_;
+  std::unique_ptr<net::Connection> peer_, rvg_;
+  CameraBuffer cameras_;
+  std::atomic<bool> rvg_bye_{false};
+  uint64_t frames_ = 0, queries_ = 0;
+};
+
+}  // namespace
+
+int run_switch_node(const NodeOptions& opts) { return SwitchNode(opts).run(); }
+
+}  // namespace occ
