@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "common/camera_path.hpp"
+#include "common/progress.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
@@ -92,7 +93,8 @@ class Client {
     wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height});
     for (int k = 0; k < 2; ++k)
       if (auto err = nodes_[k]->send(w))
-        throw ClientFailure("sending camera " + std::to_string(number) + " to switch node " + std::to_string(k) + ": " + *err);
+        throw ClientFailure("frame " + std::to_string(frame_) + ": sending camera " + std::to_string(number) +
+                            " to switch node " + std::to_string(k) + " (" + nodes_[k]->peer() + "): " + *err);
   }
 
   net::Received receive_from(int node, uint32_t frame) {
@@ -120,6 +122,7 @@ class Client {
       send_camera(next_camera++);
     start_ = Clock::now();
     for (uint32_t frame = 0;; ++frame) {
+      frame_ = frame;
       const int k = int(hc_node_of_frame(frame));
       const uint64_t bytes_before = nodes_[0]->stats().received.bytes + nodes_[1]->stats().received.bytes;
       // 1. The camera HC used for this frame comes first.
@@ -178,10 +181,10 @@ class Client {
       hc_ms_ += eof.hc_us / 1000.0;
       or_ms_ += eof.or_us / 1000.0;
       rvg_ms_ += ms_between(r0, shown);
-      if (frame % 10 == 9) std::fprintf(stderr, "\rrender_client: frame %u (camera %u/%u)", frame + 1, wcam->frame + 1, n);
+      if (frame % 10 == 9) progress("render_client: frame %u (camera %u/%u)", frame + 1, wcam->frame + 1, n);
       if (wcam->frame + 1 == n) break;
     }
-    std::fprintf(stderr, "\n");
+    progress_done();
   }
 
   void summary() const {
@@ -216,6 +219,7 @@ class Client {
   std::unique_ptr<SceneRenderer> renderer_;
   std::unique_ptr<net::Connection> nodes_[2];
   std::map<uint32_t, Clock::time_point> sent_at_;
+  uint32_t frame_ = 0;  // the frame being received (for messages)
   Clock::time_point start_;
   std::vector<Clock::time_point> frame_done_;
   std::vector<double> latency_;

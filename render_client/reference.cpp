@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "common/camera_path.hpp"
+#include "common/progress.hpp"
 #include "common/culling.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -43,10 +44,10 @@ int run_reference(const ClientOptions& o) {
     total_tris += st.triangles;
     frame_ms.push_back(ms);
     if (f % 10 == 9 || f + 1 == path.size())
-      std::fprintf(stderr, "\rrender_client: frame %u/%zu", f + 1, path.size());
+      progress("render_client: frame %u/%zu", f + 1, path.size());
   }
   std::sort(frame_ms.begin(), frame_ms.end());
-  std::fprintf(stderr, "\n");
+  progress_done();
   std::printf("reference (%s): frames=%zu mean_ms=%.2f median_ms=%.2f mean_fps=%.2f triangles_per_frame=%.0f "
               "mtri_per_s=%.2f\n",
               o.cull.c_str(), path.size(), total_ms / path.size(), frame_ms[frame_ms.size() / 2],

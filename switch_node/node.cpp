@@ -47,11 +47,10 @@ class SwitchNode {
     } catch (const NodeFailure& e) {
       std::cerr << "error: " << who_ << ": " << e.what() << "\n";
       code = 1;
+      peer_->close_with_error(who_ + " failed: " + e.what());
+      rvg_->close_with_error(who_ + " failed: " + e.what());
     }
-    if (code != 0) {
-      peer_->close_with_error(who_ + " failed");
-      rvg_->close_with_error(who_ + " failed");
-    } else {
+    if (code == 0) {
       peer_->close("done");
     }
     rvg_->close(code ? "failed" : "done");

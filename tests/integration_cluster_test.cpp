@@ -1,0 +1,190 @@
+// The occlusion switch end to end: three real processes over loopback, compared with the
+// reference renderer frame by frame (conservative culling must not change a pixel).
+#include <gtest/gtest.h>
+
+#include "integration_util.hpp"
+
+using namespace occtest;
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::vector<std::string> kView = {"--width", "192", "--height", "144"};
+
+struct ClusterRun {
+  int rvg_code = -1, node0_code = -1, node1_code = -1;
+  std::string rvg_log, node0_log, node1_log;
+};
+
+// Starts node 0, node 1 and the render client like scripts/cluster.sh does.
+ClusterRun run_cluster(const fs::path& out, const std::string& scene, const std::string& path,
+                       std::vector<std::string> extra = {}, std::vector<std::string> rvg_extra = {},
+                       std::vector<std::string> node1_extra = {},
+                       std::chrono::milliseconds timeout = 300s) {
+  fs::create_directories(out);
+  std::vector<std::string> common = {"--scene", scene, "--timeout-ms", "20000"};
+  common.insert(common.end(), kView.begin(), kView.end());
+  common.insert(common.end(), extra.begin(), extra.end());
+  auto args = [&](std::vector<std::string> a, const std::vector<std::string>& more = {}) {
+    a.insert(a.end(), common.begin(), common.end());
+    a.insert(a.end(), more.begin(), more.end());
+    return a;
+  };
+  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}), out / "node0.log");
+  int p0 = wait_port(out / "n0.port", n0);
+  Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
+                (out / "n1.port").string()}, node1_extra),
+          out / "node1.log");
+  int p1 = wait_port(out / "n1.port", n1);
+  ClusterRun r;
+  if (p0 && p1) {
+    Proc rvg(args({bin("render_client"), "--path", path, "--out", out.string(), "--connect",
+                   "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}, rvg_extra),
+             out / "render_client.log");
+    r.rvg_code = rvg.wait(timeout);
+    r.rvg_log = rvg.log();
+  }
+  r.node0_code = n0.wait(30s);
+  r.node1_code = n1.wait(30s);
+  r.node0_log = n0.log();
+  r.node1_log = n1.log();
+  return r;
+}
+
+int run_reference(const fs::path& out, const std::string& scene, const std::string& path) {
+  fs::create_directories(out);
+  std::vector<std::string> a = {bin("render_client"), "--reference", "--scene", scene, "--path", path, "--out", out.string()};
+  a.insert(a.end(), kView.begin(), kView.end());
+  Proc p(a, out / "reference.log");
+  return p.wait(300s);
+}
+
+// frame_diff exit code; its last line in *summary.
+int frame_diff(const fs::path& a, const fs::path& b, std::string* summary) {
+  Proc p({bin("frame_diff"), a.string(), b.string(), "--max-fraction", "0.0001"}, a / "diff.log");
+  int code = p.wait(120s);
+  std::string log = p.log();
+  size_t last = log.rfind("frames=");
+  *summary = last == std::string::npos ? log : log.substr(last);
+  return code;
+}
+
+void expect_cluster_equals_reference(const std::string& name, const std::string& scene, const std::string& path,
+                                     size_t frames, bool coherent) {
+  fs::path dir = fresh_dir(name);
+  ClusterRun r = run_cluster(dir / "cluster", scene, path);
+  ASSERT_EQ(r.rvg_code, 0) << r.rvg_log << r.node0_log << r.node1_log;
+  EXPECT_EQ(r.node0_code, 0) << r.node0_log;
+  EXPECT_EQ(r.node1_code, 0) << r.node1_log;
+  ASSERT_EQ(run_reference(dir / "reference", scene, path), 0) << read_file(dir / "reference" / "reference.log");
+  std::string summary;
+  EXPECT_EQ(frame_diff(dir / "reference", dir / "cluster", &summary), 0) << summary;
+  EXPECT_NE(summary.find("frames=" + std::to_string(frames)), std::string::npos) << summary;
+
+  // Every frame arrived and verified (the client exits non-zero on a desync), and culling culled.
+  auto stats = read_csv(dir / "cluster" / "stats.csv");
+  ASSERT_EQ(stats["frame"].size(), frames);
+  size_t leaves = 0;
+  auto pos = r.rvg_log.find("leaves=");
+  ASSERT_NE(pos, std::string::npos);
+  leaves = std::stoul(r.rvg_log.substr(pos + 7));
+  // From frame 2 on the occluders are the previous visible set (frame 0 has none).
+  std::vector<double> warm(stats["visible"].begin() + 2, stats["visible"].end());
+  EXPECT_LT(sum(warm) / warm.size(), 0.5 * leaves);
+  // Incremental transmission: the diff ids sent are fewer than the visible sets they describe.
+  // (Not on a walk through walls: each wall crossing empties and refills the set.)
+  if (coherent) {
+    EXPECT_LT(sum(stats["added"]) + sum(stats["removed"]), sum(stats["visible"]));
+  }
+  for (double q : stats["queries"]) EXPECT_GT(q, 0);
+}
+
+}  // namespace
+
+TEST(Cluster, CityWalkEqualsReference) {
+  expect_cluster_equals_reference("city", "city:6x6:3:10:1", "walk:90", 90, true);
+}
+
+TEST(Cluster, DuplexWalkEqualsReference) {
+  if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
+  expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);
+}
+
+TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {
+  fs::path dir = fresh_dir("fullsets");
+  ClusterRun inc = run_cluster(dir / "inc", "city:6x6:3:10:1", "walk:90", {}, {"--no-images"});
+  ClusterRun full = run_cluster(dir / "full", "city:6x6:3:10:1", "walk:90", {"--full-sets"}, {"--no-images"});
+  ASSERT_EQ(inc.rvg_code, 0) << inc.rvg_log;
+  ASSERT_EQ(full.rvg_code, 0) << full.rvg_log;
+  auto a = read_csv(dir / "inc" / "stats.csv"), b = read_csv(dir / "full" / "stats.csv");
+  EXPECT_EQ(a["visible"], b["visible"]);  // same sets either way
+  EXPECT_LT(sum(a["bytes_received"]), sum(b["bytes_received"]));
+}
+
+TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage) {
+  fs::path dir = fresh_dir("kill");
+  fs::path out = dir / "cluster";
+  fs::create_directories(out);
+  std::vector<std::string> common = {"--scene", "city:6x6:3:10:1", "--timeout-ms", "20000"};
+  common.insert(common.end(), kView.begin(), kView.end());
+  auto args = [&](std::vector<std::string> a) {
+    a.insert(a.end(), common.begin(), common.end());
+    return a;
+  };
+  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}), out / "node0.log");
+  int p0 = wait_port(out / "n0.port", n0);
+  Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
+                (out / "n1.port").string()}),
+          out / "node1.log");
+  int p1 = wait_port(out / "n1.port", n1);
+  ASSERT_TRUE(p0 && p1);
+  Proc rvg(args({bin("render_client"), "--path", "walk:100000", "--out", out.string(), "--connect",
+                 "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}),
+           out / "render_client.log");
+  // Kill node 1 once frames are flowing.
+  for (int i = 0; i < 500 && read_csv(out / "stats.csv")["frame"].size() < 20; ++i) std::this_thread::sleep_for(20ms);
+  ASSERT_GE(read_csv(out / "stats.csv")["frame"].size(), 20u) << rvg.log();
+  n1.kill_now();
+  const auto t0 = std::chrono::steady_clock::now();
+  int code = rvg.wait(30s);
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::string log = rvg.log();
+  EXPECT_EQ(code, 1) << log;
+  EXPECT_LT(waited_s, 20.0);  // ended by the disconnect, not by the 20 s timeout
+  EXPECT_NE(log.find("error: render_client: frame "), std::string::npos) << log;
+  EXPECT_NE(log.find("switch node 1"), std::string::npos) << log;
+  EXPECT_EQ(n0.wait(30s), 1) << n0.log();
+  // Every frame file is complete and has its stats row: nothing partial was written.
+  size_t pngs = 0;
+  for (auto& e : fs::directory_iterator(out)) {
+    std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    pngs += name.rfind("frame_", 0) == 0;
+  }
+  EXPECT_EQ(pngs, read_csv(out / "stats.csv")["frame"].size());
+}
+
+TEST(ClusterFaults, SceneFingerprintMismatchIsRefusedAtHandshakeNamingBoth) {
+  fs::path out = fresh_dir("fingerprint");
+  Proc n0({bin("switch_node"), "--id", "0", "--scene", "city:4x4:2:5:1", "--timeout-ms", "3000", "--port-file",
+           (out / "n0.port").string(), "--width", "64", "--height", "64"},
+          out / "node0.log");
+  int p0 = wait_port(out / "n0.port", n0);
+  ASSERT_NE(p0, 0) << n0.log();
+  Proc n1({bin("switch_node"), "--id", "1", "--scene", "city:5x4:2:5:1", "--timeout-ms", "3000", "--peer",
+           "127.0.0.1:" + std::to_string(p0), "--width", "64", "--height", "64"},
+          out / "node1.log");
+  EXPECT_EQ(n1.wait(30s), 1);
+  EXPECT_EQ(n0.wait(30s), 1);  // never got a valid peer
+  std::string l1 = n1.log(), l0 = n0.log();
+  auto fingerprint_of = [](const std::string& log) {
+    auto p = log.find("fingerprint ");
+    return p == std::string::npos ? std::string("?") : log.substr(p + 12, 16);
+  };
+  std::string f0 = fingerprint_of(l0), f1 = fingerprint_of(l1);
+  ASSERT_NE(f0, f1);
+  EXPECT_NE(l1.find("fingerprint mismatch"), std::string::npos) << l1;
+  EXPECT_NE(l1.find(f0), std::string::npos) << l1;
+  EXPECT_NE(l1.find(f1), std::string::npos) << l1;
+  EXPECT_NE(l0.find("fingerprint mismatch"), std::string::npos) << l0;
+}
