@@ -1,1 +1,10 @@
-# gl tests
+# GL tests (label gl): need an OpenGL 4.5 core context through EGL or OSMesa (llvmpipe is fine).
+occ_test(gl_test gl LIBS occ_gl SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_context_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_render_test.cpp)
+
+# PNG files and the frame_diff tool (no GL).
+occ_test(image_test unit LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/image_png_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/image_frame_diff_test.cpp)
+add_dependencies(image_test frame_diff)

@@ -1,1 +1,8 @@
-# protocol tests
+# protocol tests: decoders and visible-set algebra (unit), loopback transport (integration)
+occ_test(protocol_test unit LIBS occ_protocol SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_samples.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_wire_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_fuzz_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_visible_set_test.cpp)
+occ_test(net_transport_test integration LIBS occ_net Boost::system SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/net_transport_test.cpp)

@@ -1,0 +1,62 @@
+// Occlusion queries on axis-aligned boxes against the current depth buffer (the GL side of
+// HardwareCull, common/culling.hpp). Each box is drawn as 12 triangles with colour and depth
+// writes off and the reverse-Z depth test GL_GREATER, inside a GL_SAMPLES_PASSED query (one pool
+// per query target: a GL query object is tied to its first target, and this class only counts
+// samples). Boxes are drawn camera-relative: min/max - eye in double, then float, enlarged by a
+// relative epsilon (1e-5 of the corner's distance from the eye) so the result stays
+// conservative: geometry lying on a box face still shows through it.
+//
+// Limitation (callers decide these on the CPU, see visible_without_query): if the eye is inside
+// a box, or the box crosses the near plane, the query rasterises only far faces or nothing and
+// may return 0 samples although content inside the box is visible.
+//
+// Batched use: begin(cam); issue() a whole level; result() each handle (the first waits for the
+// GPU); reset() (or end_batch()) to recycle the handles; end() restores colour/depth writes.
+// Contracts: the GlContext is current on the calling thread and outlives the querier.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "common/camera.hpp"
+#include "common/culling.hpp"
+#include "common/gl/context.hpp"
+
+namespace occ {
+
+class BoxQuerier final : public OcclusionQueries {
+ public:
+  static constexpr double kRelativePad = 1e-5;
+
+  explicit BoxQuerier(GlContext& ctx);
+  ~BoxQuerier() override;
+  BoxQuerier(const BoxQuerier&) = delete;
+  BoxQuerier& operator=(const BoxQuerier&) = delete;
+
+  // Sets up the state for queries from `cam` (does not clear the depth buffer).
+  void begin(const Camera& cam);
+  // Starts a query for `box`, draws it, ends the query. An empty box draws nothing (0 samples).
+  uint32_t issue(const Aabb& box) override;
+  // Samples that passed the depth test for a handle of the current batch (waits for it).
+  // Throws std::out_of_range for a handle not issued since the last reset().
+  uint64_t result(uint32_t handle) override;
+  // Recycles every handle of the batch (their results are no longer needed).
+  void reset();
+  void end_batch() override { reset(); }
+  // Restores colour and depth writes.
+  void end();
+
+  uint64_t queries_issued() const { return queries_issued_; }  // since construction
+
+ private:
+  const GlApi& gl_;
+  GLuint program_ = 0, vao_ = 0;
+  GLint view_projection_loc_ = -1, min_loc_ = -1, max_loc_ = -1;
+  std::vector<GLuint> pool_;  // GL_SAMPLES_PASSED query objects
+  uint32_t next_ = 0;         // first unused query of the pool in this batch
+  glm::dvec3 eye_{0.0};
+  uint64_t queries_issued_ = 0;
+};
+
+}  // namespace occ

@@ -1,0 +1,58 @@
+#include "common/gl/shader.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace occ {
+namespace {
+
+GLuint compile(const GlApi& gl, GLenum stage, const std::string& src) {
+  GLuint sh = gl.CreateShader(stage);
+  const char* text = src.c_str();
+  gl.ShaderSource(sh, 1, &text, nullptr);
+  gl.CompileShader(sh);
+  GLint ok = GL_FALSE;
+  gl.GetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    gl.GetShaderiv(sh, GL_INFO_LOG_LENGTH, &len);
+    std::string log(size_t(std::max(len, 1)), '\0');
+    gl.GetShaderInfoLog(sh, len, nullptr, log.data());
+    gl.DeleteShader(sh);
+    throw std::runtime_error(std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+                             " shader does not compile: " + log.c_str());
+  }
+  return sh;
+}
+
+}  // namespace
+
+GLuint link_program(const GlApi& gl, const std::string& vertex_src, const std::string& fragment_src) {
+  GLuint vs = compile(gl, GL_VERTEX_SHADER, vertex_src);
+  GLuint fs = 0;
+  try {
+    fs = compile(gl, GL_FRAGMENT_SHADER, fragment_src);
+  } catch (...) {
+    gl.DeleteShader(vs);
+    throw;
+  }
+  GLuint prog = gl.CreateProgram();
+  gl.AttachShader(prog, vs);
+  gl.AttachShader(prog, fs);
+  gl.LinkProgram(prog);
+  gl.DeleteShader(vs);  // flagged for deletion; freed with the program
+  gl.DeleteShader(fs);
+  GLint ok = GL_FALSE;
+  gl.GetProgramiv(prog, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    gl.GetProgramiv(prog, GL_INFO_LOG_LENGTH, &len);
+    std::string log(size_t(std::max(len, 1)), '\0');
+    gl.GetProgramInfoLog(prog, len, nullptr, log.data());
+    gl.DeleteProgram(prog);
+    throw std::runtime_error(std::string("program does not link: ") + log.c_str());
+  }
+  return prog;
+}
+
+}  // namespace occ

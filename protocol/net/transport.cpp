@@ -1,0 +1,635 @@
+#include "protocol/net/transport.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+#include <boost/asio.hpp>
+
+namespace occ::net {
+namespace asio = boost::asio;
+using tcp = asio::ip::tcp;
+using boost::system::error_code;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+std::string hex(uint64_t v) {
+  std::string s = "0x";
+  for (int shift = 60; shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
+  return s;
+}
+
+std::string endpoint_string(const tcp::endpoint& ep) {
+  return ep.address().to_string() + ":" + std::to_string(ep.port());
+}
+
+// Bye text from any reason: printable ASCII only, at most kMaxReasonBytes (always valid).
+std::string bye_text(const std::string& reason) {
+  std::string s = reason.substr(0, wire::kMaxReasonBytes);
+  for (char& c : s)
+    if (c < 0x20 || c > 0x7e) c = '?';
+  return s;
+}
+
+Millis remaining_until(Clock::time_point deadline) {
+  return std::max(Millis(0), std::chrono::duration_cast<Millis>(deadline - Clock::now()));
+}
+
+void count(TrafficStats& s, wire::Type t, size_t bytes) {
+  s.bytes += bytes;
+  s.messages += 1;
+  s.bytes_by_type[wire::type_index(t)] += bytes;
+  s.messages_by_type[wire::type_index(t)] += 1;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Connection
+//
+// Threads: the owner's threads call send/receive/close; the io thread runs every socket
+// operation and handler. Shared state is guarded by `m`; the socket and the fields marked
+// "io thread" are touched only by the io thread once start() has run.
+// Lifecycle: open -> ended (end != none: no more sends, a Bye may be queued) -> wind_down():
+// drain the write queue, shutdown(send), discard input until the peer's EOF or close_linger
+// -> force_close(): socket closed, `finished`.
+
+struct Connection::Impl {
+  enum class End { none, closed, error };
+
+  explicit Impl(ConnectionOptions o) : opts(std::move(o)), sock(io), linger_timer(io) {}
+
+  ConnectionOptions opts;
+  asio::io_context io;
+  tcp::socket sock;
+  asio::steady_timer linger_timer;
+  std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
+  std::thread thread;
+  std::string peer = "unknown";
+
+  mutable std::mutex m;
+  std::condition_variable cv_in;   // inbox or end changed
+  std::condition_variable cv_out;  // send queue space, end or finished changed
+  std::deque<std::pair<wire::Message, size_t>> inbox;  // message, encoded bytes
+  size_t inbox_bytes = 0;
+  std::deque<std::vector<uint8_t>> outbox;  // queued, not yet handed to the socket
+  size_t outbox_bytes = 0;                  // queued + in flight
+  bool writing = false;                     // a start_write is posted or a write is in flight
+  bool read_paused = false;                 // inbox full: no read outstanding
+  End end = End::none;
+  std::string end_reason;
+  bool finished = false;  // socket closed
+  ConnectionStats stats;
+
+  // io thread
+  std::array<uint8_t, wire::kHeaderBytes> header{};
+  wire::Type payload_type = wire::Type::hello;
+  std::vector<uint8_t> payload;
+  std::vector<std::vector<uint8_t>> inflight;
+  size_t inflight_bytes = 0;
+  std::array<uint8_t, 4096> discard_buf{};
+  bool read_pending = false;
+  bool peer_eof = false;
+  bool shutdown_sent = false;
+  bool linger_started = false;
+
+  void start() {
+    error_code ec;
+    sock.set_option(tcp::no_delay(true), ec);
+    auto ep = sock.remote_endpoint(ec);
+    if (!ec) peer = endpoint_string(ep);
+    io.restart();
+    work.emplace(io.get_executor());
+    asio::post(io, [this] { read_header(); });
+    thread = std::thread([this] { io.run(); });
+  }
+
+  void stop() {  // owner thread, once, from ~Connection
+    if (!thread.joinable()) return;
+    close("connection closed");
+    asio::post(io, [this] { force_close(); });
+    work.reset();
+    thread.join();
+  }
+
+  // ---- owner side ----
+
+  std::optional<std::string> send(const wire::Message& msg) {
+    if (auto e = wire::invalid_reason(msg)) return "cannot send invalid message: " + *e;
+    std::vector<uint8_t> bytes = wire::encode(msg);
+    std::unique_lock lk(m);
+    const bool space = cv_out.wait_for(lk, opts.send_timeout, [&] {
+      return end != End::none || outbox_bytes < opts.max_send_queue_bytes;
+    });
+    if (end != End::none) return "connection ended: " + end_reason;
+    if (!space) {
+      const std::string reason = "send queue full for " + std::to_string(opts.send_timeout.count()) +
+                                 " ms (" + std::to_string(outbox_bytes) +
+                                 " bytes queued): peer is not reading";
+      end_locked(End::error, reason, Ending::abort);
+      return reason;
+    }
+    queue_locked(std::move(bytes), wire::type_of(msg));
+    return std::nullopt;
+  }
+
+  Received receive(Millis timeout) {
+    std::unique_lock lk(m);
+    cv_in.wait_for(lk, timeout, [&] { return !inbox.empty() || end != End::none; });
+    Received r;
+    if (!inbox.empty()) {
+      r.status = Received::Status::message;
+      r.message = std::move(inbox.front().first);
+      inbox_bytes -= inbox.front().second;
+      inbox.pop_front();
+      if (read_paused && inbox_bytes <= opts.max_receive_queue_bytes / 2) {
+        read_paused = false;
+        asio::post(io, [this] { read_header(); });
+      }
+    } else if (end != End::none) {
+      r.status = end == End::closed ? Received::Status::closed : Received::Status::error;
+      r.reason = end_reason;
+    }
+    return r;
+  }
+
+  void close(const std::string& reason) {
+    std::unique_lock lk(m);
+    end_locked(End::closed, "closed locally: " + reason, Ending::bye, reason);
+    cv_out.wait_for(lk, opts.close_linger + Millis(500), [&] { return finished; });
+  }
+
+  void close_with_error(const std::string& reason) {
+    std::lock_guard lk(m);
+    if (end == End::closed) {  // already winding down: only the verdict changes
+      end_error_locked(reason);
+      return;
+    }
+    end_locked(End::error, reason, Ending::bye);
+  }
+
+  // ---- shared helpers (m held) ----
+
+  enum class Ending { bye, quiet, abort };
+
+  // Ends the connection once: records the verdict, logs an error, and starts the close.
+  void end_locked(End kind, const std::string& reason, Ending how,
+                  const std::string& bye_reason = {}) {
+    if (end != End::none) return;
+    if (kind == End::error) {
+      end_error_locked(reason);
+    } else {
+      end = kind;
+      end_reason = reason;
+    }
+    cv_in.notify_all();
+    cv_out.notify_all();
+    if (how == Ending::abort) return asio::post(io, [this] { force_close(); });
+    if (how == Ending::bye)
+      queue_locked(wire::encode(wire::Bye{bye_text(bye_reason.empty() ? reason : bye_reason)}),
+                   wire::Type::bye);
+    asio::post(io, [this] { wind_down(); });
+  }
+
+  void end_error_locked(const std::string& reason) {
+    end = End::error;
+    end_reason = reason;
+    ++stats.errors;
+    const std::string line = "occ_net: peer " + peer + ": " + reason;
+    if (opts.log) opts.log(line);
+    else std::cerr << line << std::endl;
+    cv_in.notify_all();
+  }
+
+  void queue_locked(std::vector<uint8_t> bytes, wire::Type type) {
+    count(stats.sent, type, bytes.size());
+    outbox_bytes += bytes.size();
+    outbox.push_back(std::move(bytes));
+    if (!writing) {
+      writing = true;
+      asio::post(io, [this] { start_write(); });
+    }
+  }
+
+  // ---- io thread: reading ----
+
+  bool ended() {
+    std::lock_guard lk(m);
+    return end != End::none;
+  }
+
+  void read_header() {
+    if (!sock.is_open() || read_pending) return;
+    if (ended()) return wind_down();  // wind_down owns reading now
+    read_pending = true;
+    asio::async_read(sock, asio::buffer(header), [this](error_code ec, size_t n) {
+      if (after_read(ec)) return;
+      if (ec) return read_failed(ec, n, "header", header.size());
+      auto h = wire::decode_header(header);
+      if (!h) return protocol_error(h.error());
+      payload_type = h->type;
+      payload.resize(h->payload_bytes);  // <= kMaxPayloadBytes, checked by decode_header
+      read_payload();
+    });
+  }
+
+  void read_payload() {
+    read_pending = true;
+    asio::async_read(sock, asio::buffer(payload), [this](error_code ec, size_t n) {
+      if (after_read(ec)) return;
+      if (ec)
+        return read_failed(ec, n, std::string(wire::type_name(payload_type)) + " payload",
+                           payload.size());
+      auto msg = wire::decode_payload(payload_type, payload);
+      if (!msg) return protocol_error(msg.error());
+      deliver(std::move(*msg), wire::kHeaderBytes + payload.size());
+    });
+  }
+
+  // Common start of read handlers: true when the handler must not go on parsing.
+  bool after_read(const error_code& ec) {
+    read_pending = false;
+    if (!sock.is_open()) return true;
+    if (!ended()) return false;
+    if (ec) peer_eof = true;
+    wind_down();
+    return true;
+  }
+
+  void deliver(wire::Message msg, size_t bytes) {
+    std::unique_lock lk(m);
+    count(stats.received, wire::type_of(msg), bytes);
+    if (auto* bye = std::get_if<wire::Bye>(&msg)) {
+      end_locked(End::closed, "peer said bye: " + bye->reason, Ending::quiet);
+      return;
+    }
+    inbox.emplace_back(std::move(msg), bytes);
+    inbox_bytes += bytes;
+    cv_in.notify_one();
+    if (inbox_bytes > opts.max_receive_queue_bytes) {
+      read_paused = true;
+      return;
+    }
+    lk.unlock();
+    read_header();
+  }
+
+  void read_failed(const error_code& ec, size_t got, const std::string& what, size_t want) {
+    peer_eof = true;
+    const bool disconnected = ec == asio::error::eof || ec == asio::error::connection_reset;
+    std::string reason;
+    if (ec == asio::error::eof && got == 0 && what == "header")
+      reason = "peer closed the connection without bye";
+    else if (disconnected && (got > 0 || what != "header"))
+      reason = "peer disconnected mid-message (" + std::to_string(got) + " of " +
+               std::to_string(want) + " " + what + " bytes)";
+    else
+      reason = "read error: " + ec.message();
+    std::lock_guard lk(m);
+    end_locked(End::error, reason, Ending::abort);
+  }
+
+  void protocol_error(const std::string& reason) {
+    std::lock_guard lk(m);
+    end_locked(End::error, reason, Ending::bye, "protocol error: " + reason);
+  }
+
+  // ---- io thread: writing and closing ----
+
+  void start_write() {
+    {
+      std::lock_guard lk(m);
+      inflight_bytes = 0;
+      for (auto& b : outbox) {
+        inflight_bytes += b.size();
+        inflight.push_back(std::move(b));
+      }
+      outbox.clear();
+    }
+    if (!sock.is_open()) return;
+    std::vector<asio::const_buffer> buffers;
+    buffers.reserve(inflight.size());
+    for (const auto& b : inflight) buffers.push_back(asio::buffer(b));
+    asio::async_write(sock, buffers, [this](error_code ec, size_t) {
+      if (!sock.is_open()) return;
+      std::unique_lock lk(m);
+      if (ec) {
+        end_locked(End::error, "write error: " + ec.message(), Ending::quiet);
+        lk.unlock();
+        return force_close();
+      }
+      inflight.clear();
+      outbox_bytes -= inflight_bytes;
+      cv_out.notify_all();
+      if (!outbox.empty()) {
+        lk.unlock();
+        return start_write();
+      }
+      writing = false;
+      const bool is_ended = end != End::none;
+      lk.unlock();
+      if (is_ended) wind_down();
+    });
+  }
+
+  void wind_down() {
+    if (!sock.is_open()) return;
+    if (!linger_started) {
+      linger_started = true;
+      linger_timer.expires_after(opts.close_linger);
+      linger_timer.async_wait([this](error_code ec) {
+        if (!ec) force_close();
+      });
+    }
+    {
+      std::lock_guard lk(m);
+      if (writing) return;  // the write handler calls back when the queue is drained
+    }
+    if (!shutdown_sent) {
+      shutdown_sent = true;
+      error_code ignored;
+      sock.shutdown(tcp::socket::shutdown_send, ignored);
+    }
+    if (peer_eof) return force_close();
+    if (read_pending) return;  // its handler calls back
+    read_pending = true;       // discard input until the peer closes
+    sock.async_read_some(asio::buffer(discard_buf), [this](error_code ec, size_t) {
+      read_pending = false;
+      if (!sock.is_open()) return;
+      if (ec) peer_eof = true;
+      wind_down();
+    });
+  }
+
+  void force_close() {
+    error_code ignored;
+    sock.close(ignored);
+    linger_timer.cancel();
+    std::lock_guard lk(m);
+    outbox.clear();
+    finished = true;
+    cv_out.notify_all();
+    cv_in.notify_all();
+  }
+};
+
+Connection::Connection(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Connection::Connection(Connection&&) noexcept = default;
+Connection& Connection::operator=(Connection&& other) noexcept {
+  if (this != &other) {
+    if (impl_) impl_->stop();
+    impl_ = std::move(other.impl_);
+  }
+  return *this;
+}
+Connection::~Connection() {
+  if (impl_) impl_->stop();
+}
+
+Result<Connection> Connection::connect(const std::string& host, uint16_t port,
+                                       Millis retry_timeout, ConnectionOptions options) {
+  auto impl = std::make_unique<Impl>(std::move(options));
+  const auto deadline = Clock::now() + retry_timeout;
+  std::string last_error = "timed out";
+  for (;;) {
+    error_code ec;
+    tcp::resolver resolver(impl->io);
+    auto endpoints = resolver.resolve(host, std::to_string(port), ec);
+    if (ec) last_error = "cannot resolve " + host + ": " + ec.message();
+    for (const auto& entry : endpoints) {
+      if (remaining_until(deadline) == Millis(0)) break;
+      error_code ignored, result = asio::error::timed_out;
+      bool done = false;
+      impl->sock.close(ignored);
+      impl->sock.async_connect(entry.endpoint(), [&](error_code e) { result = e, done = true; });
+      impl->io.restart();
+      impl->io.run_for(remaining_until(deadline));
+      if (!done) {
+        impl->sock.close(ignored);
+        impl->io.restart();
+        impl->io.run();
+        if (result == asio::error::operation_aborted) result = asio::error::timed_out;
+      }
+      if (!result) {
+        impl->start();
+        return Connection(std::move(impl));
+      }
+      last_error = result.message();
+    }
+    const Millis left = remaining_until(deadline);
+    if (left == Millis(0)) break;
+    std::this_thread::sleep_for(std::min(left, Millis(50)));
+  }
+  return Error{"cannot connect to " + host + ":" + std::to_string(port) + " within " +
+               std::to_string(retry_timeout.count()) + " ms: " + last_error};
+}
+
+std::optional<std::string> Connection::send(const wire::Message& m) { return impl_->send(m); }
+Received Connection::receive(Millis timeout) { return impl_->receive(timeout); }
+void Connection::close(const std::string& reason) { impl_->close(reason); }
+void Connection::close_with_error(const std::string& reason) { impl_->close_with_error(reason); }
+const std::string& Connection::peer() const { return impl_->peer; }
+
+bool Connection::is_open() const {
+  std::lock_guard lk(impl_->m);
+  return impl_->end == Impl::End::none;
+}
+
+ConnectionStats Connection::stats() const {
+  std::lock_guard lk(impl_->m);
+  return impl_->stats;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Handshake
+
+namespace {
+
+std::optional<std::string> hello_mismatch(const wire::Hello& ours, const wire::Hello& peer,
+                                          const PeerExpectation& expect) {
+  auto differs = [](const char* what, auto a, auto b, bool as_hex) -> std::optional<std::string> {
+    if (a == b) return std::nullopt;
+    auto show = [&](uint64_t v) { return as_hex ? hex(v) : std::to_string(v); };
+    return std::string(what) + " mismatch: ours " + show(a) + ", peer has " + show(b);
+  };
+  if (auto e = differs("scene fingerprint", ours.scene_fingerprint, peer.scene_fingerprint, true))
+    return e;
+  if (auto e = differs("build parameter arity", ours.arity, peer.arity, false)) return e;
+  if (auto e = differs("build parameter leaf_items", ours.leaf_items, peer.leaf_items, false))
+    return e;
+  if (auto e = differs("build parameter cluster_triangles", ours.cluster_triangles,
+                       peer.cluster_triangles, false))
+    return e;
+  if (auto e = differs("config hash", ours.config_hash, peer.config_hash, true)) return e;
+  if (expect.role && *expect.role != peer.role)
+    return "unexpected role " + std::string(wire::role_name(peer.role)) + " (expected " +
+           std::string(wire::role_name(*expect.role)) + ")";
+  if (expect.node_id && *expect.node_id != peer.node_id)
+    return "unexpected node id " + std::to_string(peer.node_id) + " (expected " +
+           std::to_string(*expect.node_id) + ")";
+  if (expect.same_viewport && (ours.viewport_width_px != peer.viewport_width_px ||
+                               ours.viewport_height_px != peer.viewport_height_px))
+    return "viewport mismatch: ours " + std::to_string(ours.viewport_width_px) + "x" +
+           std::to_string(ours.viewport_height_px) + ", peer has " +
+           std::to_string(peer.viewport_width_px) + "x" + std::to_string(peer.viewport_height_px);
+  return std::nullopt;
+}
+
+}  // namespace
+
+Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine,
+                              const PeerExpectation& expect, Millis timeout) {
+  auto fail = [&](const std::string& reason) -> Result<wire::Hello> {
+    conn.close_with_error(reason);
+    return Error{"peer " + conn.peer() + ": " + reason};
+  };
+  // A connection that already ended (e.g. the peer's first bytes were garbage) reports why in
+  // receive(); only a hello we cannot send at all fails here.
+  if (auto e = conn.send(mine); e && conn.is_open()) return fail(*e);
+  Received r = conn.receive(timeout);
+  switch (r.status) {
+    case Received::Status::timeout:
+      return fail("no hello within " + std::to_string(timeout.count()) + " ms");
+    case Received::Status::closed:
+    case Received::Status::error: return fail(r.reason);
+    case Received::Status::message: break;
+  }
+  const auto* hello = std::get_if<wire::Hello>(&r.message);
+  if (!hello)
+    return fail("expected hello, got " + std::string(wire::type_name(wire::type_of(r.message))));
+  if (auto e = hello_mismatch(mine, *hello, expect)) return fail(*e);
+  return *hello;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Listener
+
+struct Listener::Impl {
+  asio::io_context io;
+  tcp::acceptor acceptor{io};
+  std::string address;
+  uint16_t port = 0;
+  uint64_t rejected = 0;
+
+  std::string where() const { return address + ":" + std::to_string(port); }
+};
+
+Listener::Listener(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Listener::Listener(Listener&&) noexcept = default;
+Listener& Listener::operator=(Listener&&) noexcept = default;
+Listener::~Listener() = default;
+
+Result<Listener> Listener::open(uint16_t port, const std::string& address) {
+  auto impl = std::make_unique<Impl>();
+  error_code ec;
+  const auto addr = asio::ip::make_address(address, ec);
+  if (ec) return Error{"invalid listen address '" + address + "': " + ec.message()};
+  const tcp::endpoint ep(addr, port);
+  const std::string where = endpoint_string(ep);
+  impl->acceptor.open(ep.protocol(), ec);
+  if (!ec) impl->acceptor.set_option(tcp::acceptor::reuse_address(true), ec);
+  if (!ec) impl->acceptor.bind(ep, ec);
+  if (!ec) impl->acceptor.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) return Error{"cannot listen on " + where + ": " + ec.message()};
+  impl->address = addr.to_string();
+  impl->port = impl->acceptor.local_endpoint(ec).port();
+  if (ec) return Error{"cannot listen on " + where + ": " + ec.message()};
+  return Listener(std::move(impl));
+}
+
+uint16_t Listener::port() const { return impl_->port; }
+const std::string& Listener::address() const { return impl_->address; }
+uint64_t Listener::rejected() const { return impl_->rejected; }
+
+Result<Connection> Listener::accept(Millis timeout, ConnectionOptions options) {
+  auto conn = std::make_unique<Connection::Impl>(std::move(options));
+  error_code result;
+  bool done = false;
+  impl_->acceptor.async_accept(conn->sock, [&](error_code e) { result = e, done = true; });
+  impl_->io.restart();
+  impl_->io.run_for(timeout);
+  if (!done) {
+    error_code ignored;
+    impl_->acceptor.cancel(ignored);
+    impl_->io.restart();
+    impl_->io.run();
+  }
+  if (result == asio::error::operation_aborted)
+    return Error{"no connection on " + impl_->where() + " within " +
+                 std::to_string(timeout.count()) + " ms"};
+  if (result) return Error{"accept on " + impl_->where() + ": " + result.message()};
+  conn->start();
+  return Connection(std::move(conn));
+}
+
+Result<Peer> Listener::accept_peer(const wire::Hello& mine, const PeerExpectation& expect,
+                                   Millis overall_timeout, Millis hello_timeout,
+                                   ConnectionOptions options) {
+  const auto deadline = Clock::now() + overall_timeout;
+  std::string last;
+  for (Millis left; (left = remaining_until(deadline)) > Millis(0);) {
+    auto conn = accept(left, options);
+    if (!conn) {
+      if (remaining_until(deadline) == Millis(0)) break;  // timed out
+      return Error{conn.error()};
+    }
+    auto hello = handshake(*conn, mine, expect,
+                           std::max(Millis(1), std::min(hello_timeout, remaining_until(deadline))));
+    if (hello) return Peer{std::move(*conn), std::move(*hello)};
+    ++impl_->rejected;
+    last = hello.error();
+  }
+  return Error{"no valid peer on " + impl_->where() + " within " +
+               std::to_string(overall_timeout.count()) + " ms (" +
+               std::to_string(impl_->rejected) + " rejected" +
+               (last.empty() ? "" : "; last: " + last) + ")"};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Port files
+
+std::optional<std::string> write_port_file(const std::string& path, uint16_t port) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << port << '\n';
+    out.flush();
+    if (!out) return "cannot write port file " + tmp;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    return "cannot rename " + tmp + " to " + path;
+  }
+  return std::nullopt;
+}
+
+Result<uint16_t> read_port_file(const std::string& path, Millis timeout) {
+  const auto deadline = Clock::now() + timeout;
+  for (;;) {
+    std::ifstream in(path);
+    if (in) {
+      std::string text;
+      std::getline(in, text);
+      unsigned value = 0;
+      auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (ec != std::errc() || end != text.data() + text.size() || value == 0 || value > 65535)
+        return Error{"port file " + path + ": invalid content '" + text.substr(0, 32) + "'"};
+      return static_cast<uint16_t>(value);
+    }
+    if (remaining_until(deadline) == Millis(0))
+      return Error{"port file " + path + " did not appear within " +
+                   std::to_string(timeout.count()) + " ms"};
+    std::this_thread::sleep_for(std::min(remaining_until(deadline), Millis(10)));
+  }
+}
+
+}  // namespace occ::net

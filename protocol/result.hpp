@@ -1,0 +1,39 @@
+// Result<T>: a value or an error reason (a C++20 stand-in for std::expected<T, std::string>).
+// Used wherever bad external input (bytes, peers) must come back as a value, never as a crash
+// or an escaping exception. Checks that produce no value return std::optional<std::string>
+// (nullopt = fine, else the reason), like Camera::invalid_reason().
+#pragma once
+#include <string>
+#include <utility>
+#include <variant>
+
+namespace occ {
+
+struct Error {
+  std::string reason;
+};
+
+template <class T>
+class [[nodiscard]] Result {
+ public:
+  Result(T value) : v_(std::in_place_index<0>, std::move(value)) {}
+  Result(Error error) : v_(std::in_place_index<1>, std::move(error)) {}
+
+  bool ok() const { return v_.index() == 0; }
+  explicit operator bool() const { return ok(); }
+
+  // Preconditions: ok() for value access, !ok() for error().
+  T& value() & { return std::get<0>(v_); }
+  const T& value() const& { return std::get<0>(v_); }
+  T&& value() && { return std::get<0>(std::move(v_)); }
+  T* operator->() { return &value(); }
+  const T* operator->() const { return &value(); }
+  T& operator*() & { return value(); }
+  const T& operator*() const& { return value(); }
+  const std::string& error() const { return std::get<1>(v_).reason; }
+
+ private:
+  std::variant<T, Error> v_;
+};
+
+}  // namespace occ

@@ -1,0 +1,450 @@
+#include "protocol/wire.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <concepts>
+#include <stdexcept>
+
+namespace occ::wire {
+namespace {
+
+// ---- number formatting for error messages (shortest round-trip form) ----
+
+std::string num(double v) {
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+template <std::integral T>
+std::string num(T v) {
+  return std::to_string(v);
+}
+std::string hex(uint64_t v, int digits = 16) {
+  std::string s = "0x";
+  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
+  return s;
+}
+
+// ---- little-endian writer / reader ----
+
+class Writer {
+ public:
+  explicit Writer(std::vector<uint8_t>& out) : out_(out) {}
+  void u8(uint8_t v) { out_.push_back(v); }
+  void u16(uint16_t v) { le(v, 2); }
+  void u32(uint32_t v) { le(v, 4); }
+  void u64(uint64_t v) { le(v, 8); }
+  void f64(double v) { u64(std::bit_cast<uint64_t>(v)); }
+  void str(const std::string& s) {
+    u16(static_cast<uint16_t>(s.size()));
+    out_.insert(out_.end(), s.begin(), s.end());
+  }
+
+ private:
+  void le(uint64_t v, int n) {
+    for (int i = 0; i < n; ++i) out_.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  }
+  std::vector<uint8_t>& out_;
+};
+
+// Callers check remaining() before reading; reads past the end are a programming error.
+class Reader {
+ public:
+  explicit Reader(std::span<const uint8_t> b) : b_(b) {}
+  size_t remaining() const { return b_.size() - pos_; }
+  uint8_t u8() { return b_[pos_++]; }
+  uint16_t u16() { return static_cast<uint16_t>(le(2)); }
+  uint32_t u32() { return static_cast<uint32_t>(le(4)); }
+  uint64_t u64() { return le(8); }
+  double f64() { return std::bit_cast<double>(u64()); }
+  std::string bytes(size_t n) {
+    std::string s(reinterpret_cast<const char*>(b_.data() + pos_), n);
+    pos_ += n;
+    return s;
+  }
+  void ids(std::vector<uint32_t>& out, size_t n) {
+    out.resize(n);
+    for (auto& id : out) id = u32();
+  }
+
+ private:
+  uint64_t le(int n) {
+    uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v |= uint64_t(b_[pos_ + i]) << (8 * i);
+    pos_ += n;
+    return v;
+  }
+  std::span<const uint8_t> b_;
+  size_t pos_ = 0;
+};
+
+// ---- sizes ----
+
+constexpr uint32_t kHelloFixedBytes = 46;
+constexpr uint32_t kCameraBytes = 100;
+constexpr uint32_t kNodeDiffFixedBytes = 12;
+constexpr uint32_t kEndOfFrameBytes = 52;
+constexpr uint32_t kByeFixedBytes = 2;
+
+struct Bounds {
+  uint32_t min_bytes, max_bytes;
+};
+Bounds payload_bounds(Type t) {
+  switch (t) {
+    case Type::hello: return {kHelloFixedBytes, kHelloFixedBytes + uint32_t(kMaxNameBytes)};
+    case Type::camera: return {kCameraBytes, kCameraBytes};
+    case Type::node_diff: return {kNodeDiffFixedBytes, kMaxPayloadBytes};
+    case Type::end_of_frame: return {kEndOfFrameBytes, kEndOfFrameBytes};
+    case Type::bye: return {kByeFixedBytes, kByeFixedBytes + uint32_t(kMaxReasonBytes)};
+  }
+  return {0, 0};
+}
+bool known_type(uint16_t t) { return t >= 1 && t <= kTypeCount; }
+
+std::optional<std::string> check_bounds(Type t, size_t payload_bytes) {
+  const Bounds b = payload_bounds(t);
+  if (payload_bytes > kMaxPayloadBytes)
+    return std::string(type_name(t)) + " payload too large: " + num(payload_bytes) + " bytes (maximum " +
+           num(kMaxPayloadBytes) + ")";
+  if (payload_bytes < b.min_bytes || payload_bytes > b.max_bytes) {
+    std::string want = b.min_bytes == b.max_bytes
+                           ? num(b.min_bytes)
+                           : num(b.min_bytes) + ".." + num(b.max_bytes);
+    return std::string(type_name(t)) + ": payload of " + num(payload_bytes) + " bytes, expected " +
+           want;
+  }
+  return std::nullopt;
+}
+
+// ---- semantic rules ----
+
+// Well-formed UTF-8 without control characters (strings end up in one-line logs).
+std::optional<std::string> text_error(std::string_view what, const std::string& s, size_t max) {
+  if (s.size() > max)
+    return std::string(what) + " of " + num(s.size()) + " bytes exceeds " + num(max);
+  const auto* p = reinterpret_cast<const uint8_t*>(s.data());
+  const size_t n = s.size();
+  for (size_t i = 0; i < n;) {
+    const uint8_t c = p[i];
+    size_t len = 0;
+    uint8_t lo = 0x80, hi = 0xbf;  // allowed range of the second byte
+    if (c < 0x80) {
+      if (c < 0x20 || c == 0x7f)
+        return std::string(what) + ": control character " + hex(c, 2) +
+               " at byte " + num(i);
+      ++i;
+      continue;
+    }
+    if (c >= 0xc2 && c <= 0xdf) len = 2;
+    else if (c >= 0xe0 && c <= 0xef) len = 3, lo = c == 0xe0 ? 0xa0 : 0x80, hi = c == 0xed ? 0x9f : 0xbf;
+    else if (c >= 0xf0 && c <= 0xf4) len = 4, lo = c == 0xf0 ? 0x90 : 0x80, hi = c == 0xf4 ? 0x8f : 0xbf;
+    bool ok = len != 0 && i + len <= n && p[i + 1] >= lo && p[i + 1] <= hi;
+    for (size_t k = 2; ok && k < len; ++k) ok = p[i + k] >= 0x80 && p[i + k] <= 0xbf;
+    if (!ok) return std::string(what) + ": invalid UTF-8 at byte " + num(i);
+    i += len;
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> viewport_error(uint32_t w, uint32_t h, uint32_t min_px) {
+  if (w < min_px || h < min_px || w > kMaxViewportPx || h > kMaxViewportPx)
+    return "viewport " + num(w) + "x" + num(h) + " outside [" + num(min_px) + ", " +
+           num(kMaxViewportPx) + "]";
+  return std::nullopt;
+}
+
+std::optional<std::string> check(const Hello& m) {
+  if (static_cast<uint8_t>(m.role) > static_cast<uint8_t>(Role::tool))
+    return "unknown role " + num(static_cast<uint8_t>(m.role));
+  if (auto e = viewport_error(m.viewport_width_px, m.viewport_height_px, 0)) return e;
+  return text_error("name", m.name, kMaxNameBytes);
+}
+
+std::optional<std::string> check(const Camera& m) {
+  const std::pair<const char*, double> fields[] = {
+      {"eye.x", m.eye[0]},         {"eye.y", m.eye[1]},         {"eye.z", m.eye[2]},
+      {"orientation.w", m.orientation[0]}, {"orientation.x", m.orientation[1]},
+      {"orientation.y", m.orientation[2]}, {"orientation.z", m.orientation[3]},
+      {"fovy", m.fovy_rad},        {"aspect", m.aspect},        {"near", m.near_dist},
+      {"far", m.far_dist}};
+  for (const auto& [name, v] : fields)
+    if (!std::isfinite(v)) return "non-finite " + std::string(name) + " (" + num(v) + ")";
+  const double* q = m.orientation;
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (norm == 0) return std::string("zero-length orientation quaternion (zero-length axes)");
+  if (!(std::abs(norm - 1.0) <= 1e-6))
+    return "orientation quaternion is not unit length (norm " + num(norm) + ")";
+  if (!(m.fovy_rad > 0 && m.fovy_rad < 3.141592653589793))
+    return "fovy " + num(m.fovy_rad) + " rad outside (0, pi)";
+  if (!(m.aspect > 0)) return "aspect " + num(m.aspect) + " <= 0";
+  if (!(m.near_dist > 0)) return "near " + num(m.near_dist) + " <= 0";
+  if (!(m.far_dist > m.near_dist))
+    return "far " + num(m.far_dist) + " <= near " + num(m.near_dist);
+  return viewport_error(m.viewport_width_px, m.viewport_height_px, 1);
+}
+
+std::optional<std::string> check(const NodeDiff& m) {
+  const size_t total = m.added.size() + m.removed.size();
+  if (total > kMaxDiffIds)
+    return "frame " + num(m.frame) + ": " + num(total) + " ids exceed " + num(kMaxDiffIds) +
+           " per message";
+  std::vector<uint32_t> all(m.added);
+  all.insert(all.end(), m.removed.begin(), m.removed.end());
+  std::sort(all.begin(), all.end());
+  auto dup = std::adjacent_find(all.begin(), all.end());
+  if (dup == all.end()) return std::nullopt;
+  const uint32_t id = *dup;
+  return "frame " + num(m.frame) + ": duplicate id " + num(id) + " (" +
+         num(std::count(m.added.begin(), m.added.end(), id)) + "x in added, " +
+         num(std::count(m.removed.begin(), m.removed.end(), id)) + "x in removed)";
+}
+
+std::optional<std::string> check(const EndOfFrame&) { return std::nullopt; }
+
+std::optional<std::string> check(const Bye& m) {
+  return text_error("reason", m.reason, kMaxReasonBytes);
+}
+
+// ---- payload codecs ----
+
+void put(Writer& w, const Hello& m) {
+  w.u32(kMagic);
+  w.u16(kProtocolVersion);
+  w.u8(static_cast<uint8_t>(m.role));
+  w.u8(m.node_id);
+  w.u32(m.viewport_width_px);
+  w.u32(m.viewport_height_px);
+  w.u64(m.scene_fingerprint);
+  w.u32(m.arity);
+  w.u32(m.leaf_items);
+  w.u32(m.cluster_triangles);
+  w.u64(m.config_hash);
+  w.str(m.name);
+}
+
+void put(Writer& w, const Camera& m) {
+  w.u32(m.frame);
+  for (double v : m.eye) w.f64(v);
+  for (double v : m.orientation) w.f64(v);
+  w.f64(m.fovy_rad);
+  w.f64(m.aspect);
+  w.f64(m.near_dist);
+  w.f64(m.far_dist);
+  w.u32(m.viewport_width_px);
+  w.u32(m.viewport_height_px);
+}
+
+void put(Writer& w, const NodeDiff& m) {
+  w.u32(m.frame);
+  w.u32(static_cast<uint32_t>(m.added.size()));
+  w.u32(static_cast<uint32_t>(m.removed.size()));
+  for (uint32_t id : m.added) w.u32(id);
+  for (uint32_t id : m.removed) w.u32(id);
+}
+
+void put(Writer& w, const EndOfFrame& m) {
+  w.u32(m.frame);
+  w.u32(m.total_added);
+  w.u32(m.total_removed);
+  w.u32(m.visible_count);
+  w.u64(m.set_hash);
+  w.u64(m.front_hash);
+  w.u32(m.queries);
+  w.u32(m.hc_us);
+  w.u32(m.or_us);
+  w.u64(m.triangles);
+}
+
+void put(Writer& w, const Bye& m) { w.str(m.reason); }
+
+// Reads a u16-prefixed string; the caller has checked the fixed part.
+Result<std::string> get_str(Reader& r, std::string_view what) {
+  const uint16_t n = r.u16();
+  if (n != r.remaining())
+    return Error{std::string(what) + " length " + num(n) + " does not match the " +
+                 num(r.remaining()) + " bytes left in the payload"};
+  return r.bytes(n);
+}
+
+Result<Message> get_hello(Reader& r) {
+  const uint32_t magic = r.u32();
+  if (magic != kMagic)
+    return Error{"bad magic " + hex(magic, 8) + " (expected " + hex(kMagic, 8) + " \"OCSW\")"};
+  const uint16_t version = r.u16();
+  if (version != kProtocolVersion)
+    return Error{"unsupported protocol version " + num(version) + " (this build speaks " +
+                 num(kProtocolVersion) + ")"};
+  Hello m;
+  m.role = static_cast<Role>(r.u8());
+  m.node_id = r.u8();
+  m.viewport_width_px = r.u32();
+  m.viewport_height_px = r.u32();
+  m.scene_fingerprint = r.u64();
+  m.arity = r.u32();
+  m.leaf_items = r.u32();
+  m.cluster_triangles = r.u32();
+  m.config_hash = r.u64();
+  auto name = get_str(r, "name");
+  if (!name) return Error{name.error()};
+  m.name = std::move(*name);
+  return Message{std::move(m)};
+}
+
+Result<Message> get_camera(Reader& r) {
+  Camera m;
+  m.frame = r.u32();
+  for (double& v : m.eye) v = r.f64();
+  for (double& v : m.orientation) v = r.f64();
+  m.fovy_rad = r.f64();
+  m.aspect = r.f64();
+  m.near_dist = r.f64();
+  m.far_dist = r.f64();
+  m.viewport_width_px = r.u32();
+  m.viewport_height_px = r.u32();
+  return Message{m};
+}
+
+Result<Message> get_node_diff(Reader& r) {
+  NodeDiff m;
+  m.frame = r.u32();
+  const uint64_t added = r.u32(), removed = r.u32();
+  const uint64_t need = (added + removed) * 4;  // no overflow in 64 bits
+  if (need != r.remaining())
+    return Error{"frame " + num(m.frame) + ": counts " + num(added) + " added + " + num(removed) +
+                 " removed need " + num(need) + " bytes, payload has " + num(r.remaining())};
+  r.ids(m.added, added);
+  r.ids(m.removed, removed);
+  return Message{std::move(m)};
+}
+
+Result<Message> get_end_of_frame(Reader& r) {
+  EndOfFrame m;
+  m.frame = r.u32();
+  m.total_added = r.u32();
+  m.total_removed = r.u32();
+  m.visible_count = r.u32();
+  m.set_hash = r.u64();
+  m.front_hash = r.u64();
+  m.queries = r.u32();
+  m.hc_us = r.u32();
+  m.or_us = r.u32();
+  m.triangles = r.u64();
+  return Message{m};
+}
+
+Result<Message> get_bye(Reader& r) {
+  auto reason = get_str(r, "reason");
+  if (!reason) return Error{reason.error()};
+  return Message{Bye{std::move(*reason)}};
+}
+
+}  // namespace
+
+std::string_view type_name(Type t) {
+  switch (t) {
+    case Type::hello: return "hello";
+    case Type::camera: return "camera";
+    case Type::node_diff: return "node_diff";
+    case Type::end_of_frame: return "end_of_frame";
+    case Type::bye: return "bye";
+  }
+  return "unknown";
+}
+
+std::string_view role_name(Role r) {
+  switch (r) {
+    case Role::switch_node: return "switch_node";
+    case Role::render_client: return "render_client";
+    case Role::tool: return "tool";
+  }
+  return "unknown";
+}
+
+Type type_of(const Message& m) { return static_cast<Type>(m.index() + 1); }
+
+std::optional<std::string> invalid_reason(const Message& m) {
+  auto e = std::visit([](const auto& msg) { return check(msg); }, m);
+  if (e) return std::string(type_name(type_of(m))) + ": " + *e;
+  return std::nullopt;
+}
+
+std::vector<uint8_t> encode(const Message& m) {
+  std::vector<uint8_t> out;
+  Writer w(out);
+  w.u16(static_cast<uint16_t>(type_of(m)));
+  w.u32(0);  // patched below
+  std::visit([&](const auto& msg) { put(w, msg); }, m);
+  const uint32_t payload = static_cast<uint32_t>(out.size() - kHeaderBytes);
+  for (int i = 0; i < 4; ++i) out[2 + i] = static_cast<uint8_t>(payload >> (8 * i));
+  return out;
+}
+
+Result<FrameHeader> decode_header(std::span<const uint8_t> bytes) {
+  if (bytes.size() < kHeaderBytes)
+    return Error{"truncated header: " + num(bytes.size()) + " of " + num(kHeaderBytes) + " bytes"};
+  Reader r(bytes.first(kHeaderBytes));
+  const uint16_t type = r.u16();
+  const uint32_t payload_bytes = r.u32();
+  if (!known_type(type)) return Error{"unknown message type " + num(type)};
+  if (auto e = check_bounds(static_cast<Type>(type), payload_bytes)) return Error{*e};
+  return FrameHeader{static_cast<Type>(type), payload_bytes};
+}
+
+Result<Message> decode_payload(Type type, std::span<const uint8_t> payload) {
+  if (!known_type(static_cast<uint16_t>(type)))
+    return Error{"unknown message type " + num(static_cast<uint16_t>(type))};
+  if (auto e = check_bounds(type, payload.size())) return Error{*e};
+  Reader r(payload);
+  Result<Message> m = [&]() -> Result<Message> {
+    switch (type) {
+      case Type::hello: return get_hello(r);
+      case Type::camera: return get_camera(r);
+      case Type::node_diff: return get_node_diff(r);
+      case Type::end_of_frame: return get_end_of_frame(r);
+      case Type::bye: return get_bye(r);
+    }
+    return Error{"unreachable"};
+  }();
+  if (!m) return Error{std::string(type_name(type)) + ": " + m.error()};
+  if (auto e = invalid_reason(*m)) return Error{*e};
+  return m;
+}
+
+Result<Message> decode(std::span<const uint8_t> frame) {
+  auto h = decode_header(frame);
+  if (!h) return Error{h.error()};
+  const size_t have = frame.size() - kHeaderBytes;
+  const std::string what = std::string(type_name(h->type)) + " payload";
+  if (have < h->payload_bytes)
+    return Error{"truncated frame: " + num(have) + " of " + num(h->payload_bytes) + " " + what +
+                 " bytes"};
+  if (have > h->payload_bytes)
+    return Error{"trailing bytes: " + num(have - h->payload_bytes) + " after a " +
+                 num(h->payload_bytes) + "-byte " + what};
+  return decode_payload(h->type, frame.subspan(kHeaderBytes));
+}
+
+std::vector<NodeDiff> chunk_node_diff(uint32_t frame, std::span<const uint32_t> added,
+                                      std::span<const uint32_t> removed, uint32_t max_ids) {
+  if (max_ids < 1 || max_ids > kMaxDiffIds)
+    throw std::invalid_argument("chunk_node_diff: max_ids " + num(max_ids) + " outside [1, " +
+                                num(kMaxDiffIds) + "]");
+  std::vector<NodeDiff> out;
+  size_t a = 0, r = 0;
+  while (a < added.size() || r < removed.size()) {
+    NodeDiff d;
+    d.frame = frame;
+    const size_t take_a = std::min<size_t>(max_ids, added.size() - a);
+    const size_t take_r = std::min<size_t>(max_ids - take_a, removed.size() - r);
+    d.added.assign(added.begin() + a, added.begin() + a + take_a);
+    d.removed.assign(removed.begin() + r, removed.begin() + r + take_r);
+    a += take_a;
+    r += take_r;
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+}  // namespace occ::wire

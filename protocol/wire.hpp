@@ -1,0 +1,186 @@
+// occswitch wire format: the single source of truth for every byte the three processes exchange.
+// Bytes only (no sockets); depends on the standard library alone.
+//
+// Encoding rules
+//   - All integers are little-endian and fixed width; f64 is the IEEE-754 binary64 bit pattern
+//     stored as a little-endian u64. Strings are a u16 byte count followed by UTF-8 bytes (no
+//     terminator, no control characters). Nothing is ever memcpy'd from a struct.
+//   - A stream is a sequence of frames: a 6-byte header, then the payload.
+//
+// Frame header (6 bytes)
+//   off size field
+//     0  u16  type            1 hello, 2 camera, 3 node_diff, 4 end_of_frame, 5 bye
+//     2  u32  payload_bytes   <= kMaxPayloadBytes and within the type's size bounds below
+//
+// Hello (46 + name_bytes; 46..110) — first message on every connection, in both directions
+//     0  u32  magic           kMagic 0x5753434F (bytes "OCSW")
+//     4  u16  version         kProtocolVersion
+//     6  u8   role            0 switch_node, 1 render_client, 2 tool
+//     7  u8   node_id         switch node id (0/1); free for the other roles
+//     8  u32  viewport_width_px    0..16384 (0 = none, e.g. a tool)
+//    12  u32  viewport_height_px   0..16384
+//    16  u64  scene_fingerprint    Hierarchy::fingerprint()
+//    24  u32  arity                build parameters that must agree ...
+//    28  u32  leaf_items
+//    32  u32  cluster_triangles
+//    36  u64  config_hash          ... and a hash of every other setting that must agree
+//    44  u16  name_bytes           <= kMaxNameBytes
+//    46  u8[] name                 for logs
+//
+// Camera (100) — camera -> world rotation, camera looks down -Z, +Y up
+//     0  u32  frame
+//     4  f64  eye x, y, z
+//    28  f64  orientation w, x, y, z   unit quaternion (|q| within 1e-6 of 1)
+//    60  f64  fovy_rad                 in (0, pi)
+//    68  f64  aspect                   > 0
+//    76  f64  near                     > 0
+//    84  f64  far                      > near
+//    92  u32  viewport_width_px        1..16384
+//    96  u32  viewport_height_px       1..16384
+//
+// NodeDiff (12 + 4 * (added_count + removed_count)) — one chunk of δ(f,f-1) and δ(f-1,f)
+//     0  u32  frame
+//     4  u32  added_count
+//     8  u32  removed_count
+//    12  u32  added ids [added_count]
+//     .  u32  removed ids [removed_count]     no id twice in one message (in either list)
+//
+// EndOfFrame (52) — closes frame `frame` of a diff stream
+//     0  u32  frame
+//     4  u32  total_added       ids added in all of this frame's NodeDiff chunks
+//     8  u32  total_removed     ids removed in all of this frame's NodeDiff chunks
+//    12  u32  visible_count     |V_f|
+//    16  u64  set_hash          set_hash(V_f), see visible_set.hpp
+//    24  u64  front_hash        0 when unused
+//    32  u32  queries           sender's per-frame statistics: occlusion queries issued,
+//    36  u32  hc_us               HC time (microseconds),
+//    40  u32  or_us               time spent on the OR for this frame (microseconds),
+//    44  u64  triangles           triangles drawn at the chosen LOD (0 = unknown)
+//
+// Bye (2 + reason_bytes; 2..1026) — clean shutdown; the sender closes after it
+//     0  u16  reason_bytes      <= kMaxReasonBytes
+//     2  u8[] reason
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "protocol/result.hpp"
+
+namespace occ::wire {
+
+constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
+constexpr uint16_t kProtocolVersion = 1;
+constexpr size_t kHeaderBytes = 6;
+constexpr uint32_t kMaxPayloadBytes = 1u << 20;
+constexpr size_t kMaxNameBytes = 64;
+constexpr size_t kMaxReasonBytes = 1024;
+constexpr uint32_t kMaxViewportPx = 16384;
+constexpr uint32_t kDefaultDiffChunkIds = 100;  // the paper's buffer size b
+constexpr uint32_t kMaxDiffIds = (kMaxPayloadBytes - 12) / 4;  // ids in one NodeDiff
+
+enum class Type : uint16_t { hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5 };
+constexpr size_t kTypeCount = 5;
+constexpr size_t type_index(Type t) { return static_cast<size_t>(t) - 1; }  // 0..kTypeCount-1
+std::string_view type_name(Type t);  // "hello", ...; "unknown" for values outside the enum
+
+enum class Role : uint8_t { switch_node = 0, render_client = 1, tool = 2 };
+std::string_view role_name(Role r);  // "switch_node", ...; "unknown" outside the enum
+
+struct Hello {
+  Role role = Role::tool;
+  uint8_t node_id = 0;
+  uint32_t viewport_width_px = 0;
+  uint32_t viewport_height_px = 0;
+  uint64_t scene_fingerprint = 0;
+  uint32_t arity = 0;
+  uint32_t leaf_items = 0;
+  uint32_t cluster_triangles = 0;
+  uint64_t config_hash = 0;
+  std::string name;
+  bool operator==(const Hello&) const = default;
+};
+
+struct Camera {
+  uint32_t frame = 0;
+  double eye[3] = {0, 0, 0};
+  double orientation[4] = {1, 0, 0, 0};  // w, x, y, z
+  double fovy_rad = 1.0471975511965976;   // 60 degrees
+  double aspect = 1.0;
+  double near_dist = 0.1;
+  double far_dist = 1000.0;
+  uint32_t viewport_width_px = 1;
+  uint32_t viewport_height_px = 1;
+  bool operator==(const Camera&) const = default;
+};
+
+struct NodeDiff {
+  uint32_t frame = 0;
+  std::vector<uint32_t> added;
+  std::vector<uint32_t> removed;
+  bool operator==(const NodeDiff&) const = default;
+};
+
+struct EndOfFrame {
+  uint32_t frame = 0;
+  uint32_t total_added = 0;
+  uint32_t total_removed = 0;
+  uint32_t visible_count = 0;
+  uint64_t set_hash = 0;
+  uint64_t front_hash = 0;
+  uint32_t queries = 0;
+  uint32_t hc_us = 0;
+  uint32_t or_us = 0;
+  uint64_t triangles = 0;
+  bool operator==(const EndOfFrame&) const = default;
+};
+
+struct Bye {
+  std::string reason;
+  bool operator==(const Bye&) const = default;
+};
+
+using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye>;
+Type type_of(const Message& m);
+
+// The rules a decoded message must satisfy beyond its layout (finite camera values, unit
+// quaternion, near/far, viewport, duplicate ids, string lengths and text, id count). nullopt when
+// valid, else the reason, prefixed by the message type ("camera: near 0 <= 0"). decode() applies
+// exactly these rules; senders call it to fail locally instead of being rejected by the peer.
+std::optional<std::string> invalid_reason(const Message& m);
+
+// Header + payload. Total function: writes whatever the struct holds (check invalid_reason()
+// first); the payload of a valid message is at most kMaxPayloadBytes.
+std::vector<uint8_t> encode(const Message& m);
+
+struct FrameHeader {
+  Type type;
+  uint32_t payload_bytes;
+};
+
+// Streaming step 1: validates the first kHeaderBytes of `bytes` (known type, payload length
+// within kMaxPayloadBytes and the type's bounds) so a reader can size its buffer safely.
+// Bytes beyond the header are ignored.
+Result<FrameHeader> decode_header(std::span<const uint8_t> bytes);
+
+// Streaming step 2: decodes one payload of the given type (the header's bounds are re-checked).
+// Rejects truncation, trailing bytes, bad magic/version, inconsistent counts, and every
+// invalid_reason(). Never allocates more than the payload size.
+Result<Message> decode_payload(Type type, std::span<const uint8_t> payload);
+
+// Decodes exactly one whole frame (header + payload, no more, no less).
+Result<Message> decode(std::span<const uint8_t> frame);
+
+// Splits one frame's diff into NodeDiff messages of at most max_ids ids each (added first, then
+// removed; input order kept). No ids -> no messages. Throws std::invalid_argument unless
+// 1 <= max_ids <= kMaxDiffIds.
+std::vector<NodeDiff> chunk_node_diff(uint32_t frame, std::span<const uint32_t> added,
+                                      std::span<const uint32_t> removed,
+                                      uint32_t max_ids = kDefaultDiffChunkIds);
+
+}  // namespace occ::wire

@@ -1,0 +1,70 @@
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "common/error.hpp"
+#include "common/gl/context.hpp"
+
+using namespace occ;
+
+TEST(GlBackend, ParsesNamesAndRejectsUnknown) {
+  EXPECT_EQ(parse_gl_backend("auto"), GlBackend::Auto);
+  EXPECT_EQ(parse_gl_backend("egl"), GlBackend::Egl);
+  EXPECT_EQ(parse_gl_backend("osmesa"), GlBackend::OSMesa);
+  try {
+    parse_gl_backend("vulkan");
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "--gl 'vulkan': expected egl, osmesa or auto");
+  }
+}
+
+TEST(GlContext, RejectsZeroSizedFramebuffer) {
+  EXPECT_THROW(GlContext::create(GlBackend::Auto, 0, 16), InputError);
+}
+
+class GlContextBackend : public testing::TestWithParam<GlBackend> {};
+
+TEST_P(GlContextBackend, ClearsAndReadsBackColourTopRowFirst) {
+  auto ctx = GlContext::create(GetParam(), 32, 16);
+  EXPECT_EQ(ctx->width(), 32);
+  EXPECT_EQ(ctx->height(), 16);
+  EXPECT_FALSE(ctx->renderer().empty());
+  EXPECT_EQ(std::string(ctx->backend_name()).substr(0, 3), GetParam() == GlBackend::Egl ? "egl" : "osm");
+  const GlApi& gl = ctx->gl();
+  gl.ClearColor(1.0f, 0.0f, 0.0f, 1.0f);
+  gl.Clear(GL_COLOR_BUFFER_BIT);
+  // Paint the bottom half green: GL's origin is bottom-left, the image's first row is the top.
+  gl.Enable(GL_SCISSOR_TEST);
+  gl.Scissor(0, 0, 32, 8);
+  gl.ClearColor(0.0f, 1.0f, 0.0f, 1.0f);
+  gl.Clear(GL_COLOR_BUFFER_BIT);
+  gl.Disable(GL_SCISSOR_TEST);
+  Image img = ctx->read_rgba();
+  ASSERT_EQ(img.rgba.size(), 32u * 16u * 4u);
+  auto px = [&](int x, int y) { return &img.rgba[(size_t(y) * 32 + x) * 4]; };
+  EXPECT_EQ(px(3, 2)[0], 255);  // top: red
+  EXPECT_EQ(px(3, 2)[1], 0);
+  EXPECT_EQ(px(3, 13)[0], 0);  // bottom: green
+  EXPECT_EQ(px(3, 13)[1], 255);
+  EXPECT_EQ(gl.GetError(), GLenum(GL_NO_ERROR));
+}
+
+TEST_P(GlContextBackend, CanBeMovedBetweenThreadsAndRecreated) {
+  for (int round = 0; round < 2; ++round) {
+    auto ctx = GlContext::create(GetParam(), 8, 8);
+    ctx->release_current();
+    std::string renderer;
+    std::thread t([&] {
+      ctx->make_current();
+      renderer = ctx->renderer();
+      ctx->release_current();
+    });
+    t.join();
+    ctx->make_current();
+    EXPECT_EQ(renderer, ctx->renderer());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, GlContextBackend, testing::Values(GlBackend::Egl, GlBackend::OSMesa),
+                         [](const auto& info) { return info.param == GlBackend::Egl ? "Egl" : "OSMesa"; });

@@ -1,0 +1,228 @@
+// SceneRenderer and BoxQuerier on tiny hand-made scenes with known screen positions.
+// Camera at the eye looking down -Z, 60 degrees vertical fov, square 128 x 128 viewport: at
+// distance d the view spans +-d*tan(30 deg) = +-0.577 d.
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "common/gl/box_query.hpp"
+#include "common/gl/context.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "common/hierarchy.hpp"
+
+using namespace occ;
+
+namespace {
+
+constexpr int kSize = 128;
+
+// Unit quad in the XY plane, centred on the origin, facing +Z; `res` x `res` cells.
+Mesh quad_mesh(int res = 1) {
+  Mesh m;
+  for (int y = 0; y <= res; ++y)
+    for (int x = 0; x <= res; ++x) m.positions.push_back({float(x) / res - 0.5f, float(y) / res - 0.5f, 0.0f});
+  for (int y = 0; y < res; ++y)
+    for (int x = 0; x < res; ++x) {
+      uint32_t a = y * (res + 1) + x, b = a + 1, c = a + res + 1, d = c + 1;
+      m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+    }
+  compute_normals(m);
+  return m;
+}
+
+glm::dmat4 place(glm::dvec3 at, double scale = 1.0) {
+  return glm::scale(glm::translate(glm::dmat4(1.0), at), glm::dvec3(scale));
+}
+
+// Two unit quads 4 m in front of the eye, left (x = -1) and right (x = +1), shifted by `offset`.
+Scene two_quads(glm::dvec3 offset = glm::dvec3(0.0), int res = 1) {
+  Scene s;
+  s.meshes.push_back(quad_mesh(res));
+  s.objects.push_back({0, place(offset + glm::dvec3(-1, 0, -4)), "left"});
+  s.objects.push_back({0, place(offset + glm::dvec3(1, 0, -4)), "right"});
+  return s;
+}
+
+Camera camera_at(glm::dvec3 eye) {
+  return Camera::look_at(eye, eye + glm::dvec3(0, 0, -1), {0, 1, 0}, 60.0, 1.0, 0.1, 100.0);
+}
+
+std::array<uint8_t, 4> pixel(const Image& img, int x, int y) {
+  const uint8_t* p = &img.rgba[(size_t(y) * img.width + x) * 4];
+  return {p[0], p[1], p[2], p[3]};
+}
+
+std::vector<uint32_t> all_items(const Hierarchy& h) {
+  std::vector<uint32_t> v(h.items().size());
+  std::iota(v.begin(), v.end(), 0u);
+  return v;
+}
+
+Image render_shaded(GlContext& ctx, Scene scene, const Camera& cam) {
+  Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer r(ctx, scene, h);
+  r.begin_frame(cam, true);
+  r.draw_items(all_items(h), SceneRenderer::Mode::Shaded);
+  return ctx.read_rgba();
+}
+
+class SceneRendererBackend : public testing::TestWithParam<GlBackend> {};
+
+}  // namespace
+
+TEST_P(SceneRendererBackend, ShadesObjectsWhereTheyProjectAndLeavesBackground) {
+  auto ctx = GlContext::create(GetParam(), kSize, kSize);
+  Scene scene = two_quads();
+  Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer r(*ctx, scene, h);
+  r.begin_frame(camera_at({0, 0, 0}), true);
+  DrawStats st = r.draw_items(all_items(h), SceneRenderer::Mode::Shaded);
+  EXPECT_EQ(st.items, 2u);
+  EXPECT_EQ(st.triangles, 4u);
+  Image img = ctx->read_rgba();
+  // Left quad covers columns ~22..50, right ~78..106, rows ~50..78; the centre is a gap.
+  const auto bg = SceneRenderer::kBackgroundRgba8;
+  for (auto [x, y] : {std::pair{64, 64}, {5, 5}, {36, 40}, {36, 88}, {120, 64}})
+    EXPECT_EQ(pixel(img, x, y), bg) << "at " << x << "," << y;
+  const auto left = pixel(img, 36, 64), right = pixel(img, 92, 64);
+  EXPECT_NE(left, bg);
+  EXPECT_NE(right, bg);
+  EXPECT_NE(left, right) << "objects get distinct base colours";
+  EXPECT_EQ(left[3], 255);
+  // Facing the headlight: bright (base colour >= 0.45, lit >= 0.9 at this angle).
+  for (int c = 0; c < 3; ++c) EXPECT_GT(left[c], 90);
+  EXPECT_EQ(ctx->gl().GetError(), GLenum(GL_NO_ERROR));
+}
+
+TEST_P(SceneRendererBackend, FarFromOriginRendersTheSamePixels) {
+  auto ctx = GlContext::create(GetParam(), kSize, kSize);
+  const glm::dvec3 far(1e7, -3e6, 1e7);
+  Image near_img = render_shaded(*ctx, two_quads(), camera_at({0.1, 0.2, 0}));
+  Image far_img = render_shaded(*ctx, two_quads(far), camera_at(far + glm::dvec3(0.1, 0.2, 0)));
+  EXPECT_EQ(near_img.rgba, far_img.rgba);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, SceneRendererBackend, testing::Values(GlBackend::Egl, GlBackend::OSMesa),
+                         [](const auto& info) { return info.param == GlBackend::Egl ? "Egl" : "OSMesa"; });
+
+TEST(SceneRenderer, ClusteredItemsAndWholeNodesDrawTheSameImage) {
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  Scene scene = two_quads({}, 16);  // 512 triangles per quad, split into 32-triangle items
+  BuildParams params;
+  params.cluster_triangles = 32;
+  Hierarchy h = Hierarchy::build(scene, params);
+  ASSERT_EQ(h.items().size(), 32u);
+  SceneRenderer r(*ctx, scene, h);
+  const Camera cam = camera_at({0, 0, 0});
+  r.begin_frame(cam, true);
+  r.draw_items(all_items(h), SceneRenderer::Mode::Shaded);
+  Image by_items = ctx->read_rgba();
+  r.begin_frame(cam, true);
+  const uint32_t root = 0;
+  DrawStats st = r.draw_nodes({&root, 1}, SceneRenderer::Mode::Shaded);
+  EXPECT_EQ(st.items, 32u);
+  EXPECT_EQ(st.triangles, 1024u);
+  EXPECT_EQ(by_items.rgba, ctx->read_rgba().rgba);
+  EXPECT_NE(pixel(by_items, 36, 64), SceneRenderer::kBackgroundRgba8);
+  const uint32_t bad = 32;
+  EXPECT_THROW(r.draw_items({&bad, 1}, SceneRenderer::Mode::Shaded), std::out_of_range);
+}
+
+TEST(SceneRenderer, ItemBufferShowsOnlyUnoccludedItems) {
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  Scene scene = two_quads();
+  // A third, larger quad right behind the left one: hidden except around the left quad.
+  scene.objects.push_back({0, place({-1, 0, -5}, 1.1), "behind-left"});
+  // A fourth quad hidden completely behind the right one.
+  scene.objects.push_back({0, place({1, 0, -6}, 0.5), "hidden"});
+  Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer r(*ctx, scene, h);
+  r.begin_id_frame(camera_at({0, 0, 0}));
+  r.draw_items(all_items(h), SceneRenderer::Mode::ItemIds);
+  std::vector<uint32_t> seen_objects;
+  for (uint32_t item : ids_in_image(ctx->read_rgba())) seen_objects.push_back(h.items()[item].object);
+  std::sort(seen_objects.begin(), seen_objects.end());
+  EXPECT_EQ(seen_objects, (std::vector<uint32_t>{0, 1, 2}));
+
+  // The root node's id everywhere something is drawn.
+  r.begin_id_frame(camera_at({0, 0, 0}));
+  const uint32_t root = 0;
+  r.draw_nodes_ids({&root, 1});
+  EXPECT_EQ(ids_in_image(ctx->read_rgba()), std::vector<uint32_t>{0});
+}
+
+TEST(SceneRenderer, DepthOnlyWritesDepthButNoColour) {
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  Scene scene = two_quads();
+  Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer r(*ctx, scene, h);
+  r.begin_frame(camera_at({0, 0, 0}), true);
+  r.draw_items(all_items(h), SceneRenderer::Mode::DepthOnly);
+  Image img = ctx->read_rgba();
+  EXPECT_EQ(pixel(img, 36, 64), SceneRenderer::kBackgroundRgba8);
+  // Shading the same items afterwards: equal depth fails GL_GREATER, nothing new is drawn.
+  r.draw_items(all_items(h), SceneRenderer::Mode::Shaded);
+  EXPECT_EQ(ctx->read_rgba().rgba, img.rgba);
+}
+
+namespace {
+
+// A 4 x 4 m occluder 5 m in front of the eye, rendered depth-only.
+struct OccluderFixture {
+  std::unique_ptr<GlContext> ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  Scene scene;
+  Hierarchy h;
+  std::unique_ptr<SceneRenderer> renderer;
+  Camera cam;
+
+  explicit OccluderFixture(glm::dvec3 offset) : cam(camera_at(offset)) {
+    scene.meshes.push_back(quad_mesh());
+    scene.objects.push_back({0, place(offset + glm::dvec3(0, 0, -5), 4.0), "occluder"});
+    h = Hierarchy::build(scene, {});
+    renderer = std::make_unique<SceneRenderer>(*ctx, scene, h);
+    renderer->begin_frame(cam, true);
+    renderer->draw_items(all_items(h), SceneRenderer::Mode::DepthOnly);
+  }
+};
+
+Aabb box_at(glm::dvec3 offset, glm::dvec3 lo, glm::dvec3 hi) { return Aabb{offset + lo, offset + hi}; }
+
+class BoxQuerierOffset : public testing::TestWithParam<double> {};
+
+}  // namespace
+
+TEST_P(BoxQuerierOffset, BoxBehindOccluderHasNoSamplesBesideAndInFrontHave) {
+  const glm::dvec3 offset(GetParam(), GetParam(), -GetParam());
+  OccluderFixture f(offset);
+  const Image before = f.ctx->read_rgba();
+  BoxQuerier q(*f.ctx);
+  q.begin(f.cam);
+  // Issue the whole batch first, then read (the batched use).
+  uint32_t behind = q.issue(box_at(offset, {-0.5, -0.5, -8}, {0.5, 0.5, -7}));
+  uint32_t beside = q.issue(box_at(offset, {3, -0.5, -8}, {4, 0.5, -7}));
+  uint32_t in_front = q.issue(box_at(offset, {-0.5, -0.5, -3}, {0.5, 0.5, -2}));
+  uint32_t occluder_itself = q.issue(f.h.items()[0].box);  // flat box on the depth it wrote
+  uint32_t empty = q.issue(Aabb{});
+  EXPECT_EQ(q.result(behind), 0u);
+  EXPECT_GT(q.result(beside), 0u);
+  // In front: its silhouette is the 1 x 1 m face at 2 m, (0.5 / (2 * 0.577) * 128)^2 = 3072
+  // pixels, and every silhouette pixel of a closed box passes twice (front and back faces).
+  EXPECT_NEAR(double(q.result(in_front)), 2 * 3072.0, 300.0);
+  EXPECT_GT(q.result(occluder_itself), 0u) << "the relative pad keeps flat boxes conservative";
+  EXPECT_EQ(q.result(empty), 0u);
+  EXPECT_EQ(q.queries_issued(), 5u);
+  q.end_batch();
+  EXPECT_THROW(q.result(0), std::out_of_range);
+  // Recycled handles work again in the next batch.
+  uint32_t again = q.issue(box_at(offset, {-0.5, -0.5, -8}, {0.5, 0.5, -7}));
+  EXPECT_EQ(again, 0u);
+  EXPECT_EQ(q.result(again), 0u);
+  q.end();
+  EXPECT_EQ(f.ctx->read_rgba().rgba, before.rgba) << "queries write no colour";
+  EXPECT_EQ(f.ctx->gl().GetError(), GLenum(GL_NO_ERROR));
+}
+
+INSTANTIATE_TEST_SUITE_P(NearAndFarFromOrigin, BoxQuerierOffset, testing::Values(0.0, 1e7),
+                         [](const auto& info) { return info.param == 0.0 ? "AtOrigin" : "At1e7"; });
