@@ -45,10 +45,15 @@ class SwitchNode {
     try {
       loop();
     } catch (const NodeFailure& e) {
-      std::cerr << "error: " << who_ << ": " << e.what() << "\n";
-      code = 1;
-      peer_->close_with_error(who_ + " failed: " + e.what());
-      rvg_->close_with_error(who_ + " failed: " + e.what());
+      // A frame in flight when the render client finished (latest mode) is not a failure.
+      for (int i = 0; i < 300 && !rvg_->is_open() && !cameras_done_; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      if (!rvg_bye_) {
+        std::cerr << "error: " << who_ << ": " << e.what() << "\n";
+        code = 1;
+        peer_->close_with_error(who_ + " failed: " + e.what());
+        rvg_->close_with_error(who_ + " failed: " + e.what());
+      }
     }
     if (code == 0) {
       peer_->close("done");
@@ -128,10 +133,12 @@ class SwitchNode {
         rvg_->close_with_error(std::string("unexpected ") + std::string(wire::type_name(wire::type_of(r.message))) +
                                " from the render client");
         cameras_.close("render client sent an unexpected message");
+        cameras_done_ = true;
         return;
       }
       rvg_bye_ = r.status == net::Received::Status::closed;
       cameras_.close(rvg_bye_ ? "render client closed: " + r.reason : "render client failed: " + r.reason);
+      cameras_done_ = true;
       return;
     }
   }
@@ -273,7 +280,7 @@ class SwitchNode {
   std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
   CameraBuffer cameras_;
-  std::atomic<bool> rvg_bye_{false};
+  std::atomic<bool> rvg_bye_{false}, cameras_done_{false};
   uint64_t frames_ = 0, queries_ = 0;
 };
 

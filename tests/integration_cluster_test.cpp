@@ -188,3 +188,15 @@ TEST(ClusterFaults, SceneFingerprintMismatchIsRefusedAtHandshakeNamingBoth) {
   EXPECT_NE(l1.find(f1), std::string::npos) << l1;
   EXPECT_NE(l0.find("fingerprint mismatch"), std::string::npos) << l0;
 }
+
+TEST(Cluster, LatestCameraModeRunsToTheLastCameraWithVerifiedFrames) {
+  fs::path dir = fresh_dir("latest");
+  ClusterRun r = run_cluster(dir, "city:6x6:3:10:1", "walk:40", {"--camera-mode", "latest"}, {"--no-images"});
+  ASSERT_EQ(r.rvg_code, 0) << r.rvg_log;
+  EXPECT_EQ(r.node0_code, 0) << r.node0_log;
+  EXPECT_EQ(r.node1_code, 0) << r.node1_log;
+  auto stats = read_csv(dir / "stats.csv");
+  ASSERT_FALSE(stats["camera"].empty());
+  EXPECT_EQ(stats["camera"].back(), 39);
+  for (size_t i = 1; i < stats["camera"].size(); ++i) EXPECT_GE(stats["camera"][i], stats["camera"][i - 1]);
+}
