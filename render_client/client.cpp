@@ -166,8 +166,8 @@ class Client {
       renderer_->begin_frame(cam, true);
       DrawStats st = renderer_->draw_items(items_of_nodes(*h_, ids), SceneRenderer::Mode::Shaded);
       ctx_->gl().Finish();
+      const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       if (out.writes_images()) out.write_frame(frame, ctx_->read_rgba());
-      const Clock::time_point shown = Clock::now();
       const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
       const uint64_t bytes = nodes_[0]->stats().received.bytes + nodes_[1]->stats().received.bytes - bytes_before;
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The main job on a default scene that needs no extra files: installs what is missing, builds,
-# renders a walk through a generated city and writes frames + stats to out/run/.
+# and runs the occlusion-switch cluster (two switch nodes + render client, three processes on
+# 127.0.0.1) along a walk through a generated city. Frames, stats.csv, logs and the summary go
+# to out/run/ (or $OUT). Extra arguments go to scripts/cluster.sh (e.g. --scene, --frames,
+# --width/--height, --camera-mode latest).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
 OUT=${OUT:-out/run}
-mkdir -p "$OUT"
-export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
-build/bin/render_client --reference --scene city --path walk:60 --width 640 --height 480 --out "$OUT" "$@"
-echo "frames and stats.csv in $OUT"
+scripts/cluster.sh --scene city --path walk --frames 120 --width 640 --height 480 --out "$OUT" "$@"
+echo "run: frames, stats.csv and logs in $OUT"
