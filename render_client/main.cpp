@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
     }
     if (o.connect.size() != 2)
       throw occ::InputError("give --connect twice (both switch nodes), or --reference (see render_client --help)");
+    for (const auto& c : o.connect) occ::parse_endpoint("connect", c);  // fail before loading the scene
     return occ::run_cluster_client(o);
   });
 }

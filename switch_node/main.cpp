@@ -27,6 +27,8 @@ int main(int argc, char** argv) {
     if (!cli.parse(argc, argv)) return 0;
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
     if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");
+    occ::parse_endpoint("listen", o.listen);  // fail before loading the scene
+    if (!o.peer.empty()) occ::parse_endpoint("peer", o.peer);
     return occ::run_switch_node(o);
   });
 }

@@ -1,0 +1,75 @@
+// Bad input to the real binaries: one "error:" line naming what and where, non-zero exit, no
+// crash. Also --help on every binary.
+#include <gtest/gtest.h>
+
+#include "integration_util.hpp"
+
+using namespace occtest;
+using namespace std::chrono_literals;
+
+namespace {
+
+struct Outcome {
+  int code;
+  std::string log;
+};
+
+Outcome run(std::vector<std::string> args, const std::string& name) {
+  static fs::path dir = fresh_dir("cli");
+  Proc p(args, dir / (name + ".log"));
+  return {p.wait(60s), p.log()};
+}
+
+// Exactly one line starts with "error:" and it contains every fragment.
+void expect_one_error(const Outcome& o, std::initializer_list<std::string> fragments) {
+  EXPECT_GT(o.code, 0) << o.log;
+  EXPECT_LT(o.code, 128) << "crashed: " << o.log;
+  size_t errors = 0;
+  std::string line;
+  std::istringstream in(o.log);
+  for (std::string l; std::getline(in, l);)
+    if (l.rfind("error:", 0) == 0) {
+      ++errors;
+      line = l;
+    }
+  EXPECT_EQ(errors, 1u) << o.log;
+  for (const auto& f : fragments) EXPECT_NE(line.find(f), std::string::npos) << "missing '" << f << "' in: " << line;
+}
+
+}  // namespace
+
+TEST(Cli, EveryBinaryHasHelp) {
+  for (const char* b : {"render_client", "switch_node", "frame_diff"}) {
+    Outcome o = run({bin(b), "--help"}, std::string(b) + "_help");
+    EXPECT_EQ(o.code, 0) << b;
+    EXPECT_NE(o.log.find("usage:"), std::string::npos) << b << ": " << o.log;
+  }
+}
+
+TEST(Cli, RenderClientBadInputGetsOneNamedError) {
+  fs::path dir = fresh_dir("cli_inputs");
+  const std::string ref = bin("render_client");
+  expect_one_error(run({ref, "--reference", "--bogus"}, "unknown"), {"unknown flag --bogus"});
+  expect_one_error(run({ref, "--reference", "--width", "0"}, "w0"), {"--width '0'"});
+  expect_one_error(run({ref, "--reference", "--height", "100000"}, "h100k"), {"--height '100000'"});
+  expect_one_error(run({ref, "--reference", "--scene", "/nonexistent/x.gltf"}, "noscene"), {"/nonexistent/x.gltf"});
+  std::ofstream(dir / "bad.gltf") << "{ \"asset\": {\"version\": \"2.0\"}, \"meshes\": [], \"nodes\": [{\"mesh\": 3}], "
+                                     "\"scenes\": [{\"nodes\": [0]}] }";
+  expect_one_error(run({ref, "--reference", "--scene", (dir / "bad.gltf").string()}, "badgltf"),
+                   {"bad.gltf", "node 0", "mesh 3"});
+  expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--path", "/nonexistent/p.csv"}, "nopath"),
+                   {"/nonexistent/p.csv"});
+  std::ofstream(dir / "nan.csv") << "0,0,1,5,0,0,0,0,1,0,60\n1,0,1,nan,0,0,0,0,1,0,60\n";
+  expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--path", (dir / "nan.csv").string()}, "nan"),
+                   {"nan.csv", "line 2", "eye_z"});
+  expect_one_error(run({ref, "--scene", "city:2x2:1:2:1"}, "noconnect"), {"--connect"});
+  expect_one_error(run({ref, "--reference", "--scene", "city:0x2"}, "badcity"), {"city:0x2"});
+}
+
+TEST(Cli, SwitchNodeBadInputGetsOneNamedError) {
+  const std::string sn = bin("switch_node");
+  expect_one_error(run({sn, "--id", "1", "--scene", "city:2x2:1:2:1"}, "nopeer"), {"--peer"});
+  expect_one_error(run({sn, "--id", "2"}, "id2"), {"--id '2'"});
+  expect_one_error(run({sn, "--id", "0", "--listen", "127.0.0.1:99999"}, "badlisten"), {"--listen"});
+  expect_one_error(run({sn, "--id", "0", "--camera-mode", "sometimes"}, "mode"), {"--camera-mode 'sometimes'"});
+}
