@@ -23,7 +23,8 @@ std::string num(T v) {
 }
 std::string hex(uint64_t v, int digits = 16) {
   std::string s = "0x";
-  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
+  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4)
+    s += "0123456789abcdef"[(v >> shift) & 0xf];
   return s;
 }
 
@@ -106,8 +107,8 @@ bool known_type(uint16_t t) { return t >= 1 && t <= kTypeCount; }
 std::optional<std::string> check_bounds(Type t, size_t payload_bytes) {
   const Bounds b = payload_bounds(t);
   if (payload_bytes > kMaxPayloadBytes)
-    return std::string(type_name(t)) + " payload too large: " + num(payload_bytes) + " bytes (maximum " +
-           num(kMaxPayloadBytes) + ")";
+    return std::string(type_name(t)) + " payload too large: " + num(payload_bytes) +
+           " bytes (maximum " + num(kMaxPayloadBytes) + ")";
   if (payload_bytes < b.min_bytes || payload_bytes > b.max_bytes) {
     std::string want = b.min_bytes == b.max_bytes
                            ? num(b.min_bytes)
@@ -128,18 +129,27 @@ std::optional<std::string> text_error(std::string_view what, const std::string& 
   const size_t n = s.size();
   for (size_t i = 0; i < n;) {
     const uint8_t c = p[i];
-    size_t len = 0;
-    uint8_t lo = 0x80, hi = 0xbf;  // allowed range of the second byte
     if (c < 0x80) {
       if (c < 0x20 || c == 0x7f)
-        return std::string(what) + ": control character " + hex(c, 2) +
-               " at byte " + num(i);
+        return std::string(what) + ": control character " + hex(c, 2) + " at byte " + num(i);
       ++i;
       continue;
     }
-    if (c >= 0xc2 && c <= 0xdf) len = 2;
-    else if (c >= 0xe0 && c <= 0xef) len = 3, lo = c == 0xe0 ? 0xa0 : 0x80, hi = c == 0xed ? 0x9f : 0xbf;
-    else if (c >= 0xf0 && c <= 0xf4) len = 4, lo = c == 0xf0 ? 0x90 : 0x80, hi = c == 0xf4 ? 0x8f : 0xbf;
+    // Sequence length from the lead byte, and the allowed range of the second byte: no
+    // overlong forms, no surrogates, nothing above U+10FFFF.
+    size_t len = 0;
+    uint8_t lo = 0x80, hi = 0xbf;
+    if (c >= 0xc2 && c <= 0xdf) {
+      len = 2;
+    } else if (c >= 0xe0 && c <= 0xef) {
+      len = 3;
+      if (c == 0xe0) lo = 0xa0;
+      if (c == 0xed) hi = 0x9f;
+    } else if (c >= 0xf0 && c <= 0xf4) {
+      len = 4;
+      if (c == 0xf0) lo = 0x90;
+      if (c == 0xf4) hi = 0x8f;
+    }
     bool ok = len != 0 && i + len <= n && p[i + 1] >= lo && p[i + 1] <= hi;
     for (size_t k = 2; ok && k < len; ++k) ok = p[i + k] >= 0x80 && p[i + k] <= 0xbf;
     if (!ok) return std::string(what) + ": invalid UTF-8 at byte " + num(i);

@@ -20,7 +20,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (size_t pos = 0; pos < size;) {
     auto h = wire::decode_header(input.subspan(pos));
     if (!h || size - pos - wire::kHeaderBytes < h->payload_bytes) break;
-    auto m = wire::decode_payload(h->type, input.subspan(pos + wire::kHeaderBytes, h->payload_bytes));
+    const auto payload = input.subspan(pos + wire::kHeaderBytes, h->payload_bytes);
+    auto m = wire::decode_payload(h->type, payload);
     if (!m) break;
     if (auto* d = std::get_if<wire::NodeDiff>(&*m)) (void)rx.on_diff(set, *d);
     if (auto* e = std::get_if<wire::EndOfFrame>(&*m)) (void)rx.on_end_of_frame(set, *e);

@@ -22,6 +22,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+// Longer waits are clamped (condition_variable::wait_for overflows near Millis::max()).
+constexpr Millis kMaxWait = std::chrono::hours(24 * 365);
+
 std::string hex(uint64_t v) {
   std::string s = "0x";
   for (int shift = 60; shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
@@ -38,6 +41,10 @@ std::string bye_text(const std::string& reason) {
   for (char& c : s)
     if (c < 0x20 || c > 0x7e) c = '?';
   return s;
+}
+
+Clock::time_point deadline_after(Millis timeout) {
+  return Clock::now() + std::clamp(timeout, Millis(0), kMaxWait);
 }
 
 Millis remaining_until(Clock::time_point deadline) {
@@ -79,8 +86,8 @@ struct Connection::Impl {
   mutable std::mutex m;
   std::condition_variable cv_in;   // inbox or end changed
   std::condition_variable cv_out;  // send queue space, end or finished changed
-  std::deque<std::pair<wire::Message, size_t>> inbox;  // message, encoded bytes
-  size_t inbox_bytes = 0;
+  std::deque<std::pair<wire::Message, size_t>> inbox;  // message, memory estimate (bytes)
+  size_t inbox_bytes = 0;                              // sum of the estimates
   std::deque<std::vector<uint8_t>> outbox;  // queued, not yet handed to the socket
   size_t outbox_bytes = 0;                  // queued + in flight
   bool writing = false;                     // a start_write is posted or a write is in flight
@@ -127,14 +134,14 @@ struct Connection::Impl {
     if (auto e = wire::invalid_reason(msg)) return "cannot send invalid message: " + *e;
     std::vector<uint8_t> bytes = wire::encode(msg);
     std::unique_lock lk(m);
-    const bool space = cv_out.wait_for(lk, opts.send_timeout, [&] {
+    const bool space = cv_out.wait_for(lk, std::clamp(opts.send_timeout, Millis(0), kMaxWait), [&] {
       return end != End::none || outbox_bytes < opts.max_send_queue_bytes;
     });
     if (end != End::none) return "connection ended: " + end_reason;
     if (!space) {
-      const std::string reason = "send queue full for " + std::to_string(opts.send_timeout.count()) +
-                                 " ms (" + std::to_string(outbox_bytes) +
-                                 " bytes queued): peer is not reading";
+      const std::string reason =
+          "send queue full for " + std::to_string(opts.send_timeout.count()) + " ms (" +
+          std::to_string(outbox_bytes) + " bytes queued): peer is not reading";
       end_locked(End::error, reason, Ending::abort);
       return reason;
     }
@@ -143,6 +150,7 @@ struct Connection::Impl {
   }
 
   Received receive(Millis timeout) {
+    timeout = std::clamp(timeout, Millis(0), kMaxWait);
     std::unique_lock lk(m);
     cv_in.wait_for(lk, timeout, [&] { return !inbox.empty() || end != End::none; });
     Received r;
@@ -165,7 +173,8 @@ struct Connection::Impl {
   void close(const std::string& reason) {
     std::unique_lock lk(m);
     end_locked(End::closed, "closed locally: " + reason, Ending::bye, reason);
-    cv_out.wait_for(lk, opts.close_linger + Millis(500), [&] { return finished; });
+    cv_out.wait_for(lk, std::clamp(opts.close_linger, Millis(0), kMaxWait) + Millis(500),
+                    [&] { return finished; });
   }
 
   void close_with_error(const std::string& reason) {
@@ -272,8 +281,9 @@ struct Connection::Impl {
       end_locked(End::closed, "peer said bye: " + bye->reason, Ending::quiet);
       return;
     }
-    inbox.emplace_back(std::move(msg), bytes);
-    inbox_bytes += bytes;
+    const size_t cost = bytes + sizeof(wire::Message);  // bounds memory for tiny messages too
+    inbox.emplace_back(std::move(msg), cost);
+    inbox_bytes += cost;
     cv_in.notify_one();
     if (inbox_bytes > opts.max_receive_queue_bytes) {
       read_paused = true;
@@ -345,7 +355,7 @@ struct Connection::Impl {
     if (!sock.is_open()) return;
     if (!linger_started) {
       linger_started = true;
-      linger_timer.expires_after(opts.close_linger);
+      linger_timer.expires_after(std::clamp(opts.close_linger, Millis(0), kMaxWait));
       linger_timer.async_wait([this](error_code ec) {
         if (!ec) force_close();
       });
@@ -398,7 +408,7 @@ Connection::~Connection() {
 Result<Connection> Connection::connect(const std::string& host, uint16_t port,
                                        Millis retry_timeout, ConnectionOptions options) {
   auto impl = std::make_unique<Impl>(std::move(options));
-  const auto deadline = Clock::now() + retry_timeout;
+  const auto deadline = deadline_after(retry_timeout);
   std::string last_error = "timed out";
   for (;;) {
     error_code ec;
@@ -556,7 +566,7 @@ Result<Connection> Listener::accept(Millis timeout, ConnectionOptions options) {
   bool done = false;
   impl_->acceptor.async_accept(conn->sock, [&](error_code e) { result = e, done = true; });
   impl_->io.restart();
-  impl_->io.run_for(timeout);
+  impl_->io.run_for(std::clamp(timeout, Millis(0), kMaxWait));
   if (!done) {
     error_code ignored;
     impl_->acceptor.cancel(ignored);
@@ -574,7 +584,7 @@ Result<Connection> Listener::accept(Millis timeout, ConnectionOptions options) {
 Result<Peer> Listener::accept_peer(const wire::Hello& mine, const PeerExpectation& expect,
                                    Millis overall_timeout, Millis hello_timeout,
                                    ConnectionOptions options) {
-  const auto deadline = Clock::now() + overall_timeout;
+  const auto deadline = deadline_after(overall_timeout);
   std::string last;
   for (Millis left; (left = remaining_until(deadline)) > Millis(0);) {
     auto conn = accept(left, options);
@@ -613,7 +623,7 @@ std::optional<std::string> write_port_file(const std::string& path, uint16_t por
 }
 
 Result<uint16_t> read_port_file(const std::string& path, Millis timeout) {
-  const auto deadline = Clock::now() + timeout;
+  const auto deadline = deadline_after(timeout);
   for (;;) {
     std::ifstream in(path);
     if (in) {

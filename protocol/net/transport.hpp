@@ -120,6 +120,7 @@ struct Peer {
   wire::Hello hello;
 };
 
+// Use one Listener from one thread at a time.
 class Listener {
  public:
   // Binds address:port and listens; port 0 lets the OS pick a free port (see port()). Loopback
