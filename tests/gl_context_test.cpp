@@ -5,6 +5,12 @@
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
 
+namespace occ {
+inline void PrintTo(GlBackend b, std::ostream* os) {
+  *os << (b == GlBackend::Egl ? "egl" : b == GlBackend::OSMesa ? "osmesa" : "auto");
+}
+}  // namespace occ
+
 using namespace occ;
 
 TEST(GlBackend, ParsesNamesAndRejectsUnknown) {

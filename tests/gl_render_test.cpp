@@ -12,6 +12,12 @@
 #include "common/gl/scene_renderer.hpp"
 #include "common/hierarchy.hpp"
 
+namespace occ {
+inline void PrintTo(GlBackend b, std::ostream* os) {
+  *os << (b == GlBackend::Egl ? "egl" : b == GlBackend::OSMesa ? "osmesa" : "auto");
+}
+}  // namespace occ
+
 using namespace occ;
 
 namespace {
@@ -226,3 +232,23 @@ TEST_P(BoxQuerierOffset, BoxBehindOccluderHasNoSamplesBesideAndInFrontHave) {
 
 INSTANTIATE_TEST_SUITE_P(NearAndFarFromOrigin, BoxQuerierOffset, testing::Values(0.0, 1e7),
                          [](const auto& info) { return info.param == 0.0 ? "AtOrigin" : "At1e7"; });
+
+TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
+  // Pins the documented limitation: the visible occluder lies inside the box, but every box face
+  // the eye can see is behind it. Callers must decide such boxes on the CPU.
+  OccluderFixture f(glm::dvec3(0.0));
+  Scene big;
+  big.meshes.push_back(quad_mesh());
+  big.objects.push_back({0, place({0, 0, -5}, 8.0), "wall filling the view"});
+  Hierarchy h = Hierarchy::build(big, {});
+  SceneRenderer r(*f.ctx, big, h);
+  r.begin_frame(f.cam, true);
+  r.draw_items(all_items(h), SceneRenderer::Mode::DepthOnly);
+  BoxQuerier q(*f.ctx);
+  q.begin(f.cam);
+  const Aabb around_eye{glm::dvec3(-10), glm::dvec3(10)};
+  ASSERT_TRUE(around_eye.contains(f.cam.eye));
+  EXPECT_EQ(q.result(q.issue(around_eye)), 0u);
+  EXPECT_TRUE(visible_without_query(around_eye, f.cam));
+  q.end();
+}

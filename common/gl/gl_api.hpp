@@ -32,13 +32,11 @@ namespace occ {
   X(PIXELSTOREI, PixelStorei)                                 \
   X(READPIXELS, ReadPixels)                                   \
   X(CREATEFRAMEBUFFERS, CreateFramebuffers)                   \
-  X(DELETEFRAMEBUFFERS, DeleteFramebuffers)                   \
   X(BINDFRAMEBUFFER, BindFramebuffer)                         \
   X(NAMEDFRAMEBUFFERRENDERBUFFER, NamedFramebufferRenderbuffer) \
   X(NAMEDFRAMEBUFFERREADBUFFER, NamedFramebufferReadBuffer)   \
   X(CHECKNAMEDFRAMEBUFFERSTATUS, CheckNamedFramebufferStatus) \
   X(CREATERENDERBUFFERS, CreateRenderbuffers)                 \
-  X(DELETERENDERBUFFERS, DeleteRenderbuffers)                 \
   X(NAMEDRENDERBUFFERSTORAGE, NamedRenderbufferStorage)       \
   X(CREATESHADER, CreateShader)                               \
   X(SHADERSOURCE, ShaderSource)                               \
@@ -60,9 +58,7 @@ namespace occ {
   X(DELETEBUFFERS, DeleteBuffers)                             \
   X(NAMEDBUFFERSTORAGE, NamedBufferStorage)                   \
   X(NAMEDBUFFERDATA, NamedBufferData)                         \
-  X(NAMEDBUFFERSUBDATA, NamedBufferSubData)                   \
   X(BINDBUFFER, BindBuffer)                                   \
-  X(BINDBUFFERBASE, BindBufferBase)                           \
   X(CREATEVERTEXARRAYS, CreateVertexArrays)                   \
   X(DELETEVERTEXARRAYS, DeleteVertexArrays)                   \
   X(BINDVERTEXARRAY, BindVertexArray)                         \

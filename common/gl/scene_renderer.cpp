@@ -13,8 +13,8 @@ namespace occ {
 namespace {
 
 // Shared vertex-shader head: attributes and the one invariant position formula. The per-draw
-// data are instanced attributes (divisor 1): llvmpipe fetches them far faster than an SSBO or
-// buffer texture indexed per vertex (measured: ~4x more triangles/s).
+// data are instanced attributes (divisor 1): on llvmpipe this took 10-15% less CPU per frame
+// than an SSBO of per-object records indexed per vertex (measured, 27k draws, 8M triangles).
 const char* const kVertexHead = R"(#version 450 core
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
@@ -86,7 +86,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
   struct Vertex {
     glm::vec3 position, normal;
   };
-  static_assert(sizeof(Vertex) == 24 && sizeof(DrawRecord) == 116);
+  static_assert(sizeof(Vertex) == 24 && sizeof(DrawRecord) == 116 && sizeof(IndirectCommand) == 20);
   std::vector<Vertex> vertices;
   std::vector<uint32_t> indices;
   std::vector<int32_t> base_vertex(scene.meshes.size());

@@ -22,8 +22,8 @@
 // An object's matrices are computed once per frame and reused by all its items.
 //
 // Contracts: the GlContext is current on the calling thread for every call; the context and the
-// hierarchy outlive the renderer; the scene is only read in the constructor (transforms and
-// meshes are copied to the GPU / kept as needed). Invalid item or node ids throw
+// hierarchy outlive the renderer; `scene` is the one the hierarchy was built from (its clusters)
+// and is only read in the constructor (meshes go to the GPU, transforms are copied). Invalid item or node ids throw
 // std::out_of_range. Faces are never culled.
 #pragma once
 #include <array>
