@@ -20,7 +20,9 @@ int main(int argc, char** argv) {
     cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height in pixels");
     cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
     cli.flag("reference", &o.reference, "single-process reference renderer");
-    cli.choice("cull", &o.cull, {"none", "frustum"}, "reference renderer: culling");
+    cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
+               "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
+    cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order)");
     cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
                "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");

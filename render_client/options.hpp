@@ -21,6 +21,7 @@ struct ClientOptions {
   // reference mode
   bool reference = false;
   std::string cull = "frustum";
+  bool exact = false;  // item-buffer pass per frame: exactly visible nodes
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame

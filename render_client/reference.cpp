@@ -1,14 +1,19 @@
-// The reference renderer: every leaf (or every leaf in the frustum) drawn shaded, in item order.
+// Single-process renderers on the same path and viewport as the cluster: the reference (no
+// culling or hierarchical frustum culling: the ground truth every cluster frame is compared
+// with) and the single-process occlusion baselines (stop-and-wait, CHC). With --exact, an item
+// buffer pass per frame counts the exactly visible nodes (paper Tables 2 and 3).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 
 #include "common/camera_path.hpp"
-#include "common/progress.hpp"
 #include "common/culling.hpp"
+#include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
+#include "common/progress.hpp"
+#include "render_client/baselines.hpp"
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
 
@@ -22,7 +27,11 @@ int run_reference(const ClientOptions& o) {
   auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
   std::cerr << "render_client: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
   SceneRenderer renderer(*ctx, ls.scene, h);
-  FrameOutput out(o.out, !o.no_images, {"frame", "nodes_drawn", "triangles_drawn", "render_ms"});
+  BoxQuerier querier(*ctx);
+  ChcRenderer chc(h);
+  std::vector<std::string> columns{"frame", "nodes_drawn", "triangles_drawn", "render_ms", "queries"};
+  if (o.exact) columns.insert(columns.end(), {"exact_visible", "exact_triangles"});
+  FrameOutput out(o.out, !o.no_images, columns);
 
   std::vector<uint32_t> all_leaves;
   for (uint32_t id = 0; id < h.size(); ++id)
@@ -32,22 +41,39 @@ int run_reference(const ClientOptions& o) {
   uint64_t total_tris = 0;
   std::vector<double> frame_ms;
   for (uint32_t f = 0; f < path.size(); ++f) {
+    const Camera& cam = path[f];
     auto t0 = std::chrono::steady_clock::now();
-    std::vector<uint32_t> nodes = o.cull == "none" ? all_leaves : frustum_cull(h, path[f]);
-    renderer.begin_frame(path[f], true);
-    DrawStats st = renderer.draw_items(items_of_nodes(h, nodes), SceneRenderer::Mode::Shaded);
+    renderer.begin_frame(cam, true);
+    BaselineStats st;
+    if (o.cull == "none" || o.cull == "frustum") {
+      std::vector<uint32_t> nodes = o.cull == "none" ? all_leaves : frustum_cull(h, cam);
+      DrawStats d = renderer.draw_items(items_of_nodes(h, nodes), SceneRenderer::Mode::Shaded);
+      st = {0, nodes.size(), d.triangles};
+    } else if (o.cull == "stop-and-wait") {
+      st = render_stop_and_wait(h, cam, renderer, querier);
+    } else {
+      st = chc.render(cam, renderer, querier);
+    }
     ctx->gl().Finish();
-    double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (out.writes_images()) out.write_frame(f, ctx->read_rgba());
-    out.write_row({double(f), double(nodes.size()), double(st.triangles), ms});
+    std::vector<double> row{double(f), double(st.nodes_drawn), double(st.triangles), ms, double(st.queries)};
+    if (o.exact) {
+      renderer.begin_id_frame(cam);
+      renderer.draw_nodes_ids(all_leaves);
+      std::vector<uint32_t> seen = ids_in_image(ctx->read_rgba());
+      uint64_t tris = 0;
+      for (uint32_t id_plus_one : seen) tris += h.node(id_plus_one - 1).triangles;
+      row.insert(row.end(), {double(seen.size()), double(tris)});
+    }
+    out.write_row(row);
     total_ms += ms;
     total_tris += st.triangles;
     frame_ms.push_back(ms);
-    if (f % 10 == 9 || f + 1 == path.size())
-      progress("render_client: frame %u/%zu", f + 1, path.size());
+    if (f % 10 == 9 || f + 1 == path.size()) progress("render_client: frame %u/%zu", f + 1, path.size());
   }
-  std::sort(frame_ms.begin(), frame_ms.end());
   progress_done();
+  std::sort(frame_ms.begin(), frame_ms.end());
   std::printf("reference (%s): frames=%zu mean_ms=%.2f median_ms=%.2f mean_fps=%.2f triangles_per_frame=%.0f "
               "mtri_per_s=%.2f\n",
               o.cull.c_str(), path.size(), total_ms / path.size(), frame_ms[frame_ms.size() / 2],

@@ -3,3 +3,5 @@ occ_test(cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE
 add_dependencies(cluster_test switch_node render_client frame_diff)
 occ_test(cli_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_cli_test.cpp)
 add_dependencies(cli_test switch_node render_client frame_diff)
+occ_test(baselines_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_baselines_test.cpp)
+add_dependencies(baselines_test render_client frame_diff)

@@ -87,6 +87,13 @@ uint64_t BoxQuerier::result(uint32_t handle) {
   return samples;
 }
 
+bool BoxQuerier::ready(uint32_t handle) const {
+  if (handle >= next_) throw std::out_of_range("BoxQuerier: query handle not issued in this batch");
+  GLuint64 available = 0;
+  gl_.GetQueryObjectui64v(pool_[handle], GL_QUERY_RESULT_AVAILABLE, &available);
+  return available != 0;
+}
+
 void BoxQuerier::reset() { next_ = 0; }
 
 void BoxQuerier::end() {

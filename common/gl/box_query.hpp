@@ -41,6 +41,8 @@ class BoxQuerier final : public OcclusionQueries {
   // Samples that passed the depth test for a handle of the current batch (waits for it).
   // Throws std::out_of_range for a handle not issued since the last reset().
   uint64_t result(uint32_t handle) override;
+  // True when the handle's result can be read without waiting.
+  bool ready(uint32_t handle) const;
   // Recycles every handle of the batch (their results are no longer needed).
   void reset();
   void end_batch() override { reset(); }

@@ -116,4 +116,10 @@ Image GlContext::read_rgba() const {
   return img;
 }
 
+std::vector<float> GlContext::read_depth() const {
+  std::vector<float> depth(size_t(width_) * height_);
+  gl_.ReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  return depth;
+}
+
 }  // namespace occ

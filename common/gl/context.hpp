@@ -10,6 +10,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/gl/gl_api.hpp"
 #include "common/image.hpp"
@@ -50,6 +51,8 @@ class GlContext {
 
   // The colour buffer as RGBA8, top row first (waits for rendering to finish).
   Image read_rgba() const;
+  // The depth buffer (reverse-Z: 1 = near, 0 = far), row 0 at the bottom (waits for rendering).
+  std::vector<float> read_depth() const;
 
  private:
   GlContext(std::unique_ptr<gl_detail::Surface> surface, int width, int height);

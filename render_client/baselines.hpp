@@ -1,0 +1,40 @@
+// Single-process occlusion-culling baselines that render while they cull, for the benchmark
+// (issue 6): the naive stop-and-wait hierarchical query, and coherent hierarchical culling
+// (CHC, Bittner et al. 2004: previous-frame visibility, queries interleaved with rendering, no
+// waiting for previously visible leaves). Both draw shaded into the current frame, front to back.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "common/camera.hpp"
+#include "common/gl/box_query.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "common/hierarchy.hpp"
+
+namespace occ {
+
+struct BaselineStats {
+  uint64_t queries = 0;
+  uint64_t nodes_drawn = 0;
+  uint64_t triangles = 0;
+};
+
+// Front-to-back traversal; every node in the frustum is queried and its result awaited before
+// going on; visible leaves are drawn at once so they occlude what follows.
+BaselineStats render_stop_and_wait(const Hierarchy& h, const Camera& cam, SceneRenderer& r, BoxQuerier& q);
+
+// CHC: keeps each node's visibility from the previous frame. Previously visible interior nodes
+// are opened without a query; previously visible leaves are drawn at once and queried only to
+// update their visibility; previously invisible nodes are queried and traversed when the result
+// says visible. Results are read when ready (or when nothing else is left to do).
+class ChcRenderer {
+ public:
+  explicit ChcRenderer(const Hierarchy& h) : h_(h), visible_(h.size(), 0) {}
+  BaselineStats render(const Camera& cam, SceneRenderer& r, BoxQuerier& q);
+
+ private:
+  const Hierarchy& h_;
+  std::vector<uint8_t> visible_;  // per node, from the previous frame
+};
+
+}  // namespace occ
