@@ -84,15 +84,17 @@ class Client {
       if (slot) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));
       slot = std::make_unique<net::Connection>(std::move(*conn));
     }
-    std::cerr << "render_client: connected to switch node 0 (" << nodes_[0]->peer() << ") and 1 ("
-              << nodes_[1]->peer() << ")\n";
+    if (!nodes_[0]) throw InputError("--connect: a single server must be node 0 (an occlusion_server)");
+    std::cerr << "render_client: connected to switch node 0 (" << nodes_[0]->peer() << ")"
+              << (nodes_[1] ? " and 1 (" + nodes_[1]->peer() + ")" : std::string(" only")) << "\n";
   }
 
   void send_camera(uint32_t number) {
     sent_at_[number] = Clock::now();
     wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height});
     for (int k = 0; k < 2; ++k)
-      if (auto err = nodes_[k]->send(w))
+      if (nodes_[k])
+        if (auto err = nodes_[k]->send(w))
         throw ClientFailure("frame " + std::to_string(frame_) + ": sending camera " + std::to_string(number) +
                             " to switch node " + std::to_string(k) + " (" + nodes_[k]->peer() + "): " + *err);
   }
@@ -123,8 +125,8 @@ class Client {
     start_ = Clock::now();
     for (uint32_t frame = 0;; ++frame) {
       frame_ = frame;
-      const int k = int(hc_node_of_frame(frame));
-      const uint64_t bytes_before = nodes_[0]->stats().received.bytes + nodes_[1]->stats().received.bytes;
+      const int k = nodes_[1] ? int(hc_node_of_frame(frame)) : 0;  // one server: it does every frame
+      const uint64_t bytes_before = received_bytes();
       // 1. The camera HC used for this frame comes first.
       net::Received r = receive_from(k, frame);
       auto* wcam = std::get_if<wire::Camera>(&r.message);
@@ -169,7 +171,7 @@ class Client {
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       if (out.writes_images()) out.write_frame(frame, ctx_->read_rgba());
       const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
-      const uint64_t bytes = nodes_[0]->stats().received.bytes + nodes_[1]->stats().received.bytes - bytes_before;
+      const uint64_t bytes = received_bytes() - bytes_before;
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
                      double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
                      eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms});
@@ -185,6 +187,13 @@ class Client {
       if (wcam->frame + 1 == n) break;
     }
     progress_done();
+  }
+
+  uint64_t received_bytes() const {
+    uint64_t b = 0;
+    for (auto& c : nodes_)
+      if (c) b += c->stats().received.bytes;
+    return b;
   }
 
   void summary() const {

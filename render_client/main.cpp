@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
     cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
                "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
-    cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order)");
+    cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
     cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
                "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");
     cli.flag("full-sets", &o.config.full_sets, "nodes send all of V_f every frame instead of the diff");
@@ -34,8 +34,10 @@ int main(int argc, char** argv) {
       if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
       return occ::run_reference(o);
     }
-    if (o.connect.size() != 2)
-      throw occ::InputError("give --connect twice (both switch nodes), or --reference (see render_client --help)");
+    if (o.connect.empty() || o.connect.size() > 2)
+      throw occ::InputError(
+          "give --connect twice (both switch nodes), once (an occlusion_server), or --reference (see render_client "
+          "--help)");
     for (const auto& c : o.connect) occ::parse_endpoint("connect", c);  // fail before loading the scene
     return occ::run_cluster_client(o);
   });

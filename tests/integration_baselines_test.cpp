@@ -34,3 +34,25 @@ TEST(Baselines, StopAndWaitAndChcFramesEqualTheUnculledReference) {
     EXPECT_LT(sum(st["nodes_drawn"]), sum(ex["nodes_drawn"]));  // and they do cull
   }
 }
+
+TEST(Baselines, DepthReadbackOcclusionServerFramesEqualTheReference) {
+  fs::path dir = fresh_dir("gigawalk");
+  ASSERT_EQ(render(dir / "ref", "frustum", false), 0);
+  fs::path out = dir / "server";
+  fs::create_directories(out);
+  Proc server({bin("occlusion_server"), "--scene", "city:6x6:3:10:1", "--width", "160", "--height", "120",
+               "--port-file", (out / "port").string(), "--timeout-ms", "20000"},
+              out / "server.log");
+  int port = wait_port(out / "port", server);
+  ASSERT_NE(port, 0) << server.log();
+  Proc rvg({bin("render_client"), "--scene", "city:6x6:3:10:1", "--path", "walk:40", "--width", "160", "--height",
+            "120", "--connect", "127.0.0.1:" + std::to_string(port), "--out", out.string()},
+           out / "client.log");
+  ASSERT_EQ(rvg.wait(120s), 0) << rvg.log();
+  EXPECT_EQ(server.wait(30s), 0) << server.log();
+  Proc diff({bin("frame_diff"), (dir / "ref").string(), out.string(), "--max-fraction", "0.0001"}, dir / "diff.log");
+  EXPECT_EQ(diff.wait(60s), 0) << diff.log();
+  auto st = read_csv(out / "stats.csv");
+  ASSERT_EQ(st["frame"].size(), 40u);
+  EXPECT_LT(sum(st["visible"]) / 40, 0.5 * 360);  // it culls
+}
