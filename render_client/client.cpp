@@ -114,7 +114,7 @@ class Client {
     const uint32_t n = uint32_t(path_.size());
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
-                     "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms"});
+                     "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms"});
     VisibleSet visible(uint32_t(h_->size()));
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
@@ -174,7 +174,8 @@ class Client {
       const uint64_t bytes = received_bytes() - bytes_before;
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
                      double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
-                     eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms});
+                     eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
+                     ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown)});
       frame_done_.push_back(shown);
       visible_sum_ += visible.size();
       bytes_sum_ += bytes;
