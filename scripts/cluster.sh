@@ -11,12 +11,15 @@
 # --arity ...), except render-client-only ones (--no-images --lookahead N) and node-only ones
 # (--diff-chunk B), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run.
+# --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
+# node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
+# direction (user-space: the kernel here has no netem). Relay logs go to the output folder.
 set -uo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${OCC_BIN:-$here/build/bin}
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
-scene="" path="walk" frames=60 out="out/cluster"
+scene="" path="walk" frames=60 out="out/cluster" link=""
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -24,6 +27,7 @@ while [ $# -gt 0 ]; do
     --path) path=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
+    --link) link=$2; shift 2 ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --lookahead) rvg_only+=("$1" "$2"); shift 2 ;;
     --diff-chunk) node_only+=("$1" "$2"); shift 2 ;;
@@ -36,11 +40,18 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$scene" ] || { echo "error: --scene is required (e.g. --scene city)" >&2; exit 2; }
 case "$path" in walk|orbit|fly) path="$path:$frames" ;; esac
-for b in switch_node render_client; do
+relay_args=()
+if [ -n "$link" ]; then
+  IFS=: read -r l_delay l_rate l_jitter <<<"$link"
+  [[ "$l_delay" =~ ^[0-9.]+$ && "$l_rate" =~ ^[0-9.]+$ && "${l_jitter:-0}" =~ ^[0-9.]+$ ]] ||
+    { echo "error: --link '$link': expected DELAY_MS:RATE_MBIT[:JITTER_MS] (numbers)" >&2; exit 2; }
+  relay_args=(--delay-ms "$l_delay" --rate-mbit "$l_rate" --jitter-ms "${l_jitter:-0}")
+fi
+for b in switch_node render_client $([ -n "$link" ] && echo link_relay); do
   [ -x "$BIN/$b" ] || { echo "error: $BIN/$b not built (run scripts/build.sh)" >&2; exit 2; }
 done
 mkdir -p "$out"
-rm -f "$out"/node0.port "$out"/node1.port "$out"/frame_*.png
+rm -f "$out"/*.port "$out"/frame_*.png
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 pids=()
@@ -56,37 +67,59 @@ wait_port() {  # file pid name
   echo "error: $3 did not write its port file within 60 s" >&2; return 1
 }
 
+# start_relay NAME TARGET_PORT: a link_relay in front of 127.0.0.1:TARGET_PORT (port in NAME.port).
+start_relay() {
+  "$BIN/link_relay" --target "127.0.0.1:$2" --port-file "$out/$1.port" "${relay_args[@]}" >"$out/$1.log" 2>&1 &
+  pids+=($!)
+}
+
 "$BIN/switch_node" --id 0 --scene "$scene" --port-file "$out/node0.port" "${common[@]}" "${node_only[@]}" \
   >"$out/node0.log" 2>&1 &
-pids+=($!)
-p0=$(wait_port "$out/node0.port" "${pids[0]}" node0) || { cleanup; exit 1; }
-"$BIN/switch_node" --id 1 --scene "$scene" --peer "127.0.0.1:$p0" --port-file "$out/node1.port" \
+node0_pid=$!
+pids+=($node0_pid)
+p0=$(wait_port "$out/node0.port" $node0_pid node0) || { cleanup; exit 1; }
+peer0=$p0
+if [ -n "$link" ]; then
+  start_relay relay_peer "$p0"
+  peer0=$(wait_port "$out/relay_peer.port" "${pids[-1]}" relay_peer) || { cleanup; exit 1; }
+fi
+"$BIN/switch_node" --id 1 --scene "$scene" --peer "127.0.0.1:$peer0" --port-file "$out/node1.port" \
   "${common[@]}" "${node_only[@]}" >"$out/node1.log" 2>&1 &
-pids+=($!)
-p1=$(wait_port "$out/node1.port" "${pids[1]}" node1) || { cleanup; exit 1; }
-"$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "127.0.0.1:$p0" \
-  --connect "127.0.0.1:$p1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
-pids+=($!)
+node1_pid=$!
+pids+=($node1_pid)
+p1=$(wait_port "$out/node1.port" $node1_pid node1) || { cleanup; exit 1; }
+c0=$p0 c1=$p1
+if [ -n "$link" ]; then
+  start_relay relay_rvg0 "$p0"
+  c0=$(wait_port "$out/relay_rvg0.port" "${pids[-1]}" relay_rvg0) || { cleanup; exit 1; }
+  start_relay relay_rvg1 "$p1"
+  c1=$(wait_port "$out/relay_rvg1.port" "${pids[-1]}" relay_rvg1) || { cleanup; exit 1; }
+fi
+"$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "127.0.0.1:$c0" \
+  --connect "127.0.0.1:$c1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
+rvg_pid=$!
+pids+=($rvg_pid)
 
-# Bounded wait for all three.
+# Bounded wait for all three (the relays are stopped afterwards).
 status=0
 deadline=$((SECONDS + MAX_SECONDS))
-names=(node0 node1 render_client)
-for i in 2 0 1; do
-  while kill -0 "${pids[$i]}" 2>/dev/null && [ $SECONDS -lt $deadline ]; do sleep 0.2; done
-  if kill -0 "${pids[$i]}" 2>/dev/null; then
-    echo "error: ${names[$i]} still running after ${MAX_SECONDS} s: killed" >&2
+for entry in "render_client:$rvg_pid" "node0:$node0_pid" "node1:$node1_pid"; do
+  name=${entry%%:*} pid=${entry##*:}
+  while kill -0 "$pid" 2>/dev/null && [ $SECONDS -lt $deadline ]; do sleep 0.2; done
+  if kill -0 "$pid" 2>/dev/null; then
+    echo "error: $name still running after its deadline: killed" >&2
     cleanup; status=1
   fi
-  wait "${pids[$i]}"; rc=$?
+  wait "$pid"; rc=$?
   if [ $rc -ne 0 ]; then
-    echo "cluster: ${names[$i]} exited with status $rc; last lines of $out/${names[$i]}.log:" >&2
-    tail -n 5 "$out/${names[$i]}.log" | sed 's/^/  /' >&2
+    echo "cluster: $name exited with status $rc; last lines of $out/$name.log:" >&2
+    tail -n 5 "$out/$name.log" | sed 's/^/  /' >&2
     status=1
   fi
   # Once the render client is done, give the nodes a short grace period.
-  [ $i -eq 2 ] && deadline=$((SECONDS + 30))
+  [ "$name" = render_client ] && deadline=$((SECONDS + 30))
 done
+cleanup
 grep -h "^summary:" "$out/render_client.log" || true
 grep -h "HC frames" "$out/node0.log" "$out/node1.log" || true
 exit $status

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Network experiments: what latency and bandwidth do to the occlusion switch. Runs the cluster
+# (scripts/cluster.sh) with every link routed through link_relay, for each delay x rate, then for
+# each diff chunk size b at one fixed delay (the paper's buffering trade-off, section 3.5). All
+# traffic stays on 127.0.0.1.
+#
+#   scripts/netlab.sh --scene S [--path P] [--delays "0 1 5 20"] [--rates "10 100 1000"]
+#                     [--chunks "1 10 100 1000"] [--chunk-delay-ms 5] [--mode latest|lockstep]
+#                     [--width W --height H] [--out DIR]
+#
+# Writes OUT/net.csv (delay_ms, rate_mbit, chunk_ids, fps, latency mean/p95, bytes/frame, frames
+# completed), OUT/net_fps.png, OUT/net_latency.png, OUT/net_chunks.png. Rates are Mbit/s per
+# direction; delays are one-way, per link.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+scene="" path="walk:150" delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay=5
+mode=latest width=320 height=240 out="out/netlab"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --scene) scene=$2; shift 2 ;;
+    --path) path=$2; shift 2 ;;
+    --delays) delays=$2; shift 2 ;;
+    --rates) rates=$2; shift 2 ;;
+    --chunks) chunks=$2; shift 2 ;;
+    --chunk-delay-ms) chunk_delay=$2; shift 2 ;;
+    --mode) mode=$2; shift 2 ;;
+    --width) width=$2; shift 2 ;;
+    --height) height=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "error: unexpected argument '$1' (see scripts/netlab.sh --help)" >&2; exit 2 ;;
+  esac
+done
+[ -n "$scene" ] || { echo "error: --scene is required" >&2; exit 2; }
+case "$mode" in latest|lockstep) ;; *) echo "error: --mode '$mode': expected latest or lockstep" >&2; exit 2 ;; esac
+mkdir -p "$out"
+csv="$out/net.csv"
+echo "delay_ms,rate_mbit,chunk_ids,fps,latency_ms_mean,latency_ms_p95,bytes_per_frame,frames" >"$csv"
+
+run() {  # delay rate chunk
+  local dir="$out/d$1_r$2_b$3"
+  echo "netlab: delay $1 ms, rate $2 Mbit/s, chunk $3 ids" >&2
+  if ! "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --width "$width" --height "$height" \
+      --camera-mode "$mode" --no-images --diff-chunk "$3" --link "$1:$2" --out "$dir" >/dev/null; then
+    echo "netlab: run failed (see $dir)" >&2
+    echo "$1,$2,$3,,,,,0" >>"$csv"
+    return
+  fi
+  local s
+  s=$(grep -h "^summary:" "$dir/render_client.log")
+  get() { sed -n "s/.* $1=\([^ ]*\).*/\1/p" <<<"$s"; }
+  echo "$1,$2,$3,$(get mean_fps),$(get latency_ms_mean),$(get latency_ms_p95),$(get mean_bytes_per_frame),$(get frames)" >>"$csv"
+}
+
+for d in $delays; do for r in $rates; do run "$d" "$r" 100; done; done
+for b in $chunks; do run "$chunk_delay" 1000 "$b"; done
+column -s, -t "$csv"
+
+if command -v gnuplot >/dev/null; then
+  gnuplot -e "csv='$csv'; out='$out'; chunk_delay=$chunk_delay; rates='$rates'" "$here/scripts/netlab_plots.gp"
+  echo "netlab: plots in $out/net_fps.png, $out/net_latency.png, $out/net_chunks.png" >&2
+fi
