@@ -30,6 +30,8 @@ Camera Camera::look_at(const glm::dvec3& eye, const glm::dvec3& target, const gl
   return c;
 }
 
+void Camera::rotate_local(const glm::dquat& delta) { orientation = glm::normalize(orientation * delta); }
+
 glm::dmat4 Camera::view_rotation() const {
   return glm::dmat4(glm::mat3_cast(glm::conjugate(orientation)));
 }

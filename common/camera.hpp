@@ -36,6 +36,11 @@ struct Camera {
   glm::dvec3 up() const { return orientation * glm::dvec3(0, 1, 0); }
   glm::dvec3 right() const { return orientation * glm::dvec3(1, 0, 0); }
 
+  // Turns the camera by `delta`, a rotation in camera space (orientation = orientation * delta),
+  // and re-normalises the quaternion, so that a long chain of small rotations (an interactive
+  // walk) stays a unit quaternion and does not drift from the directly computed orientation.
+  void rotate_local(const glm::dquat& delta);
+
   // World-to-camera rotation only (eye at the origin): use with camera-relative positions.
   glm::dmat4 view_rotation() const;
   // Reverse-Z projection for glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE): near -> 1, far -> 0.

@@ -382,6 +382,135 @@ void check_range(const std::string& where, const char* what, int v, int lo, int 
 // Limits of the city parameters (also enforced on --scene specs).
 constexpr int kMaxBlocks = 1000, kMaxBuildings = 64, kMaxFloors = 200, kMaxDetail = 16, kMaxCopies = 1000;
 
+// ------------------------------------------------------------------------------------- hard cases
+
+// A closed axis-aligned box mesh [lo, hi] (6 faces, 12 triangles), optionally without its +x face
+// (an open box the camera can stand in and look out of).
+Mesh box_mesh(const std::string& name, glm::vec3 lo, glm::vec3 hi, bool open_plus_x = false) {
+  Mesh m;
+  m.name = name;
+  const glm::vec3 d = hi - lo;
+  const glm::vec3 ex(d.x, 0, 0), ey(0, d.y, 0), ez(0, 0, d.z);
+  add_grid(m, lo, ez, ey, 1, 1);                    // -x
+  if (!open_plus_x) add_grid(m, lo + ex, ey, ez, 1, 1);  // +x
+  add_grid(m, lo, ex, ez, 1, 1);                    // -y
+  add_grid(m, lo + ey, ez, ex, 1, 1);               // +y
+  add_grid(m, lo, ey, ex, 1, 1);                    // -z
+  add_grid(m, lo + ez, ex, ey, 1, 1);               // +z
+  return m;
+}
+
+uint32_t add_mesh(Scene& s, Mesh m) {
+  s.meshes.push_back(std::move(m));
+  return uint32_t(s.meshes.size() - 1);
+}
+
+void place(Scene& s, uint32_t mesh, const glm::dvec3& at, const std::string& name,
+           const glm::dvec3& scale = glm::dvec3(1.0)) {
+  s.objects.push_back(Object{mesh, glm::scale(glm::translate(glm::dmat4(1.0), at), scale), name});
+}
+
+// hard:walls (layout in scene_io.hpp): zero-thickness walls with doors, cubes behind each wall,
+// an open box to stand in, an edge-on wall and a flat ground.
+Scene hard_walls(int walls) {
+  Scene s;
+  const uint32_t ground = add_mesh(s, Mesh{});
+  add_grid(s.meshes[ground], {-20, 0, -20}, {0, 0, 40}, {20.0f + 10.0f * float(walls + 1), 0, 0}, 1, 1);
+  s.meshes[ground].name = "ground (flat box)";
+  // A wall in the plane x = 0: y in [0, 4], z in [-6, 6], a door z in [-1, 1], y in [0, 2.5].
+  Mesh wall;
+  wall.name = "wall (zero thickness)";
+  add_grid(wall, {0, 0, -6}, {0, 0, 5}, {0, 4, 0}, 1, 1);
+  add_grid(wall, {0, 0, 1}, {0, 0, 5}, {0, 4, 0}, 1, 1);
+  add_grid(wall, {0, 2.5f, -1}, {0, 0, 2}, {0, 1.5f, 0}, 1, 1);
+  const uint32_t wall_mesh = add_mesh(s, std::move(wall));
+  const uint32_t cube = add_mesh(s, box_mesh("unit cube", {0, 0, 0}, {1, 1, 1}));
+  const uint32_t open_box = add_mesh(s, box_mesh("open box", {0, 0, 0}, {3, 3, 3}, true));
+  Mesh edge;
+  edge.name = "edge-on wall";
+  add_grid(edge, {0, 0, 0}, {0, 4, 0}, {10.0f * float(walls + 1), 0, 0}, 1, 1);  // plane z = 0
+  const uint32_t edge_mesh = add_mesh(s, std::move(edge));
+
+  s.objects.push_back(Object{ground, glm::dmat4(1.0), "ground"});
+  place(s, open_box, {-8, 0, -1.5}, "open box");
+  place(s, edge_mesh, {0, 0, 8}, "edge-on wall");
+  for (int k = 1; k <= walls; ++k) {
+    const std::string w = "wall " + std::to_string(k);
+    place(s, wall_mesh, {10.0 * k, 0, 0}, w);
+    for (int c = 0; c < 3; ++c)
+      place(s, cube, {10.0 * k + 4.5, 0, -4.5 + 4.0 * c}, w + " cube " + std::to_string(c));
+    place(s, cube, {10.0 * k + 2.0, 0, 2.5}, w + " tower", {1, 5, 1});  // above the wall: partly visible
+  }
+  return s;
+}
+
+// hard:span: parts from 1e-3 to 1e3 units on a bench, a tiny part behind a tiny plate, inside a
+// hall 1e5 wide (inward faces), with 1e4-unit pillars.
+Scene hard_span() {
+  Scene s;
+  const uint32_t cube = add_mesh(s, box_mesh("unit cube", {0, 0, 0}, {1, 1, 1}));
+  const uint32_t hall = add_mesh(s, box_mesh("hall", {-0.5f, 0, -0.5f}, {0.5f, 1, 0.5f}));
+  place(s, hall, {0, -1, 0}, "hall", {1e5, 2e4, 1e5});
+  double x = 0;
+  for (int e = -3; e <= 3; ++e) {  // sizes 1e-3 .. 1e3, each on the bench at y = 1
+    const double size = std::pow(10.0, e);
+    place(s, cube, {x, 1.0, -0.5 * size}, "part 1e" + std::to_string(e), glm::dvec3(size));
+    x += 3.0 * size;
+  }
+  // A 1e-3 part hidden 1e-3 behind a 4e-3 plate (seen from -x), and one peeking out beside it.
+  place(s, cube, {-0.01, 1.0, -0.002}, "tiny plate", {1e-4, 4e-3, 4e-3});
+  place(s, cube, {-0.0085, 1.0015, -0.0005}, "tiny hidden part", glm::dvec3(1e-3));
+  place(s, cube, {-0.0085, 1.0015, 0.0025}, "tiny peeking part", glm::dvec3(1e-3));
+  for (int i = 0; i < 4; ++i)
+    place(s, cube, {(i % 2 ? 3e4 : -3e4) - 5e2, -1, (i / 2 ? 3e4 : -3e4) - 5e2}, "pillar " + std::to_string(i),
+          {1e3, 1e4, 1e3});
+  return s;
+}
+
+// hard:degenerate: meshes of zero-area triangles (repeated indices, collinear and coincident
+// vertices), a cube with degenerate triangles inside it, two huge triangles (1e6), and a field of
+// sub-pixel cubes (2e-3) partly behind a wall.
+Scene hard_degenerate() {
+  Scene s;
+  Mesh degenerate;
+  degenerate.name = "degenerate triangles only";
+  degenerate.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {1, 1, 0}, {1, 1, 0}};
+  degenerate.indices = {0, 0, 1, 0, 1, 2, 3, 4, 3, 3, 3, 3, 0, 2, 1, 4, 4, 0};
+  degenerate.normals.assign(degenerate.positions.size(), {0, 0, 1});
+  const uint32_t degenerate_mesh = add_mesh(s, std::move(degenerate));
+  Mesh point;
+  point.name = "a single point";
+  point.positions = {{0, 0, 0}};
+  point.normals = {{0, 1, 0}};
+  point.indices = {0, 0, 0};
+  const uint32_t point_mesh = add_mesh(s, std::move(point));
+  Mesh mixed = box_mesh("cube with degenerate triangles", {0, 0, 0}, {1, 1, 1});
+  const auto base = uint32_t(mixed.positions.size());
+  mixed.positions.insert(mixed.positions.end(), {{0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f}, {0.2f, 0.5f, 0.5f}});
+  mixed.normals.insert(mixed.normals.end(), 3, glm::vec3(0, 1, 0));
+  mixed.indices.insert(mixed.indices.end(), {base, base + 1, base + 2, 0, 0, 0, 1, 2, 1});
+  const uint32_t mixed_mesh = add_mesh(s, std::move(mixed));
+  Mesh huge;
+  huge.name = "huge triangles";
+  huge.positions = {{-1e6f, 0, -1e6f}, {1e6f, 0, -1e6f}, {0, 0, 1e6f},  // ground, y = 0
+                    {300, -1e6f, -1e6f}, {300, -1e6f, 1e6f}, {300, 1e6f, 0}};  // backdrop, x = 300
+  huge.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {-1, 0, 0}, {-1, 0, 0}, {-1, 0, 0}};
+  huge.indices = {0, 2, 1, 3, 4, 5};
+  const uint32_t huge_mesh = add_mesh(s, std::move(huge));
+  const uint32_t cube = add_mesh(s, box_mesh("unit cube", {0, 0, 0}, {1, 1, 1}));
+
+  s.objects.push_back(Object{huge_mesh, glm::dmat4(1.0), "huge triangles"});
+  place(s, degenerate_mesh, {5, 1, -2}, "degenerate triangles");
+  place(s, point_mesh, {5, 1, 2}, "point");
+  place(s, mixed_mesh, {8, 0.01, -0.5}, "cube with degenerate triangles");
+  place(s, cube, {20, 0.01, -3}, "wall", {0.2, 3, 3});
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j)
+      place(s, cube, {25.0 + 2.0 * i, 1.0 + 0.1 * j, -6.0 + 1.0 * j}, "sub-pixel " + std::to_string(i * 12 + j),
+            glm::dvec3(2e-3));
+  return s;
+}
+
 // ------------------------------------------------------------------------------------- specs
 
 // A decimal integer in [lo, hi]: the whole of `text`.
@@ -517,7 +646,42 @@ Scene load_scene(const std::string& spec) {
     return f;
   };
   Scene scene;
-  if (spec.rfind("layout:", 0) == 0) {
+  if (spec.rfind("offset:", 0) == 0) {
+    const auto f = split(3);
+    if (f.size() != 3 || f[2].empty())
+      throw InputError("--scene '" + spec + "': expected offset:DX,DY,DZ:<scene spec>");
+    glm::dvec3 d{};
+    std::string_view rest = f[1];
+    for (int axis = 0; axis < 3; ++axis) {
+      const size_t comma = rest.find(',');
+      if ((axis < 2) != (comma != std::string_view::npos))
+        throw InputError("--scene '" + spec + "': offset must be DX,DY,DZ (got '" + std::string(f[1]) + "')");
+      const std::string text(rest.substr(0, comma));
+      char* end = nullptr;
+      errno = 0;
+      const double v = text.empty() ? NAN : std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || std::abs(v) > 1e9)
+        throw InputError("--scene '" + spec + "': offset component '" + text +
+                         "' must be a finite number with |v| <= 1e9");
+      d[axis] = v;
+      rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma + 1);
+    }
+    scene = load_scene(std::string(f[2]));
+    const glm::dmat4 t = glm::translate(glm::dmat4(1.0), d);
+    for (Object& o : scene.objects) o.transform = t * o.transform;
+  } else if (spec.rfind("hard:", 0) == 0) {
+    const auto f = split(3);
+    const std::string_view kind = f[1];
+    if (kind == "walls" && f.size() <= 3) {
+      scene = hard_walls(f.size() == 3 ? parse_int(spec, "walls", f[2], 1, 100) : 5);
+    } else if (kind == "span" && f.size() == 2) {
+      scene = hard_span();
+    } else if (kind == "degenerate" && f.size() == 2) {
+      scene = hard_degenerate();
+    } else {
+      throw InputError("--scene '" + spec + "': unknown hard case; expected hard:walls[:N], hard:span or hard:degenerate");
+    }
+  } else if (spec.rfind("layout:", 0) == 0) {
     const auto f = split(3);
     if (f.size() != 3 || f[2].empty())
       throw InputError("--scene '" + spec + "': expected layout:NXxNZ:path.gltf|.glb");
@@ -537,7 +701,8 @@ Scene load_scene(const std::string& spec) {
   } else {
     throw InputError("--scene '" + spec +
                      "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
-                     "(blocks, buildings per block side, max floors, detail) or layout:NXxNZ:path.gltf|.glb");
+                     "(blocks, buildings per block side, max floors, detail), layout:NXxNZ:path.gltf|.glb, "
+                     "hard:walls[:N], hard:span, hard:degenerate or offset:DX,DY,DZ:<spec>");
   }
   scene.source = spec;
   return scene;

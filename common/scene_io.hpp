@@ -31,6 +31,22 @@ Scene layout_grid(const Scene& asset, int nx, int nz, double gap);
 //   path.gltf | path.glb                 a glTF file
 //   city[:BXxBZ[:N[:F[:D]]]]             generate_city (blocks, buildings/side, max floors, detail)
 //   layout:NXxNZ:path                    layout_grid of a glTF asset
+//   offset:DX,DY,DZ:<spec>               any scene translated by (DX,DY,DZ) (|D| <= 1e9): the object
+//                                        transforms (double) move, the meshes (float) do not
+// Hard cases (deterministic; Y up; the tests in tests/hard_*.cpp pin cameras on them):
+//   hard:walls[:N]   N (default 5, 1..100) zero-thickness walls in the planes x = 10k (y 0..4,
+//                    z -6..6) with a door (z -1..1, y 0..2.5); behind each, cubes at x = 10k+4.5,
+//                    z = -4.5, -0.5, 3.5 and a 1x5x1 tower at (10k+2, 0, 2.5) rising above it;
+//                    an open 3 m box at (-8, 0, -1.5) without its +x face; a zero-thickness
+//                    edge-on wall in the plane z = 8 (x 0..10(N+1), y 0..4); a flat ground y = 0
+//   hard:span        cubes of 1e-3 .. 1e3 units on a "bench" at y = 1 (x from 0, each 3 sizes
+//                    after the last); a 1e-3 part hidden 1e-3 behind a 4e-3 plate at x = -0.01
+//                    and one peeking out beside it; a hall 1e5 x 2e4 x 1e5 (floor y = -1) and
+//                    four 1e4-unit pillars at (+-3e4, +-3e4)
+//   hard:degenerate  meshes of only zero-area triangles (and a single point), a cube with
+//                    degenerate triangles inside, two huge triangles (a 2e6 ground at y = 0 and a
+//                    backdrop in the plane x = 300), a wall at x = 20..20.2 and a 12x12 field of
+//                    2e-3 cubes (sub-pixel) at x = 25..47 behind and beside it
 // Throws InputError for unknown specs and bad numbers.
 Scene load_scene(const std::string& spec);
 

@@ -1,0 +1,15 @@
+# Hard cases (issue 7), label "hard" (scripts/test.sh and CI run every label; `scripts/test.sh -L hard`
+# runs only these): numerical hard cases through the three real processes, translated scenes,
+# extreme viewports, rotation drift, faults and bad input at the listening ports, and the
+# depth-precision measurement (GL).
+occ_test(hard_cases_test hard LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_cases_test.cpp)
+add_dependencies(hard_cases_test switch_node render_client frame_diff)
+occ_test(hard_translated_test hard LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_translated_test.cpp)
+add_dependencies(hard_translated_test switch_node render_client frame_diff)
+occ_test(hard_rotation_test hard LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_rotation_test.cpp)
+add_dependencies(hard_rotation_test switch_node render_client frame_diff)
+occ_test(hard_scenes_test hard LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_scenes_test.cpp)

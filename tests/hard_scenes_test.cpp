@@ -1,0 +1,75 @@
+// The hard-case scene generator (common/scene_io.hpp: hard:walls, hard:span, hard:degenerate,
+// offset:DX,DY,DZ:<spec>): deterministic, the documented geometry, translations exact in double,
+// bad specs named.
+#include <gtest/gtest.h>
+
+#include "common/error.hpp"
+#include "common/scene_io.hpp"
+
+using namespace occ;
+
+TEST(HardScenes, GeneratedScenesAreDeterministic) {
+  for (const char* spec : {"hard:walls", "hard:walls:3", "hard:span", "hard:degenerate", "offset:1e7,-2,3.5:hard:span"})
+    EXPECT_EQ(load_scene(spec).content_hash(), load_scene(spec).content_hash()) << spec;
+}
+
+TEST(HardScenes, WallsHaveZeroThicknessBoxes) {
+  const Scene s = load_scene("hard:walls:2");
+  int flat = 0;
+  for (const Object& o : s.objects) {
+    const Aabb b = s.meshes[o.mesh].box().transformed(o.transform);
+    flat += b.min.x == b.max.x || b.min.y == b.max.y || b.min.z == b.max.z;
+  }
+  EXPECT_EQ(flat, 4);  // ground, edge-on wall, 2 walls
+  EXPECT_EQ(s.bounds().min, glm::dvec3(-20, 0, -20));
+}
+
+TEST(HardScenes, SpanCoversOneThousandthToOneHundredThousand) {
+  const Scene s = load_scene("hard:span");
+  double smallest = 1e300;
+  for (const Object& o : s.objects) {
+    const Aabb b = s.meshes[o.mesh].box().transformed(o.transform);
+    smallest = std::min(smallest, std::max({b.extent().x, b.extent().y, b.extent().z}));
+  }
+  EXPECT_NEAR(smallest, 1e-3, 1e-9);
+  EXPECT_NEAR(s.bounds().extent().x, 1e5, 1e-6);
+}
+
+TEST(HardScenes, DegenerateSceneKeepsItsZeroAreaTriangles) {
+  const Scene s = load_scene("hard:degenerate");
+  int zero_area = 0;
+  for (const Mesh& m : s.meshes)
+    for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+      const glm::vec3 a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]], c = m.positions[m.indices[t + 2]];
+      zero_area += glm::length(glm::cross(b - a, c - a)) == 0.0f;
+    }
+  EXPECT_GE(zero_area, 9);
+}
+
+TEST(HardScenes, OffsetTranslatesExactlyInDouble) {
+  const Scene base = load_scene("hard:walls"), moved = load_scene("offset:1e7,-1e6,0.25:hard:walls");
+  ASSERT_EQ(base.objects.size(), moved.objects.size());
+  EXPECT_EQ(moved.bounds().min, base.bounds().min + glm::dvec3(1e7, -1e6, 0.25));
+  EXPECT_EQ(moved.bounds().max, base.bounds().max + glm::dvec3(1e7, -1e6, 0.25));
+  EXPECT_EQ(moved.source, "offset:1e7,-1e6,0.25:hard:walls");
+}
+
+TEST(HardScenes, BadSpecsAreNamed) {
+  auto message = [](const std::string& spec) {
+    try {
+      load_scene(spec);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message("hard:nope").find("unknown hard case"), std::string::npos);
+  EXPECT_NE(message("hard:walls:0").find("walls must be 1..100"), std::string::npos);
+  EXPECT_NE(message("hard:span:3").find("unknown hard case"), std::string::npos);
+  EXPECT_NE(message("offset:1,2:hard:walls").find("offset must be DX,DY,DZ"), std::string::npos);
+  EXPECT_NE(message("offset:1,2,x:hard:walls").find("'x' must be a finite number"), std::string::npos);
+  EXPECT_NE(message("offset:1,2,inf:hard:walls").find("must be a finite number"), std::string::npos);
+  EXPECT_NE(message("offset:2e9,0,0:hard:walls").find("|v| <= 1e9"), std::string::npos);
+  EXPECT_NE(message("offset:1,2,3").find("expected offset:DX,DY,DZ:<scene spec>"), std::string::npos);
+  EXPECT_NE(message("offset:1,2,3:hard:nope").find("unknown hard case"), std::string::npos);
+}
