@@ -13,3 +13,8 @@ occ_test(hard_rotation_test hard LIBS occ_common SOURCES
 add_dependencies(hard_rotation_test switch_node render_client frame_diff)
 occ_test(hard_scenes_test hard LIBS occ_common SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/hard_scenes_test.cpp)
+occ_test(hard_depth_test hard LIBS occ_gl SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_depth_test.cpp)
+occ_test(hard_faults_test hard LIBS occ_common occ_protocol SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_faults_test.cpp)
+add_dependencies(hard_faults_test switch_node render_client frame_diff)
