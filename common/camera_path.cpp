@@ -49,7 +49,7 @@ std::vector<Camera> generated(const std::string& spec, const std::string& kind, 
       const double len = along_x ? e.x : e.z, side = along_x ? e.z : e.x;
       const double eye_y = b.min.y + std::min(1.7, 0.25 * e.y);
       const double s = -0.4 * len + 0.8 * len * t;
-      const double sway = 0.01 * side * std::sin(6.0 * t);  // stays within a street of the city
+      const double sway = 0.002 * side * std::sin(6.0 * t);  // stays within a street of the city
       glm::dvec3 eye = along_x ? glm::dvec3(c.x + s, eye_y, c.z + sway) : glm::dvec3(c.x + sway, eye_y, c.z + s);
       const double yaw = 0.35 * std::sin(4.0 * t);
       glm::dvec3 fwd = along_x ? glm::dvec3(std::cos(yaw), 0, std::sin(yaw)) : glm::dvec3(std::sin(yaw), 0, std::cos(yaw));
