@@ -5,3 +5,5 @@ occ_test(cli_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR
 add_dependencies(cli_test switch_node render_client frame_diff)
 occ_test(baselines_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_baselines_test.cpp)
 add_dependencies(baselines_test render_client frame_diff occlusion_server)
+occ_test(overview_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/overview_test.cpp)
+add_dependencies(overview_test cull_overview)
