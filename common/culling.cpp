@@ -87,6 +87,79 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
   return out;
 }
 
+std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                        const LodSelector& sel, bool visible_pixel_lod,
+                                        std::span<const uint32_t> start,
+                                        const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
+  CullStats local;
+  CullStats& st = stats ? *stats : local;
+  const Frustum fr = cam.frustum();
+  const double tau = sel.tau();
+  const bool pixel_lod = visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
+  std::vector<uint32_t> out, level, next;
+  if (start.empty())
+    level.push_back(0);
+  else
+    level.assign(start.begin(), start.end());
+  constexpr uint64_t kNoQuery = ~uint64_t(0);
+  std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
+  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples)
+  while (!level.empty()) {
+    pending.clear();
+    visible.clear();
+    for (uint32_t id : level) {
+      const HNode& n = h.node(id);
+      ++st.nodes_visited;
+      if (n.item_count == 0) continue;
+      if (fr.classify(n.box) == Containment::Outside) {
+        ++st.frustum_culled;
+      } else if (visible_without_query(n.box, cam)) {
+        ++st.near_visible;
+        visible.emplace_back(id, kNoQuery);
+      } else {
+        pending.emplace_back(id, q.issue(n.box));
+        ++st.queries;
+      }
+    }
+    if (!pending.empty()) ++st.levels;
+    for (auto [id, handle] : pending) {
+      const uint64_t samples = q.result(handle);
+      if (samples > 0)
+        visible.emplace_back(id, samples);
+      else
+        ++st.occluded;
+    }
+    q.end_batch();
+    next.clear();
+    std::sort(visible.begin(), visible.end());
+    for (auto [id, samples] : visible) {
+      const HNode& n = h.node(id);
+      const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
+      uint32_t r = kNoNode;
+      if (n.leaf()) {
+        r = few_pixels ? sel.coarsest(id) : sel.renderable(id);
+        if (few_pixels && r != sel.renderable(id)) ++st.pixel_stops;
+      } else if (sel.satisfies(id)) {
+        r = id;
+        ++st.hlods;
+      } else if (few_pixels) {
+        r = id;
+        ++st.hlods;
+        ++st.pixel_stops;
+      }
+      if (r != kNoNode) {
+        out.push_back(r);
+        if (on_visible) on_visible(r);
+      } else {
+        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) next.push_back(ch);
+      }
+    }
+    level.swap(next);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes) {
   std::vector<uint32_t> items;
   for (uint32_t id : nodes) {

@@ -10,6 +10,7 @@
 
 #include "common/camera.hpp"
 #include "common/hierarchy.hpp"
+#include "common/lod.hpp"
 
 namespace occ {
 
@@ -37,6 +38,8 @@ struct CullStats {
   uint32_t occluded = 0;           // nodes whose query returned 0 samples
   uint32_t near_visible = 0;       // nodes decided visible without a query
   uint32_t levels = 0;             // query batches (levels) issued
+  uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
+  uint32_t hlods = 0;              // interior nodes accepted at their HLOD
 };
 
 // Leaves whose boxes are not outside the frustum, in ascending id order.
@@ -50,6 +53,19 @@ std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullSt
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                     const std::function<void(uint32_t)>& on_visible,
                                     CullStats* stats = nullptr);
+
+// HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like
+// hardware_cull, but a visible node is accepted when sel.satisfies() it (interior: its HLOD meets
+// tau; leaves always, at sel.leaf_level()), or, with visible_pixel_lod and tau > 0, when its query
+// saw fewer than tau samples (then at its coarsest representation); other visible interior nodes
+// are refined. The first batch is `start` (the fronts, occluded first; empty = the root).
+// on_visible gets each accepted renderable id (lod.hpp) as its batch resolves. Returns the
+// renderables, ascending. With tau = 0 it returns exactly hardware_cull's leaves.
+std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                        const LodSelector& sel, bool visible_pixel_lod,
+                                        std::span<const uint32_t> start,
+                                        const std::function<void(uint32_t)>& on_visible,
+                                        CullStats* stats = nullptr);
 
 // The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
 // identically in every renderer).

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "common/hash.hpp"
 #include "common/scene_io.hpp"
 
 namespace occ {
@@ -15,9 +16,11 @@ void add_scene_options(Cli& cli, SceneOptions& o) {
   cli.option("leaf-items", &o.build.leaf_items, 1, 1024, "hierarchy: max items per leaf");
   cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,
              "hierarchy: meshes above this many triangles are split into spatial clusters");
+  cli.option("lod-cache", &o.lod_cache, "DIR",
+             "LOD/HLOD cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
 }
 
-LoadedScene load_and_build(const SceneOptions& opts, const std::string& who) {
+LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, bool with_lod) {
   auto t0 = std::chrono::steady_clock::now();
   LoadedScene ls{load_scene(opts.spec), {}};
   auto t1 = std::chrono::steady_clock::now();
@@ -33,6 +36,18 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who) {
                 ls.hierarchy.depth(), static_cast<unsigned long long>(ls.hierarchy.fingerprint()), ms(t0, t1),
                 ms(t1, t2));
   std::cerr << buf << "\n";
+  ls.fingerprint = ls.hierarchy.fingerprint();
+  if (with_lod) {
+    ls.lod = std::make_unique<LodData>(
+        load_or_build_lod(ls.scene, ls.hierarchy, opts.lod, opts.lod_cache, opts.spec, who));
+    Hasher fh;
+    fh.u64(ls.hierarchy.fingerprint());
+    fh.u64(ls.lod->hash());
+    ls.fingerprint = fh.value();
+    std::snprintf(buf, sizeof buf, "%s: scene fingerprint with LODs %016llx", who.c_str(),
+                  static_cast<unsigned long long>(ls.fingerprint));
+    std::cerr << buf << "\n";
+  }
   return ls;
 }
 

@@ -1,10 +1,12 @@
 // The scene every process builds identically: --scene spec + hierarchy build parameters.
 // Shared by render_client, switch_node and the tools so flags and messages are the same.
 #pragma once
+#include <memory>
 #include <string>
 
 #include "common/cli.hpp"
 #include "common/hierarchy.hpp"
+#include "common/lod.hpp"
 #include "common/scene.hpp"
 
 namespace occ {
@@ -12,6 +14,8 @@ namespace occ {
 struct SceneOptions {
   std::string spec = "city";
   BuildParams build;
+  LodParams lod;
+  std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod.hpp)
 };
 
 void add_scene_options(Cli& cli, SceneOptions& opts);
@@ -19,10 +23,15 @@ void add_scene_options(Cli& cli, SceneOptions& opts);
 struct LoadedScene {
   Scene scene;
   Hierarchy hierarchy;
+  std::unique_ptr<LodData> lod;  // null unless requested (tau > 0)
+  // What Hello carries: the hierarchy fingerprint, combined with LodData::hash() when LODs are
+  // loaded (the LOD cache is part of the scene's identity).
+  uint64_t fingerprint = 0;
 };
 
 // Loads/generates the scene and builds the hierarchy; prints one summary line to stderr
-// prefixed by `who` ("scene: city: 6400 objects, 2.1M triangles, ..."). Throws InputError.
-LoadedScene load_and_build(const SceneOptions& opts, const std::string& who);
+// prefixed by `who` ("scene: city: 6400 objects, 2.1M triangles, ..."). With `with_lod`, also
+// loads the LOD cache or builds it (progress bar on a terminal, a summary line). Throws InputError.
+LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, bool with_lod = false);
 
 }  // namespace occ

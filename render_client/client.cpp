@@ -11,6 +11,7 @@
 #include "common/camera_path.hpp"
 #include "common/progress.hpp"
 #include "common/culling.hpp"
+#include "common/front.hpp"
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -39,12 +40,14 @@ class Client {
   explicit Client(const ClientOptions& o) : o_(o) {}
 
   int run() {
-    LoadedScene ls = load_and_build(o_.scene, "render_client");
+    LoadedScene ls = load_and_build(o_.scene, "render_client", o_.config.lod());
     h_ = &ls.hierarchy;
+    fingerprint_ = ls.fingerprint;
+    renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
     path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
     ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
     std::cerr << "render_client: GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
-    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy);
+    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
     leaf_count_ = 0;
     for (const HNode& n : h_->nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
     total_triangles_ = ls.scene.triangle_count();
@@ -68,7 +71,7 @@ class Client {
     mine.role = wire::Role::render_client;
     mine.viewport_width_px = uint32_t(o_.width);
     mine.viewport_height_px = uint32_t(o_.height);
-    mine.scene_fingerprint = h_->fingerprint();
+    mine.scene_fingerprint = fingerprint_;
     mine.arity = h_->params().arity;
     mine.leaf_items = h_->params().leaf_items;
     mine.cluster_triangles = h_->params().cluster_triangles;
@@ -115,7 +118,7 @@ class Client {
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms"});
-    VisibleSet visible(uint32_t(h_->size()));
+    VisibleSet visible(renderables_->count());
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
     if (lockstep)
@@ -139,6 +142,19 @@ class Client {
         throw ClientFailure("frame " + std::to_string(frame) + ": lockstep, but switch node " + std::to_string(k) +
                             " used camera " + std::to_string(wcam->frame));
       const Camera cam = from_wire(*wcam);
+      // Front tracking (front.hpp, occlusion switch only): coarsen V_{f-1} for camera f exactly
+      // as both switch nodes do; the diff is relative to the result, whose hash
+      // EndOfFrame.front_hash carries.
+      uint64_t expected_front = 0;
+      if (nodes_[1] && o_.config.front_tracking == "on" && !o_.config.full_sets) {
+        LodSelector sel(*renderables_, cam, o_.height, o_.config.pixel_error);
+        std::vector<uint32_t> prime = coarsen_visible(sel, visible.ids()), gone;
+        for (uint32_t id : visible.ids())
+          if (!std::binary_search(prime.begin(), prime.end(), id)) gone.push_back(id);
+        for (uint32_t id : gone) visible.erase(id);
+        for (uint32_t id : prime) visible.insert(id);
+        expected_front = front_hash(prime);
+      }
       // 2. Diff chunks, then EndOfFrame.
       bool cleared = false;
       wire::EndOfFrame eof;
@@ -153,6 +169,12 @@ class Client {
             throw ClientFailure("switch node " + std::to_string(k) + " ended frame " + std::to_string(e->frame) +
                                 ", expected " + std::to_string(frame));
           if (auto err = streams[k].on_end_of_frame(visible, *e)) throw ClientFailure("desync with switch node " + std::to_string(k) + ": " + *err);
+          if (e->front_hash != expected_front) {
+            char msg[160];
+            std::snprintf(msg, sizeof msg, "frame %u: front hash %016llx from switch node %d, %016llx here", frame,
+                          (unsigned long long)e->front_hash, k, (unsigned long long)expected_front);
+            throw ClientFailure(std::string("desync with switch node ") + std::to_string(k) + ": " + msg);
+          }
           eof = *e;
           break;
         } else {
@@ -166,7 +188,7 @@ class Client {
       const Clock::time_point r0 = Clock::now();
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
       renderer_->begin_frame(cam, true);
-      DrawStats st = renderer_->draw_items(items_of_nodes(*h_, ids), SceneRenderer::Mode::Shaded);
+      DrawStats st = renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::Shaded);
       ctx_->gl().Finish();
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       if (out.writes_images()) out.write_frame(frame, ctx_->read_rgba());
@@ -224,6 +246,8 @@ class Client {
 
   const ClientOptions& o_;
   const Hierarchy* h_ = nullptr;
+  uint64_t fingerprint_ = 0;
+  std::unique_ptr<Renderables> renderables_;
   std::vector<Camera> path_;
   std::unique_ptr<GlContext> ctx_;
   std::unique_ptr<SceneRenderer> renderer_;

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
     cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
                "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");
     cli.flag("full-sets", &o.config.full_sets, "nodes send all of V_f every frame instead of the diff");
+    occ::add_lod_options(cli, o.config);
     cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
     if (!cli.parse(argc, argv)) return 0;

@@ -1,5 +1,6 @@
 #include "switch_node/cluster.hpp"
 
+#include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/hash.hpp"
 
@@ -37,7 +38,19 @@ uint64_t ClusterConfig::hash() const {
   Hasher h;
   h.str(camera_mode);
   h.u32(full_sets);
+  h.f64(pixel_error);
+  h.str(visible_pixel_lod);
+  h.str(front_tracking);
   return h.value();
+}
+
+void add_lod_options(Cli& cli, ClusterConfig& c) {
+  cli.option("pixel-error", &c.pixel_error, 0.0, 1e6,
+             "tau: screen-space error bound in pixels for LOD/HLOD selection (0 = original geometry, conservative)");
+  cli.choice("visible-pixel-lod", &c.visible_pixel_lod, {"on", "off"},
+             "stop refining a node whose occlusion query saw fewer than tau pixels (paper 4.7.2)");
+  cli.choice("front-tracking", &c.front_tracking, {"on", "off"},
+             "HC starts from the previous frame's fronts (paper 4.6) instead of the root");
 }
 
 Endpoint parse_endpoint(const std::string& flag, const std::string& text) {

@@ -21,8 +21,16 @@ Camera from_wire(const wire::Camera& w);
 struct ClusterConfig {
   std::string camera_mode = "lockstep";  // lockstep | latest
   bool full_sets = false;                // send all of V_f each frame instead of the diff
+  double pixel_error = 0;                // tau, the paper's pixels of error (0 = original geometry)
+  std::string visible_pixel_lod = "off"; // on | off: stop refining where fewer than tau pixels show
+  std::string front_tracking = "on";     // on | off: HC starts from the fronts (4.6) or the root
+  bool lod() const { return pixel_error > 0; }  // LODs are loaded/built only when used
   uint64_t hash() const;
 };
+
+class Cli;
+// --pixel-error, --visible-pixel-lod, --front-tracking (all must agree: they are in hash()).
+void add_lod_options(Cli& cli, ClusterConfig& c);
 
 struct Endpoint {
   std::string host;

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
                "lockstep: camera f for frame f (reproducible); latest: newest camera");
     cli.flag("full-sets", &o.config.full_sets, "send all of V_f every frame instead of the diff");
+    occ::add_lod_options(cli, o.config);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer, a camera or a message");
     if (!cli.parse(argc, argv)) return 0;

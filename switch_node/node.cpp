@@ -1,11 +1,14 @@
 #include "switch_node/node.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <iostream>
 #include <thread>
 
 #include "common/camera_buffer.hpp"
 #include "common/culling.hpp"
+#include "common/front.hpp"
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
@@ -33,18 +36,20 @@ class SwitchNode {
   explicit SwitchNode(const NodeOptions& o) : o_(o), who_("switch_node " + std::to_string(o.id)) {}
 
   int run() {
-    LoadedScene ls = load_and_build(o_.scene, who_);
+    LoadedScene ls = load_and_build(o_.scene, who_, o_.config.lod());
     h_ = &ls.hierarchy;
+    fingerprint_ = ls.fingerprint;
+    renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
     ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
     std::cerr << who_ << ": GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
-    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy);
+    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
     querier_ = std::make_unique<BoxQuerier>(*ctx_);
     connect();
     std::thread camera_thread([this] { receive_cameras(); });
     int code = 0;
     try {
       loop();
-    } catch (const NodeFailure& e) {
+    } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
       // A frame in flight when the render client finished (latest mode) is not a failure.
       for (int i = 0; i < 300 && !rvg_->is_open() && !cameras_done_; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -71,7 +76,7 @@ class SwitchNode {
     h.node_id = uint8_t(o_.id);
     h.viewport_width_px = uint32_t(o_.width);
     h.viewport_height_px = uint32_t(o_.height);
-    h.scene_fingerprint = h_->fingerprint();
+    h.scene_fingerprint = fingerprint_;
     h.arity = h_->params().arity;
     h.leaf_items = h_->params().leaf_items;
     h.cluster_triangles = h_->params().cluster_triangles;
@@ -154,9 +159,26 @@ class SwitchNode {
     return ids;
   }
 
+  // Front tracking needs V_{f-1} on every process: not with --full-sets (each frame replaces it).
+  bool tracking() const { return o_.config.front_tracking == "on" && !o_.config.full_sets; }
+
+  // Front tracking step 1 (front.hpp) on this process's copy of V_{f-1} for camera f: the set
+  // becomes V' (what frame f's diff is relative to); returns set_hash(V'), 0 when not tracking.
+  uint64_t coarsen_set(VisibleSet& visible, const Camera& cam) {
+    if (!tracking()) return 0;
+    LodSelector sel(*renderables_, cam, o_.height, o_.config.pixel_error);
+    std::vector<uint32_t> prime = coarsen_visible(sel, visible.ids());
+    std::vector<uint32_t> gone;
+    for (uint32_t id : visible.ids())
+      if (!std::binary_search(prime.begin(), prime.end(), id)) gone.push_back(id);
+    for (uint32_t id : gone) visible.erase(id);
+    for (uint32_t id : prime) visible.insert(id);
+    return front_hash(prime);
+  }
+
   void loop() {
     const Millis timeout(o_.timeout_ms);
-    VisibleSet visible(uint32_t(h_->size()));
+    VisibleSet visible(renderables_->count());
     DiffReceiver stream;  // diffs of the other node's HC frames
     std::optional<uint32_t> last_camera;
     for (uint32_t frame = uint32_t(o_.id);; frame += 2) {
@@ -173,16 +195,20 @@ class SwitchNode {
       last_camera = cam->number;
       const Clock::time_point or_start = Clock::now();
       renderer_->begin_frame(cam->camera, false);
-      std::vector<uint8_t> drawn(h_->size(), 0);
+      std::vector<uint8_t> drawn(renderables_->count(), 0);
       std::vector<uint32_t> ids = sorted(visible);
       for (uint32_t id : ids) drawn[id] = 1;
-      renderer_->draw_nodes(ids, SceneRenderer::Mode::DepthOnly);
+      renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::DepthOnly);
       if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn)) return;
       const uint32_t or_us = micros_since(or_start);
 
-      // ---- HC(frame): camera to the render client first, then cull and stream the diff.
-      if (auto err = rvg_->send(to_wire(cam->number, cam->camera, {o_.width, o_.height})))
-        throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + *err);
+      // ---- HC(frame): camera to the render client and the other node first (both coarsen
+      // their V_{frame-1} with it), then cull and stream the diff.
+      try {
+        send_both(to_wire(cam->number, cam->camera, {o_.width, o_.height}));
+      } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
+        throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
+      }
       const Clock::time_point hc_start = Clock::now();
       hc_frame(frame, cam->camera, visible, or_us, hc_start);
     }
@@ -192,7 +218,12 @@ class SwitchNode {
   // the other node closed cleanly instead (the run is over).
   bool receive_stream(uint32_t frame, VisibleSet& visible, DiffReceiver& stream, std::vector<uint8_t>& drawn) {
     bool cleared = false;  // full-sets mode: the frame's first message replaces the set
+    bool have_camera = false;
+    uint64_t expected_front = 0;
     auto start_frame = [&] {
+      if (!have_camera)
+        throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) +
+                          " sent its diff before its camera");
       if (o_.config.full_sets && !cleared) visible.clear();
       cleared = true;
     };
@@ -202,7 +233,12 @@ class SwitchNode {
       if (!r.ok())
         throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
                           peer_->peer() + ") " + (r.status == net::Received::Status::timeout ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms" : r.reason));
-      if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
+      if (auto* c = std::get_if<wire::Camera>(&r.message)) {
+        if (have_camera)
+          throw NodeFailure("frame " + std::to_string(frame) + ": two cameras from switch node " + std::to_string(1 - o_.id));
+        have_camera = true;
+        expected_front = coarsen_set(visible, from_wire(*c));
+      } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
         start_frame();
         if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
         std::vector<uint32_t> fresh;
@@ -211,11 +247,14 @@ class SwitchNode {
             drawn[id] = 1;
             fresh.push_back(id);
           }
-        renderer_->draw_nodes(fresh, SceneRenderer::Mode::DepthOnly);
+        renderer_->draw_renderables(*renderables_, fresh, SceneRenderer::Mode::DepthOnly);
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
         if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
         if (auto err = stream.on_end_of_frame(visible, *e)) throw NodeFailure("desync: " + *err);
+        if (e->front_hash != expected_front)
+          throw NodeFailure("desync: frame " + std::to_string(frame) + ": front hash " + hex(e->front_hash) +
+                            " from switch node " + std::to_string(1 - o_.id) + ", " + hex(expected_front) + " here");
         return true;
       } else {
         throw NodeFailure("frame " + std::to_string(frame) + ": unexpected " +
@@ -232,11 +271,24 @@ class SwitchNode {
       send_both(wire::NodeDiff{frame, pending, {}});
       pending.clear();
     };
+    // Front tracking (front.hpp): V' = coarsened V_{frame-1}; fronts derived from it.
+    const uint64_t fhash = coarsen_set(visible, cam);
+    LodSelector sel(*renderables_, cam, o_.height, o_.config.pixel_error);
+    std::vector<uint32_t> start;
+    if (tracking()) {
+      std::vector<uint32_t> vnodes = nodes_of(*renderables_, sorted(visible)), above;
+      start = derive_occluded_front(*h_, vnodes, &above);
+      const Frustum fr = cam.frustum();
+      if (o_.config.visible_pixel_lod != "on") vnodes = update_cut(*h_, sel, vnodes, &fr);
+      start.insert(start.end(), vnodes.begin(), vnodes.end());  // occluded front first
+      for (uint32_t a : above)  // what a root traversal would have queried above the fronts
+        if (!fr.culls(h_->node(a).box) && !visible_without_query(h_->node(a).box, cam)) ++skipped_;
+    }
     querier_->begin(cam);
     CullStats stats;
     SetDiff diff;
-    std::vector<uint32_t> leaves = hardware_cull(
-        *h_, cam, *querier_,
+    std::vector<uint32_t> leaves = hardware_cull_lod(
+        *h_, cam, *querier_, sel, o_.config.visible_pixel_lod == "on", start,
         [&](uint32_t id) {
           if (o_.config.full_sets || !visible.contains(id)) {
             pending.push_back(id);
@@ -247,7 +299,7 @@ class SwitchNode {
         &stats);
     querier_->end();
     flush(true);
-    VisibleSet cur(uint32_t(h_->size()));
+    VisibleSet cur(renderables_->count());
     for (uint32_t id : leaves) cur.insert(id);
     if (!o_.config.full_sets) {
       for (uint32_t id : visible.ids())
@@ -255,14 +307,23 @@ class SwitchNode {
       for (auto& chunk : wire::chunk_node_diff(frame, {}, diff.removed, b)) send_both(chunk);
     }
     wire::EndOfFrame eof = make_end_of_frame(frame, diff, cur);
+    eof.front_hash = fhash;
     eof.queries = stats.queries;
     eof.or_us = or_us;
     eof.hc_us = micros_since(hc_start);
-    for (uint32_t id : leaves) eof.triangles += h_->node(id).triangles;
+    for (uint32_t id : leaves) eof.triangles += renderables_->triangles(id);
     send_both(eof);
     visible = std::move(cur);
     ++frames_;
     queries_ += stats.queries;
+    pixel_stops_ += stats.pixel_stops;
+    hlods_ += stats.hlods;
+  }
+
+  static std::string hex(uint64_t v) {
+    char b[17];
+    std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+    return b;
   }
 
   void print_summary() const {
@@ -270,18 +331,26 @@ class SwitchNode {
     auto r = rvg_->stats(), p = peer_->stats();
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries, sent " << r.sent.bytes
               << " B to the render client and " << p.sent.bytes << " B to the other node\n";
+    std::fprintf(stderr,
+                 "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
+                 "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
+                 who_.c_str(), o_.config.pixel_error, o_.config.visible_pixel_lod.c_str(),
+                 o_.config.front_tracking.c_str(), (unsigned long long)hlods_, (unsigned long long)pixel_stops_,
+                 (unsigned long long)skipped_, frames_ ? double(skipped_) / double(frames_) : 0.0);
   }
 
   const NodeOptions& o_;
   std::string who_;
   const Hierarchy* h_ = nullptr;
+  uint64_t fingerprint_ = 0;
+  std::unique_ptr<Renderables> renderables_;
   std::unique_ptr<GlContext> ctx_;
   std::unique_ptr<SceneRenderer> renderer_;
   std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
   CameraBuffer cameras_;
   std::atomic<bool> rvg_bye_{false}, cameras_done_{false};
-  uint64_t frames_ = 0, queries_ = 0;
+  uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0;
 };
 
 }  // namespace

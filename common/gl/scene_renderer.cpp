@@ -1,6 +1,7 @@
 #include "common/gl/scene_renderer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -21,6 +22,7 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) in mat4 in_model_view;       // per draw (locations 2..5)
 layout(location = 6) in vec4 in_normal_color[3];  // per draw: normal matrix columns, colour in w
 layout(location = 9) in uint in_id;               // per draw: id + 1
+layout(location = 10) in vec4 in_vertex_color;    // per vertex: HLOD colour (alpha 1), else 0
 uniform mat4 u_projection;
 invariant gl_Position;
 vec4 view_position() { return in_model_view * vec4(in_position, 1.0); }
@@ -35,7 +37,8 @@ void main() {
   gl_Position = u_projection * p;
   v_position = p.xyz;
   v_normal = mat3(in_normal_color[0].xyz, in_normal_color[1].xyz, in_normal_color[2].xyz) * in_normal;
-  v_color = vec3(in_normal_color[0].w, in_normal_color[1].w, in_normal_color[2].w);
+  v_color = in_vertex_color.a > 0.5 ? in_vertex_color.rgb
+                                    : vec3(in_normal_color[0].w, in_normal_color[1].w, in_normal_color[2].w);
 }
 )";
 
@@ -81,12 +84,13 @@ glm::vec4 object_color(uint32_t object) {
 
 }  // namespace
 
-SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy)
+SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod)
     : gl_(ctx.gl()), hierarchy_(hierarchy) {
   struct Vertex {
     glm::vec3 position, normal;
+    uint32_t color;  // RGBA8; alpha 0 = use the object's colour
   };
-  static_assert(sizeof(Vertex) == 24 && sizeof(DrawRecord) == 116 && sizeof(IndirectCommand) == 20);
+  static_assert(sizeof(Vertex) == 28 && sizeof(DrawRecord) == 116 && sizeof(IndirectCommand) == 20);
   std::vector<Vertex> vertices;
   std::vector<uint32_t> indices;
   std::vector<int32_t> base_vertex(scene.meshes.size());
@@ -98,19 +102,49 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
     base_vertex[m] = int32_t(vertices.size());
     first_index[m] = uint32_t(indices.size());
     for (size_t v = 0; v < mesh.positions.size(); ++v)
-      vertices.push_back({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1)});
+      vertices.push_back({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1), 0u});
     indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
   }
   transforms_.reserve(scene.objects.size());
   for (const Object& o : scene.objects) transforms_.push_back(o.transform);
+  if (lod) {
+    auto upload = [&](const LodMesh& m) {
+      if (vertices.size() + m.positions.size() > size_t(INT32_MAX))
+        throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
+      ItemDraw d{uint32_t(m.indices.size()), uint32_t(indices.size()), int32_t(vertices.size()), 0};
+      for (size_t v = 0; v < m.positions.size(); ++v) {
+        uint32_t rgba = 0;
+        if (!m.objects.empty()) {
+          const glm::vec4 c = object_color(m.objects[v]);
+          for (int k = 0; k < 4; ++k) rgba |= uint32_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f)) << (8 * k);
+        }
+        vertices.push_back({m.positions[v], m.normals[v], rgba});
+      }
+      indices.insert(indices.end(), m.indices.begin(), m.indices.end());
+      return d;
+    };
+    for (const LodMesh& m : lod->cluster_lods()) lod_draws_.push_back(upload(m));
+    item_slot_ = lod->item_slots();
+    hlod_of_node_.assign(hierarchy.size(), kNoNode);
+    for (uint32_t id = 0; id < hierarchy.size(); ++id)
+      if (const LodMesh* m = lod->hlod(id)) {
+        hlod_of_node_[id] = uint32_t(hlod_draws_.size());
+        ItemDraw d = upload(*m);
+        d.object = uint32_t(transforms_.size());  // pseudo-object: translation to the origin
+        glm::dmat4 t(1.0);
+        t[3] = glm::dvec4(m->origin, 1.0);
+        transforms_.push_back(t);
+        hlod_draws_.push_back(d);
+      }
+  }
   item_draws_.reserve(hierarchy.items().size());
   for (const Item& it : hierarchy.items()) {
     const uint32_t mesh = scene.objects[it.object].mesh;
     const MeshCluster& cl = scene.meshes[mesh].clusters[it.cluster];
     item_draws_.push_back({cl.index_count, first_index[mesh] + cl.first_index, base_vertex[mesh], it.object});
   }
-  object_frame_.assign(scene.objects.size(), 0);
-  object_matrices_.resize(scene.objects.size());
+  object_frame_.assign(transforms_.size(), 0);
+  object_matrices_.resize(transforms_.size());
 
   const char* const vertex_src[3] = {kShadedVertex, kDepthVertex, kIdVertex};
   const char* const fragment_src[3] = {kShadedFragment, kDepthFragment, kIdFragment};
@@ -141,8 +175,9 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
     gl_.VertexArrayAttribFormat(vao_, 6 + c, 4, GL_FLOAT, GL_FALSE,
                                 offsetof(DrawRecord, object.normal_color) + c * sizeof(glm::vec4));
   gl_.VertexArrayAttribIFormat(vao_, 9, 1, GL_UNSIGNED_INT, offsetof(DrawRecord, id_plus_one));
-  for (GLuint a = 0; a < 10; ++a) {
-    gl_.VertexArrayAttribBinding(vao_, a, a < 2 ? 0 : 1);
+  gl_.VertexArrayAttribFormat(vao_, 10, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(Vertex, color));
+  for (GLuint a = 0; a < 11; ++a) {
+    gl_.VertexArrayAttribBinding(vao_, a, (a < 2 || a == 10) ? 0 : 1);
     gl_.EnableVertexArrayAttrib(vao_, a);
   }
   gl_.VertexArrayElementBuffer(vao_, index_buf_);
@@ -221,6 +256,43 @@ void SceneRenderer::add_item(uint32_t item, uint32_t id_plus_one, DrawStats& sta
   commands_.push_back({d.index_count, 1, d.first_index, d.base_vertex, uint32_t(commands_.size())});
   stats.items += 1;
   stats.triangles += d.index_count / 3;
+}
+
+void SceneRenderer::add_draw(const ItemDraw& d, uint32_t id_plus_one, DrawStats& stats) {
+  records_.push_back({object_matrices(d.object), id_plus_one});
+  commands_.push_back({d.index_count, 1, d.first_index, d.base_vertex, uint32_t(commands_.size())});
+  stats.items += 1;
+  stats.triangles += d.index_count / 3;
+}
+
+DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode) {
+  std::vector<std::pair<uint64_t, uint32_t>> order;  // (first item << 8 | level, id)
+  order.reserve(ids.size());
+  for (uint32_t id : ids) {
+    if (id >= r.count())
+      throw std::out_of_range("SceneRenderer: renderable " + std::to_string(id) + " out of range (" +
+                              std::to_string(r.count()) + ")");
+    const uint32_t node = r.node_of(id);
+    order.emplace_back(uint64_t(hierarchy_.node(node).first_item) << 8 | r.level_of(id), id);
+  }
+  std::sort(order.begin(), order.end());
+  DrawStats stats;
+  for (auto [key, id] : order) {
+    const uint32_t node = r.node_of(id), level = r.level_of(id);
+    const HNode& n = hierarchy_.node(node);
+    if (n.leaf() && level > 0 && !lod_draws_.empty()) {
+      for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) {
+        ItemDraw d = lod_draws_[item_slot_[i] * kLeafLodLevels + level - 1];
+        d.object = item_draws_[i].object;
+        add_draw(d, i + 1, stats);
+      }
+    } else if (!n.leaf() && !hlod_draws_.empty() && hlod_of_node_[node] != kNoNode) {
+      add_draw(hlod_draws_[hlod_of_node_[node]], node + 1, stats);
+    } else {
+      for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) add_item(i, i + 1, stats);
+    }
+  }
+  return submit(mode, stats);
 }
 
 DrawStats SceneRenderer::draw_items(std::span<const uint32_t> item_indices, Mode mode) {

@@ -37,6 +37,7 @@
 #include "common/gl/context.hpp"
 #include "common/hierarchy.hpp"
 #include "common/image.hpp"
+#include "common/lod.hpp"
 #include "common/scene.hpp"
 
 namespace occ {
@@ -56,7 +57,9 @@ class SceneRenderer {
   enum class Mode { Shaded, DepthOnly, ItemIds };
   static constexpr std::array<uint8_t, 4> kBackgroundRgba8{20, 23, 28, 255};
 
-  SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy);
+  // With `lod`, its leaf LODs and HLODs are uploaded too (draw_renderables); it must outlive
+  // nothing (only read here).
+  SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod = nullptr);
   ~SceneRenderer();
   SceneRenderer(const SceneRenderer&) = delete;
   SceneRenderer& operator=(const SceneRenderer&) = delete;
@@ -72,6 +75,12 @@ class SceneRenderer {
   DrawStats draw_items(std::span<const uint32_t> item_indices, Mode mode);
   // All items of each node's contiguous range [first_item, first_item + item_count).
   DrawStats draw_nodes(std::span<const uint32_t> node_ids, Mode mode);
+  // Renderable ids (lod.hpp): leaves at level 0 draw their items, leaves at level l their items'
+  // level-l LODs with the objects' transforms and colours, interior nodes their HLOD (per-vertex
+  // colours of the source objects). Draw order: by the node's first item, then level — for
+  // level-0 leaves exactly ascending item order, as everywhere else (z-ties resolve identically).
+  // Without LOD data uploaded, LOD ids fall back to full detail.
+  DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
   // ItemIds rendering of whole nodes, each in colour node id + 1.
   DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);
 
@@ -99,6 +108,7 @@ class SceneRenderer {
   void check_items(std::span<const uint32_t> item_indices) const;
   void check_nodes(std::span<const uint32_t> node_ids) const;
   void add_item(uint32_t item, uint32_t id_plus_one, DrawStats& stats);
+  void add_draw(const ItemDraw& d, uint32_t id_plus_one, DrawStats& stats);
   const ObjectMatrices& object_matrices(uint32_t object);
   DrawStats submit(Mode mode, DrawStats stats);
 
@@ -106,6 +116,10 @@ class SceneRenderer {
   const Hierarchy& hierarchy_;
   std::vector<glm::dmat4> transforms_;  // per object
   std::vector<ItemDraw> item_draws_;    // per hierarchy item
+  std::vector<ItemDraw> lod_draws_;     // per LodData cluster LOD (object filled per draw)
+  std::vector<ItemDraw> hlod_draws_;    // per HLOD (object = a pseudo-object: its origin)
+  std::vector<uint32_t> item_slot_;     // per item: LodData slot
+  std::vector<uint32_t> hlod_of_node_;  // per node: HLOD index or kNoNode
   GLuint programs_[3] = {};             // indexed by Mode
   GLint projection_loc_[3] = {};
   GLuint vao_ = 0, vertex_buf_ = 0, index_buf_ = 0, record_buf_ = 0, indirect_buf_ = 0;

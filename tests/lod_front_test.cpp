@@ -1,0 +1,257 @@
+// Front tracking (front.hpp) and the LOD-aware HC traversal against brute force (no GL).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "common/culling.hpp"
+#include "common/front.hpp"
+#include "common/scene_io.hpp"
+
+using namespace occ;
+
+namespace {
+
+struct World {
+  Scene scene;
+  Hierarchy h;
+  LodData lod;
+};
+
+const World& world() {
+  static World* w = [] {
+    auto* w = new World;
+    CityParams p;
+    p.blocks_x = 4;
+    p.blocks_z = 3;
+    p.buildings_per_block = 2;
+    p.floors_max = 8;
+    p.detail = 1;
+    w->scene = generate_city(p);
+    BuildParams bp;
+    bp.arity = 4;
+    bp.cluster_triangles = 128;
+    w->h = Hierarchy::build(w->scene, bp);
+    w->lod = LodData::build(w->scene, w->h, {});
+    return w;
+  }();
+  return *w;
+}
+
+Camera random_camera(std::mt19937& rng, const Aabb& b) {
+  std::uniform_real_distribution<double> u(0, 1);
+  const glm::dvec3 e = b.extent();
+  glm::dvec3 eye = b.min - 0.2 * e + glm::dvec3(u(rng) * 1.4 * e.x, 1.7 + u(rng) * e.y * 2, u(rng) * 1.4 * e.z);
+  glm::dvec3 target = b.min + glm::dvec3(u(rng) * e.x, u(rng) * e.y, u(rng) * e.z);
+  if (glm::length(target - eye) < 1) target = eye + glm::dvec3(1, 0, 0);
+  return Camera::look_at(eye, target, {0, 1, 0}, 40 + 50 * u(rng), 4.0 / 3.0, 0.1, 1e4);
+}
+
+// Each non-empty leaf has exactly one ancestor-or-self in `cut`.
+void expect_covers_once(const Hierarchy& h, const std::vector<uint32_t>& cut) {
+  std::vector<uint8_t> in(h.size(), 0);
+  for (uint32_t c : cut) in[c] = 1;
+  for (uint32_t id = 0; id < h.size(); ++id) {
+    if (!h.node(id).leaf() || h.node(id).item_count == 0) continue;
+    int n = 0;
+    for (uint32_t a = id; a != kNoNode; a = h.node(a).parent) n += in[a];
+    EXPECT_EQ(n, 1) << "leaf " << id;
+  }
+}
+
+// Monotone fake occlusion: a box shows as many samples as visible points it contains (a child's
+// box is inside its parent's, so a parent is never occluded when a child shows).
+struct PointQueries : OcclusionQueries {
+  std::vector<glm::dvec3> points;
+  std::vector<Aabb> boxes;
+  uint32_t issue(const Aabb& b) override {
+    boxes.push_back(b);
+    return uint32_t(boxes.size() - 1);
+  }
+  uint64_t result(uint32_t handle) override {
+    uint64_t n = 0;
+    for (auto& p : points) n += boxes[handle].contains(p);
+    return n;
+  }
+  void end_batch() override { boxes.clear(); }
+};
+
+std::vector<glm::dvec3> random_points(std::mt19937& rng, const Aabb& b, int n) {
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<glm::dvec3> pts;
+  for (int i = 0; i < n; ++i) {
+    const glm::dvec3 e = b.extent();
+    pts.push_back(b.min + glm::dvec3(u(rng) * e.x, u(rng) * e.y, u(rng) * e.z));
+  }
+  return pts;
+}
+
+}  // namespace
+
+TEST(Front, UpdatedCutEqualsFreshCutOnRandomCameras) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(1);
+  int changed = 0, coarsened = 0;
+  for (int k = 0; k < 300; ++k) {
+    const double tau = std::vector<double>{0, 1, 5, 20, 50, 100, 300}[k % 7];
+    LodSelector a(r, random_camera(rng, w.h.node(0).box), 480, tau);
+    LodSelector b(r, random_camera(rng, w.h.node(0).box), 480, k % 5 == 0 ? tau * 3 : tau);
+    const std::vector<uint32_t> cut_a = lod_cut(w.h, a), fresh_b = lod_cut(w.h, b);
+    expect_covers_once(w.h, cut_a);
+    const std::vector<uint32_t> updated = update_cut(w.h, b, cut_a);
+    ASSERT_EQ(updated, fresh_b) << "camera pair " << k << " tau " << tau;
+    changed += cut_a != fresh_b;
+    for (uint32_t n : cut_a) coarsened += !std::binary_search(fresh_b.begin(), fresh_b.end(), n) && b.satisfies(n);
+    // States after the update: every node refined (satisfies, parent does not).
+    for (uint32_t n : updated) {
+      EXPECT_TRUE(b.satisfies(n));
+      if (w.h.node(n).parent != kNoNode) EXPECT_FALSE(b.satisfies(w.h.node(n).parent));
+    }
+  }
+  EXPECT_GT(changed, 50);   // the cameras did move the cut ...
+  EXPECT_GT(coarsened, 0);  // ... in both directions
+  std::printf("cut changed on %d of 300 camera pairs; %d over-refined nodes coarsened\n", changed, coarsened);
+}
+
+TEST(Front, TauZeroCutIsAllLeaves) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(2);
+  LodSelector sel(r, random_camera(rng, w.h.node(0).box), 480, 0.0);
+  std::vector<uint32_t> leaves;
+  for (uint32_t id = 0; id < w.h.size(); ++id)
+    if (w.h.node(id).leaf() && w.h.node(id).item_count > 0) leaves.push_back(id);
+  EXPECT_EQ(lod_cut(w.h, sel), leaves);
+}
+
+TEST(Front, CoarsenedVisibleFrontHasNoOverRefinedNodes) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(3);
+  for (int k = 0; k < 100; ++k) {
+    const double tau = 1.0 + k % 10;
+    LodSelector a(r, random_camera(rng, w.h.node(0).box), 480, tau);
+    LodSelector b(r, random_camera(rng, w.h.node(0).box), 480, tau);
+    // A visible front: a random half of camera a's cut, as renderables.
+    std::vector<uint32_t> v;
+    for (uint32_t n : lod_cut(w.h, a))
+      if (rng() % 2) v.push_back(a.renderable(n));
+    const std::vector<uint32_t> c = coarsen_visible(b, v);
+    std::vector<uint32_t> nodes = nodes_of(r, c);
+    EXPECT_EQ(nodes.size(), c.size());  // one representation per node
+    for (uint32_t x : c) {
+      const uint32_t n = r.node_of(x);
+      if (w.h.node(n).parent != kNoNode) EXPECT_FALSE(b.satisfies(w.h.node(n).parent)) << "over-refined " << n;
+      if (w.h.node(n).leaf()) EXPECT_GE(r.level_of(x), b.leaf_level(n));
+    }
+    // Every input node is inside exactly one output node (antichain, nothing lost).
+    for (uint32_t x : v) {
+      int inside = 0;
+      for (uint32_t a2 = r.node_of(x); a2 != kNoNode; a2 = w.h.node(a2).parent)
+        inside += std::binary_search(nodes.begin(), nodes.end(), a2);
+      EXPECT_EQ(inside, 1);
+    }
+    // Coarsening twice changes nothing.
+    EXPECT_EQ(coarsen_visible(b, c), c);
+  }
+}
+
+TEST(Front, DerivedOccludedFrontCompletesTheCut) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(4);
+  EXPECT_EQ(derive_occluded_front(w.h, {}), std::vector<uint32_t>{0});
+  for (int k = 0; k < 100; ++k) {
+    LodSelector a(r, random_camera(rng, w.h.node(0).box), 480, double(k % 6));
+    std::vector<uint32_t> v;
+    for (uint32_t n : lod_cut(w.h, a))
+      if (rng() % 3 == 0) v.push_back(n);
+    std::vector<uint32_t> above;
+    std::vector<uint32_t> o = derive_occluded_front(w.h, v, &above);
+    std::vector<uint32_t> cut = o;
+    cut.insert(cut.end(), v.begin(), v.end());
+    std::sort(cut.begin(), cut.end());
+    EXPECT_EQ(std::adjacent_find(cut.begin(), cut.end()), cut.end());  // disjoint
+    expect_covers_once(w.h, cut);
+    for (uint32_t x : above) EXPECT_FALSE(w.h.node(x).leaf());
+  }
+}
+
+TEST(FrontCull, TauZeroLodTraversalEqualsHardwareCull) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(5);
+  for (int k = 0; k < 50; ++k) {
+    PointQueries q;
+    q.points = random_points(rng, w.h.node(0).box, 1 + k % 20);
+    const Camera cam = random_camera(rng, w.h.node(0).box);
+    LodSelector sel(r, cam, 480, 0.0);
+    auto plain = hardware_cull(w.h, cam, q, nullptr);
+    auto lod = hardware_cull_lod(w.h, cam, q, sel, true, {}, nullptr);
+    EXPECT_EQ(lod, plain);
+  }
+}
+
+// The switch-node loop without GL: V_{f-1} -> coarsen -> fronts -> traversal, against a fresh
+// root traversal of the same frame. With a monotone occlusion oracle and visible-pixel LOD off
+// the two must agree exactly, for tau = 0 and tau > 0, and the front must save queries.
+TEST(FrontCull, FrontTrackedTraversalEqualsFreshTraversal) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  for (double tau : {0.0, 1.0, 5.0}) {
+    std::mt19937 rng(6 + int(tau));
+    std::vector<uint32_t> visible;  // V_{f-1}
+    uint64_t fresh_queries = 0, front_queries = 0;
+    Camera cam = random_camera(rng, w.h.node(0).box);
+    std::vector<glm::dvec3> points = random_points(rng, w.h.node(0).box, 30);
+    for (int f = 0; f < 60; ++f) {
+      // A coherent path: small moves, occasional jumps; a few visible points change.
+      if (f % 15 == 14) cam = random_camera(rng, w.h.node(0).box);
+      else cam.eye += glm::dvec3(0.7, 0, 0.4);
+      points[rng() % points.size()] = random_points(rng, w.h.node(0).box, 1)[0];
+      PointQueries q;
+      q.points = points;
+      LodSelector sel(r, cam, 480, tau);
+      CullStats fresh_st, front_st;
+      auto fresh = hardware_cull_lod(w.h, cam, q, sel, false, {}, nullptr, &fresh_st);
+      const std::vector<uint32_t> prime = coarsen_visible(sel, visible);
+      std::vector<uint32_t> vnodes = nodes_of(r, prime);
+      std::vector<uint32_t> start = derive_occluded_front(w.h, vnodes);
+      const Frustum fr = cam.frustum();
+      vnodes = update_cut(w.h, sel, vnodes, &fr);
+      start.insert(start.end(), vnodes.begin(), vnodes.end());
+      auto tracked = hardware_cull_lod(w.h, cam, q, sel, false, start, nullptr, &front_st);
+      ASSERT_EQ(tracked, fresh) << "tau " << tau << " frame " << f;
+      fresh_queries += fresh_st.queries;
+      front_queries += front_st.queries;
+      visible = tracked;
+    }
+    EXPECT_GT(fresh_queries, 0u);
+    EXPECT_LT(front_queries, fresh_queries) << "tau " << tau;
+  }
+}
+
+TEST(FrontCull, VisiblePixelLodStopsWhereFewPixelsShow) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(9);
+  int stops = 0;
+  for (int k = 0; k < 30; ++k) {
+    PointQueries q;
+    q.points = random_points(rng, w.h.node(0).box, 3);  // few "pixels" per box
+    const Camera cam = random_camera(rng, w.h.node(0).box);
+    LodSelector sel(r, cam, 480, 10.0);
+    CullStats on_st, off_st;
+    auto on = hardware_cull_lod(w.h, cam, q, sel, true, {}, nullptr, &on_st);
+    auto off = hardware_cull_lod(w.h, cam, q, sel, false, {}, nullptr, &off_st);
+    EXPECT_LE(on_st.queries, off_st.queries);
+    stops += on_st.pixel_stops;
+    // Every accepted node: visible, and either within tau or it had fewer than tau samples.
+    for (uint32_t x : on) {
+      const uint32_t n = r.node_of(x);
+      EXPECT_GT(q.result(q.issue(w.h.node(n).box)) + visible_without_query(w.h.node(n).box, cam), 0u);
+    }
+  }
+  EXPECT_GT(stops, 0);
+}
