@@ -14,12 +14,17 @@
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
 # direction (user-space: the kernel here has no netem). Relay logs go to the output folder.
+# --netns (root only) puts node 0, node 1 and the render client in three network namespaces of
+# their own, joined by veth pairs (10.77.1.0/30 node0-client, 10.77.2.0/30 node1-client,
+# 10.77.3.0/30 node0-node1); with --link the rate is a tc tbf qdisc on every veth and the delay a
+# link_relay on the connecting side. Namespaces, veths and qdiscs are removed at exit, also on
+# Ctrl-C or failure.
 set -uo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${OCC_BIN:-$here/build/bin}
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
-scene="" path="walk" frames=60 out="out/cluster" link=""
+scene="" path="walk" frames=60 out="out/cluster" link="" netns=0
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -28,11 +33,12 @@ while [ $# -gt 0 ]; do
     --frames) frames=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --link) link=$2; shift 2 ;;
+    --netns) netns=1; shift ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --lookahead) rvg_only+=("$1" "$2"); shift 2 ;;
     --diff-chunk) node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
-    -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --*) [ $# -ge 2 ] || { echo "error: $1 needs a value" >&2; exit 2; }
          common+=("$1" "$2"); shift 2 ;;
     *) echo "error: unexpected argument '$1' (see scripts/cluster.sh --help)" >&2; exit 2 ;;
@@ -58,6 +64,43 @@ pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; }
 trap 'echo "cluster: interrupted, stopping all processes" >&2; cleanup; exit 130' INT TERM
 
+# Where each process runs and how the others reach it.
+in_a=() in_b=() in_c=() listen=127.0.0.1:0 addr_a_from_c=127.0.0.1 addr_b_from_c=127.0.0.1 addr_a_from_b=127.0.0.1
+if [ $netns = 1 ]; then
+  [ "$(id -u)" = 0 ] || { echo "error: --netns needs root (network namespaces and veth pairs)" >&2; exit 2; }
+  command -v ip >/dev/null || { echo "error: --netns needs iproute2's ip" >&2; exit 2; }
+  tag="occ$$"
+  ns_a=${tag}a ns_b=${tag}b ns_c=${tag}c
+  teardown() {
+    cleanup
+    wait 2>/dev/null
+    for ns in $ns_a $ns_b $ns_c; do ip netns del "$ns" 2>/dev/null; done  # takes its veths and qdiscs
+  }
+  trap teardown EXIT
+  trap 'echo "cluster: interrupted, stopping all processes" >&2; exit 130' INT TERM
+  veth() {  # NS1 IF1 ADDR1 NS2 IF2 ADDR2
+    ip link add "$2" type veth peer name "$5" &&
+    ip link set "$2" netns "$1" && ip link set "$5" netns "$4" &&
+    ip -n "$1" addr add "$3/30" dev "$2" && ip -n "$4" addr add "$6/30" dev "$5" &&
+    ip -n "$1" link set "$2" up && ip -n "$4" link set "$5" up || return 1
+    if [ -n "$link" ] && [ "$l_rate" != 0 ]; then
+      for end in "$1 $2" "$4 $5"; do
+        set -- $end
+        ip netns exec "$1" tc qdisc add dev "$2" root tbf rate "${l_rate}mbit" burst 64kb latency 200ms || return 1
+      done
+    fi
+  }
+  { for ns in $ns_a $ns_b $ns_c; do ip netns add "$ns" && ip -n "$ns" link set lo up || exit 1; done
+    veth $ns_a ${tag}ac 10.77.1.1 $ns_c ${tag}ca 10.77.1.2 &&
+    veth $ns_b ${tag}bc 10.77.2.1 $ns_c ${tag}cb 10.77.2.2 &&
+    veth $ns_a ${tag}ab 10.77.3.1 $ns_b ${tag}ba 10.77.3.2; } ||
+    { echo "error: --netns: could not set up namespaces and veth pairs" >&2; exit 1; }
+  in_a=(ip netns exec $ns_a) in_b=(ip netns exec $ns_b) in_c=(ip netns exec $ns_c)
+  listen=0.0.0.0:0 addr_a_from_c=10.77.1.1 addr_b_from_c=10.77.2.1 addr_a_from_b=10.77.3.1
+  # The kernel links carry the rate; relays add only the delay.
+  [ -n "$link" ] && relay_args=(--delay-ms "$l_delay" --jitter-ms "${l_jitter:-0}")
+fi
+
 wait_port() {  # file pid name
   for _ in $(seq 1 600); do
     [ -s "$1" ] && { cat "$1"; return 0; }
@@ -67,36 +110,39 @@ wait_port() {  # file pid name
   echo "error: $3 did not write its port file within 60 s" >&2; return 1
 }
 
-# start_relay NAME TARGET_PORT: a link_relay in front of 127.0.0.1:TARGET_PORT (port in NAME.port).
+# start_relay NAME TARGET [PREFIX...]: a link_relay in front of TARGET (HOST:PORT), listening on
+# 127.0.0.1 (inside the connecting side's namespace with --netns); its port goes to NAME.port.
 start_relay() {
-  "$BIN/link_relay" --target "127.0.0.1:$2" --port-file "$out/$1.port" "${relay_args[@]}" >"$out/$1.log" 2>&1 &
+  local name=$1 target=$2
+  shift 2
+  "$@" "$BIN/link_relay" --target "$target" --port-file "$out/$name.port" "${relay_args[@]}" >"$out/$name.log" 2>&1 &
   pids+=($!)
 }
 
-"$BIN/switch_node" --id 0 --scene "$scene" --port-file "$out/node0.port" "${common[@]}" "${node_only[@]}" \
-  >"$out/node0.log" 2>&1 &
+"${in_a[@]}" "$BIN/switch_node" --id 0 --scene "$scene" --listen "$listen" --port-file "$out/node0.port" \
+  "${common[@]}" "${node_only[@]}" >"$out/node0.log" 2>&1 &
 node0_pid=$!
 pids+=($node0_pid)
 p0=$(wait_port "$out/node0.port" $node0_pid node0) || { cleanup; exit 1; }
-peer0=$p0
+peer0=$addr_a_from_b:$p0
 if [ -n "$link" ]; then
-  start_relay relay_peer "$p0"
-  peer0=$(wait_port "$out/relay_peer.port" "${pids[-1]}" relay_peer) || { cleanup; exit 1; }
+  start_relay relay_peer "$peer0" "${in_b[@]}"
+  peer0=127.0.0.1:$(wait_port "$out/relay_peer.port" "${pids[-1]}" relay_peer) || { cleanup; exit 1; }
 fi
-"$BIN/switch_node" --id 1 --scene "$scene" --peer "127.0.0.1:$peer0" --port-file "$out/node1.port" \
+"${in_b[@]}" "$BIN/switch_node" --id 1 --scene "$scene" --peer "$peer0" --listen "$listen" --port-file "$out/node1.port" \
   "${common[@]}" "${node_only[@]}" >"$out/node1.log" 2>&1 &
 node1_pid=$!
 pids+=($node1_pid)
 p1=$(wait_port "$out/node1.port" $node1_pid node1) || { cleanup; exit 1; }
-c0=$p0 c1=$p1
+c0=$addr_a_from_c:$p0 c1=$addr_b_from_c:$p1
 if [ -n "$link" ]; then
-  start_relay relay_rvg0 "$p0"
-  c0=$(wait_port "$out/relay_rvg0.port" "${pids[-1]}" relay_rvg0) || { cleanup; exit 1; }
-  start_relay relay_rvg1 "$p1"
-  c1=$(wait_port "$out/relay_rvg1.port" "${pids[-1]}" relay_rvg1) || { cleanup; exit 1; }
+  start_relay relay_rvg0 "$c0" "${in_c[@]}"
+  c0=127.0.0.1:$(wait_port "$out/relay_rvg0.port" "${pids[-1]}" relay_rvg0) || { cleanup; exit 1; }
+  start_relay relay_rvg1 "$c1" "${in_c[@]}"
+  c1=127.0.0.1:$(wait_port "$out/relay_rvg1.port" "${pids[-1]}" relay_rvg1) || { cleanup; exit 1; }
 fi
-"$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "127.0.0.1:$c0" \
-  --connect "127.0.0.1:$c1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
+"${in_c[@]}" "$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "$c0" \
+  --connect "$c1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
 rvg_pid=$!
 pids+=($rvg_pid)
 

@@ -6,15 +6,16 @@
 #
 #   scripts/netlab.sh --scene S [--path P] [--delays "0 1 5 20"] [--rates "10 100 1000"]
 #                     [--chunks "1 10 100 1000"] [--chunk-delay-ms 5] [--mode latest|lockstep]
-#                     [--width W --height H] [--out DIR]
+#                     [--width W --height H] [--out DIR] [--netns]
 #
 # Writes OUT/net.csv (delay_ms, rate_mbit, chunk_ids, fps, latency mean/p95, bytes/frame, frames
 # completed), OUT/net_fps.png, OUT/net_latency.png, OUT/net_chunks.png. Rates are Mbit/s per
-# direction; delays are one-way, per link.
+# direction; delays are one-way, per link. --netns (root): the three processes run in three
+# network namespaces joined by veth pairs, rates as tc tbf qdiscs (see scripts/cluster.sh).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 scene="" path="walk:150" delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay=5
-mode=latest width=320 height=240 out="out/netlab"
+mode=latest width=320 height=240 out="out/netlab" netns=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --scene) scene=$2; shift 2 ;;
@@ -27,7 +28,8 @@ while [ $# -gt 0 ]; do
     --width) width=$2; shift 2 ;;
     --height) height=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --netns) netns=(--netns); shift ;;
+    -h|--help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "error: unexpected argument '$1' (see scripts/netlab.sh --help)" >&2; exit 2 ;;
   esac
 done
@@ -41,7 +43,7 @@ run() {  # delay rate chunk
   local dir="$out/d$1_r$2_b$3"
   echo "netlab: delay $1 ms, rate $2 Mbit/s, chunk $3 ids" >&2
   if ! "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --width "$width" --height "$height" \
-      --camera-mode "$mode" --no-images --diff-chunk "$3" --link "$1:$2" --out "$dir" >/dev/null; then
+      --camera-mode "$mode" --no-images --diff-chunk "$3" --link "$1:$2" "${netns[@]}" --out "$dir" >/dev/null; then
     echo "netlab: run failed (see $dir)" >&2
     echo "$1,$2,$3,,,,,0" >>"$csv"
     return

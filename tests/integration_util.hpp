@@ -82,6 +82,7 @@ class Proc {
     return code_;
   }
   void kill_now() { ::kill(pid_, SIGKILL); }
+  void signal(int sig) { ::kill(pid_, sig); }
   std::string log() const { return read_file(log_); }
 
  private:
