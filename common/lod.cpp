@@ -21,7 +21,7 @@ namespace occ {
 
 namespace {
 
-constexpr uint32_t kCacheVersion = 1;
+constexpr uint32_t kCacheVersion = 2;  // bump whenever the builder changes its output
 constexpr char kCacheMagic[8] = {'O', 'C', 'C', 'L', 'O', 'D', '\r', '\n'};
 
 double now_ms() {
@@ -62,8 +62,10 @@ LodMesh simplify(const LodMesh& in, size_t target_indices) {
   const float scale = meshopt_simplifyScale(&wpos[0].x, nw, sizeof(glm::vec3));
   std::vector<uint32_t> dst(widx.size());
   float rel = 0;
+  // Borders locked: open edges (cluster seams, the open bottom of a building) stay where they are,
+  // so neighbouring clusters do not crack apart and walls are not lifted off the ground.
   size_t n = meshopt_simplify(dst.data(), widx.data(), widx.size(), &wpos[0].x, nw, sizeof(glm::vec3), target_indices,
-                              1.0f, 0, &rel);
+                              1.0f, meshopt_SimplifyLockBorder, &rel);
   if (n > target_indices + target_indices / 2) {  // topology stopped it: try the sloppy simplifier
     std::vector<uint32_t> dst2(widx.size());
     float rel2 = 0;
@@ -110,7 +112,18 @@ LodMesh simplify(const LodMesh& in, size_t target_indices) {
       out.indices.push_back(it->second);
     }
   }
-  out.error = in.error + abs_err;
+  // The simplifier's error is an estimate; never report less than how far the bounding box moved
+  // (catches a part that vanished or shrank, which its quadrics may not see).
+  Aabb before, after;
+  for (uint32_t i : widx) before.grow(glm::dvec3(wpos[i]));
+  for (size_t i = 0; i < n; ++i) after.grow(glm::dvec3(wpos[dst[i]]));
+  double moved = before.diagonal();
+  if (!after.empty()) {
+    moved = 0;
+    for (int a = 0; a < 3; ++a)
+      moved = std::max({moved, std::abs(after.min[a] - before.min[a]), std::abs(after.max[a] - before.max[a])});
+  }
+  out.error = in.error + std::max(abs_err, moved);
   return out;
 }
 

@@ -1,10 +1,13 @@
-// frame_diff DIR_A DIR_B [--threshold T] [--max-fraction F]
+// frame_diff DIR_A DIR_B [--threshold T] [--max-fraction F] [--psnr]
 // Compares every frame_NNNNN.png of DIR_A with the same file in DIR_B. A pixel differs when any
 // channel differs by more than T. Prints one line per frame and a summary line
 //   frames=N differing_pixels=K max_frame_fraction=F
+// With --psnr the summary goes on with  mean_fraction=M psnr_db=P  (PSNR over the RGB channels of
+// all frames together: 10 log10(255^2 / MSE); "inf" when identical).
 // Exit: 0 ok, 1 a frame is missing in B / sizes differ / no frames / unreadable file,
 //       2 usage error, 3 some frame's differing fraction exceeds --max-fraction.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -27,6 +30,17 @@ bool is_frame_file(const std::string& name) {  // frame_ + digits + .png
     return false;
   return std::all_of(name.begin() + prefix.size(), name.end() - suffix.size(),
                      [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// Sum of squared RGB differences.
+double squared_error(const occ::Image& a, const occ::Image& b) {
+  double s = 0;
+  for (size_t p = 0; p < a.rgba.size(); p += 4)
+    for (size_t c = 0; c < 3; ++c) {
+      const double d = double(a.rgba[p + c]) - double(b.rgba[p + c]);
+      s += d * d;
+    }
+  return s;
 }
 
 uint64_t count_differing(const occ::Image& a, const occ::Image& b, int threshold) {
@@ -53,6 +67,8 @@ int run(int argc, char** argv) {
                "2 on usage errors; 3 when a frame's differing fraction exceeds --max-fraction.");
   cli.option("threshold", &threshold, 0, 255, "a pixel differs if any channel differs by more than this");
   cli.option("max-fraction", &max_fraction, 0.0, 1.0, "exit 3 if a frame's differing fraction exceeds this");
+  bool psnr = false;
+  cli.flag("psnr", &psnr, "also print the mean differing fraction and the PSNR (dB) of all frames");
   std::vector<char*> rest{argv[0]};
   rest.insert(rest.end(), argv + first_option, argv + argc);
   if (!cli.parse(int(rest.size()), rest.data())) return 0;
@@ -70,7 +86,7 @@ int run(int argc, char** argv) {
   if (names.empty()) throw std::runtime_error(dirs[0] + ": no frame_NNNNN.png files");
 
   uint64_t total = 0;
-  double worst = 0.0;
+  double worst = 0.0, sum_fraction = 0.0, sq = 0.0, samples = 0.0;
   for (const std::string& name : names) {
     const fs::path path_b = fs::path(dirs[1]) / name;
     if (!fs::exists(path_b)) throw std::runtime_error(path_b.string() + ": missing (present in " + dirs[0] + ")");
@@ -84,12 +100,26 @@ int run(int argc, char** argv) {
     const double fraction = double(n) / (double(a.width) * a.height);
     total += n;
     worst = std::max(worst, fraction);
+    sum_fraction += fraction;
+    if (psnr) {
+      sq += squared_error(a, b);
+      samples += 3.0 * double(a.width) * a.height;
+    }
     const std::string frame = name.substr(6, name.size() - 10);
     std::printf("frame %s: %llu differing pixels (%.4f%%)\n", frame.c_str(), (unsigned long long)n,
                 100.0 * fraction);
   }
-  std::printf("frames=%zu differing_pixels=%llu max_frame_fraction=%.6g\n", names.size(),
-              (unsigned long long)total, worst);
+  std::printf("frames=%zu differing_pixels=%llu max_frame_fraction=%.6g", names.size(), (unsigned long long)total,
+              worst);
+  if (psnr) {
+    const double mse = samples > 0 ? sq / samples : 0.0;
+    std::printf(" mean_fraction=%.6g", sum_fraction / double(names.size()));
+    if (mse > 0)
+      std::printf(" psnr_db=%.3f", 10.0 * std::log10(255.0 * 255.0 / mse));
+    else
+      std::printf(" psnr_db=inf");
+  }
+  std::printf("\n");
   std::fflush(stdout);
   if (worst > max_fraction) {
     std::cerr << "error: a frame differs in " << worst << " of its pixels (--max-fraction " << max_fraction << ")\n";

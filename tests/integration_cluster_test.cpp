@@ -200,3 +200,78 @@ TEST(Cluster, LatestCameraModeRunsToTheLastCameraWithVerifiedFrames) {
   EXPECT_EQ(stats["camera"].back(), 39);
   for (size_t i = 1; i < stats["camera"].size(); ++i) EXPECT_GE(stats["camera"][i], stats["camera"][i - 1]);
 }
+
+// Levels of detail (tau > 0): every process verifies every frame (set hash and front hash), the
+// LOD cache is built once and reused, fewer triangles are drawn than at tau = 0, and the image
+// stays close to the full-detail reference.
+TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
+  fs::path dir = fresh_dir("lod");
+  const std::string scene = "city:6x6:3:10:1", path = "walk:60";
+  const std::vector<std::string> cache = {"--lod-cache", (dir / "cache").string()};
+  auto with = [&](std::vector<std::string> a) {
+    a.insert(a.end(), cache.begin(), cache.end());
+    return a;
+  };
+  ClusterRun exact = run_cluster(dir / "tau0", scene, path, with({}), {"--no-images"});
+  ASSERT_EQ(exact.rvg_code, 0) << exact.rvg_log;
+  ClusterRun r = run_cluster(dir / "tau3", scene, path, with({"--pixel-error", "3"}));
+  ASSERT_EQ(r.rvg_code, 0) << r.rvg_log << r.node0_log << r.node1_log;
+  EXPECT_EQ(r.node0_code, 0) << r.node0_log;
+  EXPECT_EQ(r.node1_code, 0) << r.node1_log;
+  // Node 0 built the cache, node 1 and the render client loaded it; all agree on the fingerprint.
+  EXPECT_NE(r.node0_log.find("built LODs"), std::string::npos) << r.node0_log;
+  EXPECT_NE(r.node1_log.find("LOD cache"), std::string::npos) << r.node1_log;
+  EXPECT_NE(r.rvg_log.find("loaded in"), std::string::npos) << r.rvg_log;
+  auto fp = [](const std::string& log) {
+    auto p = log.find("fingerprint with LODs ");
+    return p == std::string::npos ? std::string("?") : log.substr(p + 22, 16);
+  };
+  EXPECT_EQ(fp(r.node0_log), fp(r.rvg_log));
+  EXPECT_EQ(fp(r.node1_log), fp(r.rvg_log));
+  EXPECT_NE(fp(r.rvg_log), "?");
+  auto a = read_csv(dir / "tau0" / "stats.csv"), b = read_csv(dir / "tau3" / "stats.csv");
+  ASSERT_EQ(b["frame"].size(), 60u);
+  EXPECT_LT(sum(b["triangles"]), 0.8 * sum(a["triangles"]));
+  EXPECT_NE(r.node0_log.find("front tracking skipped"), std::string::npos);
+  // Close to full detail: few differing pixels (LOD is not exact, so not zero).
+  ASSERT_EQ(run_reference(dir / "reference", scene, path), 0);
+  Proc diff({bin("frame_diff"), (dir / "reference").string(), (dir / "tau3").string(), "--threshold", "16",
+             "--max-fraction", "0.05", "--psnr"},
+            dir / "diff.log");
+  EXPECT_EQ(diff.wait(120s), 0) << diff.log();
+  EXPECT_NE(diff.log().find("psnr_db="), std::string::npos) << diff.log();
+}
+
+TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
+  fs::path dir = fresh_dir("lodvp");
+  const std::vector<std::string> cache = {"--lod-cache", (dir / "cache").string()};
+  for (auto extra : std::vector<std::vector<std::string>>{{"--pixel-error", "5", "--visible-pixel-lod", "on"},
+                                                          {"--pixel-error", "5", "--front-tracking", "off"}}) {
+    extra.insert(extra.end(), cache.begin(), cache.end());
+    const fs::path out = dir / extra[3];
+    ClusterRun r = run_cluster(out, "city:6x6:3:10:1", "walk:40", extra, {"--no-images"});
+    ASSERT_EQ(r.rvg_code, 0) << r.rvg_log << r.node0_log << r.node1_log;
+    EXPECT_EQ(r.node0_code, 0) << r.node0_log;
+    EXPECT_EQ(r.node1_code, 0) << r.node1_log;
+    EXPECT_EQ(read_csv(out / "stats.csv")["frame"].size(), 40u);
+  }
+}
+
+TEST(ClusterLod, MismatchedPixelErrorIsRefusedAtHandshake) {
+  fs::path out = fresh_dir("lodmismatch");
+  const std::vector<std::string> common = {"--scene", "city:4x4:2:5:1", "--timeout-ms", "3000", "--width", "64",
+                                           "--height", "64", "--lod-cache", (out / "cache").string()};
+  std::vector<std::string> a0 = {bin("switch_node"), "--id", "0", "--pixel-error", "1", "--port-file",
+                                 (out / "n0.port").string()};
+  a0.insert(a0.end(), common.begin(), common.end());
+  Proc n0(a0, out / "node0.log");
+  int p0 = wait_port(out / "n0.port", n0);
+  ASSERT_NE(p0, 0) << n0.log();
+  std::vector<std::string> a1 = {bin("switch_node"), "--id", "1", "--pixel-error", "2", "--peer",
+                                 "127.0.0.1:" + std::to_string(p0)};
+  a1.insert(a1.end(), common.begin(), common.end());
+  Proc n1(a1, out / "node1.log");
+  EXPECT_EQ(n1.wait(30s), 1);
+  EXPECT_EQ(n0.wait(30s), 1);
+  EXPECT_NE(n1.log().find("config hash"), std::string::npos) << n1.log();
+}

@@ -283,3 +283,25 @@ TEST(LodCache, CorruptFilesAreRejectedNeverTrusted) {
   EXPECT_EQ(again.hash(), b.lod.hash());
   fs::remove_all(dir);
 }
+
+// The simplified meshes keep the shape: each LOD's box matches its original cluster's box
+// within the reported error (a vanished or shifted building would fail this).
+TEST(LodBuild, LodBoxesMatchOriginalWithinError) {
+  Built b = small_city(3);
+  for (uint32_t i = 0; i < b.h.items().size(); ++i) {
+    const Item& it = b.h.items()[i];
+    const Mesh& mesh = b.scene.meshes[b.scene.objects[it.object].mesh];
+    const Aabb orig = mesh.clusters[it.cluster].box;
+    for (uint32_t l = 1; l <= kLeafLodLevels; ++l) {
+      const LodMesh& m = b.lod.item_lod(i, l);
+      Aabb box;
+      for (uint32_t idx : m.indices) box.grow(glm::dvec3(m.positions[idx]));
+      const double tol = m.error + 1e-4 * (1 + orig.diagonal());
+      ASSERT_FALSE(box.empty()) << "item " << i << " level " << l;
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(box.min[a], orig.min[a], tol) << "item " << i << " level " << l << " axis " << a;
+        EXPECT_NEAR(box.max[a], orig.max[a], tol) << "item " << i << " level " << l << " axis " << a;
+      }
+    }
+  }
+}
