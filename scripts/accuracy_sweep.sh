@@ -97,7 +97,7 @@ gnuplot <<EOF
 set terminal pngcairo size 900,600 font ",10"
 set output "$out/accuracy.png"
 set datafile separator ","
-set title "$(basename "$scene"), $path, ${width}x${height}: frame time vs image error (labels: tau px)"
+set title "$(basename "$scene"), $path, ${width}x${height}: frame time vs image error (labels: tau px)" noenhanced
 set xlabel "pixels differing from the full-detail reference (%, mean over frames)"
 set ylabel "frame time (ms, mean)"
 set grid
