@@ -338,7 +338,7 @@ class Reader {
     if (!pod(count)) return false;
     if (count > (n_ - off_) / sizeof(T)) return false;  // checked before allocating
     v.resize(count);
-    std::memcpy(v.data(), p_ + off_, count * sizeof(T));
+    if (count > 0) std::memcpy(v.data(), p_ + off_, count * sizeof(T));
     off_ += count * sizeof(T);
     return true;
   }
