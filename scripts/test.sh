@@ -1,24 +1,49 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs every test (CTest labels unit, gl, integration).
+# Installs what is missing, builds, and runs every test (CTest labels unit, gl, integration, hard).
 #   scripts/test.sh              all tests
 #   scripts/test.sh -L unit      only one label (any ctest arguments are passed through)
-#   scripts/test.sh --sanitize   ASan+UBSan build in build-asan/, then the suite
+#   scripts/test.sh --sanitize   ASan+UBSan build in build-asan/, then the whole suite
+#   scripts/test.sh --tsan       TSan build in build-tsan/ of the threaded parts (transport, camera
+#                                buffer, the switch node's camera thread in one cluster run and the
+#                                strangers-at-the-ports test), then
+#                                those tests (ctest arguments replace the default selection)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 
-if [ "${1:-}" = "--sanitize" ]; then
-  shift
-  export OCC_BUILD_DIR=build-asan
-  export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
-  export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp
-  export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-  scripts/build.sh -DOCC_SANITIZE=ON
-else
-  scripts/build.sh
-fi
-BUILD_DIR=${OCC_BUILD_DIR:-build}
+MODE=normal
+case "${1:-}" in
+  --sanitize) MODE=asan; shift ;;
+  --tsan) MODE=tsan; shift ;;
+esac
 
 # One rasteriser thread per process: with several processes on 2 cores this is as fast or faster.
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
-ctest --test-dir "$BUILD_DIR" --output-on-failure --timeout 600 "$@"
+
+case "$MODE" in
+  asan)
+    export OCC_BUILD_DIR=build-asan
+    # fast_unwind_on_malloc=0 would deadlock OSMesa: keep the default fast unwinder.
+    export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0
+    export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0
+    export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+    scripts/build.sh -DOCC_SANITIZE=ON
+    ;;
+  tsan)
+    export OCC_BUILD_DIR=build-tsan
+    export TSAN_OPTIONS="suppressions=$PWD/tests/tsan.supp:halt_on_error=1:second_deadlock_stack=1:report_signal_unsafe=0"
+    if [ ! -f build-tsan/CMakeCache.txt ]; then
+      cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DOCC_TSAN=ON >/dev/null
+    fi
+    cmake --build build-tsan -j"$(nproc)" --target core_test net_transport_test cluster_test hard_faults_test \
+      switch_node render_client frame_diff
+    if [ $# -eq 0 ]; then
+      set -- -R '^(CameraBuffer|Loopback|Handshake|Connect|Connection|Listener)\.|^Cluster\.CityWalkEqualsReference$|^HardFaults\.'
+    fi
+    ;;
+  normal)
+    scripts/build.sh
+    ;;
+esac
+BUILD_DIR=${OCC_BUILD_DIR:-build}
+ctest --test-dir "$BUILD_DIR" --output-on-failure --timeout 900 "$@"
