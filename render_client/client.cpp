@@ -67,16 +67,8 @@ class Client {
 
  private:
   void connect() {
-    wire::Hello mine;
-    mine.role = wire::Role::render_client;
-    mine.viewport_width_px = uint32_t(o_.width);
-    mine.viewport_height_px = uint32_t(o_.height);
-    mine.scene_fingerprint = fingerprint_;
-    mine.arity = h_->params().arity;
-    mine.leaf_items = h_->params().leaf_items;
-    mine.cluster_triangles = h_->params().cluster_triangles;
-    mine.config_hash = o_.config.hash();
-    mine.name = "render_client";
+    const wire::Hello mine = make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, fingerprint_,
+                                        h_->params(), o_.config, "render_client");
     for (const std::string& text : o_.connect) {
       Endpoint e = parse_endpoint("connect", text);
       auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));

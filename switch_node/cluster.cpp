@@ -34,6 +34,22 @@ Camera from_wire(const wire::Camera& w) {
   return c;
 }
 
+wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
+                       const BuildParams& build, const ClusterConfig& config, const std::string& name) {
+  wire::Hello h;
+  h.role = role;
+  h.node_id = node_id;
+  h.viewport_width_px = uint32_t(vp.width);
+  h.viewport_height_px = uint32_t(vp.height);
+  h.scene_fingerprint = scene_fingerprint;
+  h.arity = build.arity;
+  h.leaf_items = build.leaf_items;
+  h.cluster_triangles = build.cluster_triangles;
+  h.config_hash = config.hash();
+  h.name = name;
+  return h;
+}
+
 uint64_t ClusterConfig::hash() const {
   Hasher h;
   h.str(camera_mode);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/camera.hpp"
+#include "common/hierarchy.hpp"
 #include "protocol/wire.hpp"
 
 namespace occ {
@@ -27,6 +28,10 @@ struct ClusterConfig {
   bool lod() const { return pixel_error > 0; }  // LODs are loaded/built only when used
   uint64_t hash() const;
 };
+
+// The Hello every process sends: who it is and everything that must agree between processes.
+wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
+                       const BuildParams& build, const ClusterConfig& config, const std::string& name);
 
 class Cli;
 // --pixel-error, --visible-pixel-lod, --front-tracking (all must agree: they are in hash()).

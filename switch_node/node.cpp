@@ -70,21 +70,6 @@ class SwitchNode {
   }
 
  private:
-  wire::Hello hello() const {
-    wire::Hello h;
-    h.role = wire::Role::switch_node;
-    h.node_id = uint8_t(o_.id);
-    h.viewport_width_px = uint32_t(o_.width);
-    h.viewport_height_px = uint32_t(o_.height);
-    h.scene_fingerprint = fingerprint_;
-    h.arity = h_->params().arity;
-    h.leaf_items = h_->params().leaf_items;
-    h.cluster_triangles = h_->params().cluster_triangles;
-    h.config_hash = o_.config.hash();
-    h.name = who_;
-    return h;
-  }
-
   void connect() {
     Endpoint listen = parse_endpoint("listen", o_.listen);
     auto listener = net::Listener::open(listen.port, listen.host);
@@ -94,7 +79,8 @@ class SwitchNode {
         throw InputError("--port-file '" + o_.port_file + "': " + *err);
     std::cerr << who_ << ": listening on " << listener->address() << ":" << listener->port() << "\n";
     const Millis timeout(o_.timeout_ms);
-    const wire::Hello mine = hello();
+    const wire::Hello mine = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height},
+                                        fingerprint_, h_->params(), o_.config, who_);
     if (o_.id == 1) {
       Endpoint pe = parse_endpoint("peer", o_.peer);
       auto conn = net::Connection::connect(pe.host, pe.port, timeout);
@@ -189,7 +175,10 @@ class SwitchNode {
               ? cameras_.take(frame, timeout, &why)
               : cameras_.take_latest(last_camera ? *last_camera + 1 : 0, timeout, &why);
       if (!cam) {
-        if (rvg_bye_) return;  // the render client finished
+        if (rvg_bye_) {  // the render client finished (or gave up: its reason says which)
+          std::cerr << who_ << ": " << why << "\n";
+          return;
+        }
         throw NodeFailure("frame " + std::to_string(frame) + ": " + why);
       }
       last_camera = cam->number;
@@ -199,8 +188,10 @@ class SwitchNode {
       std::vector<uint32_t> ids = sorted(visible);
       for (uint32_t id : ids) drawn[id] = 1;
       renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::DepthOnly);
-      if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn)) return;
-      const uint32_t or_us = micros_since(or_start);
+      Clock::duration waited{0};  // for the other node's stream: not OR work
+      if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
+      const uint32_t or_us =
+          micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
 
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
@@ -216,7 +207,8 @@ class SwitchNode {
 
   // Applies and draws the other node's diff of `frame` until its EndOfFrame. Returns false when
   // the other node closed cleanly instead (the run is over).
-  bool receive_stream(uint32_t frame, VisibleSet& visible, DiffReceiver& stream, std::vector<uint8_t>& drawn) {
+  bool receive_stream(uint32_t frame, VisibleSet& visible, DiffReceiver& stream, std::vector<uint8_t>& drawn,
+                      Clock::duration& waited) {
     bool cleared = false;  // full-sets mode: the frame's first message replaces the set
     bool have_camera = false;
     uint64_t expected_front = 0;
@@ -228,7 +220,9 @@ class SwitchNode {
       cleared = true;
     };
     for (;;) {
+      const Clock::time_point wait_start = Clock::now();
       net::Received r = peer_->receive(Millis(o_.timeout_ms));
+      waited += Clock::now() - wait_start;
       if (r.status == net::Received::Status::closed) return false;
       if (!r.ok())
         throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +

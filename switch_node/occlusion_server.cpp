@@ -67,17 +67,8 @@ int serve(const ServerOptions& o) {
   if (!o.port_file.empty())
     if (auto err = net::write_port_file(o.port_file, listener->port())) throw InputError("--port-file: " + *err);
   ClusterConfig config;  // lockstep, incremental
-  wire::Hello mine;
-  mine.role = wire::Role::switch_node;
-  mine.node_id = 0;
-  mine.viewport_width_px = uint32_t(o.width);
-  mine.viewport_height_px = uint32_t(o.height);
-  mine.scene_fingerprint = h.fingerprint();
-  mine.arity = h.params().arity;
-  mine.leaf_items = h.params().leaf_items;
-  mine.cluster_triangles = h.params().cluster_triangles;
-  mine.config_hash = config.hash();
-  mine.name = who;
+  const wire::Hello mine =
+      make_hello(wire::Role::switch_node, 0, {o.width, o.height}, ls.fingerprint, h.params(), config, who);
   auto peer = listener->accept_peer(mine, {wire::Role::render_client, std::nullopt}, net::Millis(o.timeout_ms));
   if (!peer) throw std::runtime_error("no render client: " + peer.error());
   net::Connection& rvg = peer->connection;

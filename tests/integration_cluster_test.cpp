@@ -153,7 +153,12 @@ TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage)
   EXPECT_LT(waited_s, 20.0);  // ended by the disconnect, not by the 20 s timeout
   EXPECT_NE(log.find("error: render_client: frame "), std::string::npos) << log;
   EXPECT_NE(log.find("switch node 1"), std::string::npos) << log;
-  EXPECT_EQ(n0.wait(30s), 1) << n0.log();
+  // Node 0 ends too, not hanging: with an error if it noticed node 1's death first, cleanly if
+  // the render client's goodbye (which says it failed) came first.
+  const int n0_code = n0.wait(30s);
+  EXPECT_TRUE(n0_code == 0 || n0_code == 1) << n0.log();
+  EXPECT_TRUE(n0.log().find("switch node 1") != std::string::npos ||
+              n0.log().find("render client failed") != std::string::npos) << n0.log();
   // Every frame file is complete and has its stats row: nothing partial was written.
   size_t pngs = 0;
   for (auto& e : fs::directory_iterator(out)) {
