@@ -90,7 +90,8 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, bool visible_pixel_lod,
                                         std::span<const uint32_t> start,
-                                        const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
+                                        const std::function<void(uint32_t)>& on_visible, CullStats* stats,
+                                        QuerySkipper* skipper) {
   CullStats local;
   CullStats& st = stats ? *stats : local;
   const Frustum fr = cam.frustum();
@@ -116,6 +117,9 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       } else if (visible_without_query(n.box, cam)) {
         ++st.near_visible;
         visible.emplace_back(id, kNoQuery);
+      } else if (skipper && skipper->skip(id)) {
+        ++st.skipped;
+        visible.emplace_back(id, kNoQuery);
       } else {
         pending.emplace_back(id, q.issue(n.box));
         ++st.queries;
@@ -124,6 +128,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
     if (!pending.empty()) ++st.levels;
     for (auto [id, handle] : pending) {
       const uint64_t samples = q.result(handle);
+      if (skipper) skipper->record(id, samples > 0);
       if (samples > 0)
         visible.emplace_back(id, samples);
       else
@@ -158,6 +163,25 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+bool QuerySkipper::skip(uint32_t node) {
+  State& s = state_.at(node);
+  if (s.remaining == 0) return false;
+  --s.remaining;
+  return true;
+}
+
+void QuerySkipper::record(uint32_t node, bool visible) {
+  State& s = state_.at(node);
+  if (!visible) {
+    s = State{};
+    return;
+  }
+  if (s.streak < kTrust) ++s.streak;
+  if (s.streak < kTrust) return;
+  s.wait = uint8_t(std::min<int>(kMaxWait, std::max<int>(2, 2 * s.wait)));
+  s.remaining = s.wait;
 }
 
 std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes) {

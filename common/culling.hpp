@@ -40,6 +40,30 @@ struct CullStats {
   uint32_t levels = 0;             // query batches (levels) issued
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
   uint32_t hlods = 0;              // interior nodes accepted at their HLOD
+  uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
+};
+
+// Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
+// culling paper): a node whose query came back visible kTrust times in a row is assumed visible,
+// without a query, for its next `wait` visits; every confirmation doubles the wait (up to
+// kMaxWait), an occluded result resets it. Assuming visible is conservative: the node is accepted
+// or descended exactly as if its query had passed, so no frame changes; only the visible set may
+// keep a node for up to kMaxWait visits after it became occluded. A scene with little occlusion
+// (an open field, the outside of one object) thus stops paying for queries that never cull.
+class QuerySkipper {
+ public:
+  static constexpr uint8_t kTrust = 3;
+  static constexpr uint8_t kMaxWait = 16;
+  explicit QuerySkipper(size_t nodes) : state_(nodes) {}
+  // True when `node` is assumed visible this time (consumes one visit of its wait).
+  bool skip(uint32_t node);
+  void record(uint32_t node, bool visible);
+
+ private:
+  struct State {
+    uint8_t streak = 0, wait = 0, remaining = 0;
+  };
+  std::vector<State> state_;
 };
 
 // Leaves whose boxes are not outside the frustum, in ascending id order.
@@ -65,7 +89,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
                                         const LodSelector& sel, bool visible_pixel_lod,
                                         std::span<const uint32_t> start,
                                         const std::function<void(uint32_t)>& on_visible,
-                                        CullStats* stats = nullptr);
+                                        CullStats* stats = nullptr, QuerySkipper* skipper = nullptr);
 
 // The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
 // identically in every renderer).

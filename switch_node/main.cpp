@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
     cli.flag("full-sets", &o.config.full_sets, "send all of V_f every frame instead of the diff");
     occ::add_lod_options(cli, o.config);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
+    cli.choice("adaptive-queries", &o.adaptive_queries, {"on", "off"},
+               "assume nodes whose queries keep coming back visible visible for a while (no query)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer, a camera or a message");
     if (!cli.parse(argc, argv)) return 0;
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");

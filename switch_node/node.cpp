@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <cstdio>
 #include <iostream>
 #include <thread>
@@ -38,6 +39,7 @@ class SwitchNode {
   int run() {
     LoadedScene ls = load_and_build(o_.scene, who_, o_.config.lod());
     h_ = &ls.hierarchy;
+    if (o_.adaptive_queries == "on") skipper_.emplace(ls.hierarchy.size());
     fingerprint_ = ls.fingerprint;
     renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
     ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
@@ -58,6 +60,8 @@ class SwitchNode {
         code = 1;
         peer_->close_with_error(who_ + " failed: " + e.what());
         rvg_->close_with_error(who_ + " failed: " + e.what());
+      } else {
+        std::cerr << who_ << ": stopped: " << e.what() << " (after the " << rvg_end_ << ")\n";
       }
     }
     if (code == 0) {
@@ -127,8 +131,9 @@ class SwitchNode {
         cameras_done_ = true;
         return;
       }
+      rvg_end_ = (r.status == net::Received::Status::closed ? "render client closed: " : "render client failed: ") + r.reason;
       rvg_bye_ = r.status == net::Received::Status::closed;
-      cameras_.close(rvg_bye_ ? "render client closed: " + r.reason : "render client failed: " + r.reason);
+      cameras_.close(rvg_end_);
       cameras_done_ = true;
       return;
     }
@@ -290,7 +295,7 @@ class SwitchNode {
             flush(false);
           }
         },
-        &stats);
+        &stats, skipper_ ? &*skipper_ : nullptr);
     querier_->end();
     flush(true);
     VisibleSet cur(renderables_->count());
@@ -310,6 +315,7 @@ class SwitchNode {
     visible = std::move(cur);
     ++frames_;
     queries_ += stats.queries;
+    assumed_visible_ += stats.skipped;
     pixel_stops_ += stats.pixel_stops;
     hlods_ += stats.hlods;
   }
@@ -323,7 +329,8 @@ class SwitchNode {
   void print_summary() const {
     if (!rvg_ || !peer_) return;
     auto r = rvg_->stats(), p = peer_->stats();
-    std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries, sent " << r.sent.bytes
+    std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
+              << " more skipped by adaptive queries), sent " << r.sent.bytes
               << " B to the render client and " << p.sent.bytes << " B to the other node\n";
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
@@ -343,8 +350,10 @@ class SwitchNode {
   std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
   CameraBuffer cameras_;
+  std::string rvg_end_;  // why the render client's connection ended (written before cameras_done_)
   std::atomic<bool> rvg_bye_{false}, cameras_done_{false};
-  uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0;
+  uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
+  std::optional<QuerySkipper> skipper_;
 };
 
 }  // namespace

@@ -21,6 +21,7 @@ struct NodeOptions {
   std::string port_file;
   std::string peer;  // node 1: where node 0 listens
   int diff_chunk_ids = 100;
+  std::string adaptive_queries = "on";  // skip queries of nodes that keep coming back visible
   int timeout_ms = 30000;
 };
 

@@ -3,6 +3,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/culling.hpp"
+#include "common/lod.hpp"
 
 using namespace occ;
 
@@ -127,4 +128,53 @@ TEST(Culling, ItemsOfNodesAreSortedAndUnique) {
   auto items = items_of_nodes(h, nodes);
   EXPECT_EQ(items.size(), h.items().size());
   EXPECT_TRUE(std::is_sorted(items.begin(), items.end()));
+}
+
+TEST(QuerySkipper, TrustsAfterRepeatedVisibleResultsAndResetsOnOccluded) {
+  QuerySkipper s(4);
+  EXPECT_FALSE(s.skip(1));
+  s.record(1, true);
+  s.record(1, true);
+  EXPECT_FALSE(s.skip(1));  // two in a row are not enough
+  s.record(1, true);
+  EXPECT_TRUE(s.skip(1));
+  EXPECT_TRUE(s.skip(1));
+  EXPECT_FALSE(s.skip(1));  // wait of 2 used up: test again
+  s.record(1, true);        // confirmed: the wait doubles
+  int skipped = 0;
+  while (s.skip(1)) ++skipped;
+  EXPECT_EQ(skipped, 4);
+  s.record(1, false);  // occluded: back to querying every time
+  s.record(1, true);
+  EXPECT_FALSE(s.skip(1));
+  EXPECT_FALSE(s.skip(2));  // other nodes are independent
+}
+
+TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
+  Scene s = cube_grid(8, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  Renderables r(h, nullptr);
+  Camera cam = overview(h.node(0).box);
+  LodSelector sel(r, cam, 480, 0.0);
+  FakeQueries truth_q, fast_q;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; j += 2) truth_q.visible_points.push_back({3.0 * i + 0.5, 0.5, 3.0 * j + 0.5});
+  fast_q.visible_points = truth_q.visible_points;
+  QuerySkipper skipper(h.size());
+  CullStats plain_stats, skip_stats;
+  for (int frame = 0; frame < 30; ++frame) {
+    if (frame == 15) {  // half of the visible cubes become occluded
+      truth_q.visible_points.resize(16);
+      fast_q.visible_points.resize(16);
+    }
+    auto truth = hardware_cull_lod(h, cam, truth_q, sel, false, {}, nullptr, &plain_stats);
+    auto fast = hardware_cull_lod(h, cam, fast_q, sel, false, {}, nullptr, &skip_stats, &skipper);
+    EXPECT_TRUE(std::includes(fast.begin(), fast.end(), truth.begin(), truth.end())) << "frame " << frame;
+    if (frame < 15 || frame >= 15 + QuerySkipper::kMaxWait + 1) {
+      EXPECT_EQ(fast, truth) << "frame " << frame;
+    }
+  }
+  EXPECT_GT(skip_stats.skipped, 0u);
+  // The occluded half is queried every frame; the visible half mostly is not.
+  EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
 }

@@ -19,7 +19,7 @@ struct ClusterRun {
 // Starts node 0, node 1 and the render client like scripts/cluster.sh does.
 ClusterRun run_cluster(const fs::path& out, const std::string& scene, const std::string& path,
                        std::vector<std::string> extra = {}, std::vector<std::string> rvg_extra = {},
-                       std::vector<std::string> node1_extra = {},
+                       std::vector<std::string> node_extra = {},
                        std::chrono::milliseconds timeout = 300s) {
   fs::create_directories(out);
   std::vector<std::string> common = {"--scene", scene, "--timeout-ms", "20000"};
@@ -30,10 +30,11 @@ ClusterRun run_cluster(const fs::path& out, const std::string& scene, const std:
     a.insert(a.end(), more.begin(), more.end());
     return a;
   };
-  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}), out / "node0.log");
+  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}, node_extra),
+          out / "node0.log");
   int p0 = wait_port(out / "n0.port", n0);
   Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (out / "n1.port").string()}, node1_extra),
+                (out / "n1.port").string()}, node_extra),
           out / "node1.log");
   int p1 = wait_port(out / "n1.port", n1);
   ClusterRun r;
@@ -112,8 +113,12 @@ TEST(Cluster, DuplexWalkEqualsReference) {
 
 TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {
   fs::path dir = fresh_dir("fullsets");
-  ClusterRun inc = run_cluster(dir / "inc", "city:6x6:3:10:1", "walk:90", {}, {"--no-images"});
-  ClusterRun full = run_cluster(dir / "full", "city:6x6:3:10:1", "walk:90", {"--full-sets"}, {"--no-images"});
+  // Adaptive queries off: with them the set may keep assumed-visible nodes, and full sets turn
+  // front tracking off, so the two traversals (both conservative) would differ slightly.
+  const std::vector<std::string> exact_queries = {"--adaptive-queries", "off"};
+  ClusterRun inc = run_cluster(dir / "inc", "city:6x6:3:10:1", "walk:90", {}, {"--no-images"}, exact_queries);
+  ClusterRun full =
+      run_cluster(dir / "full", "city:6x6:3:10:1", "walk:90", {"--full-sets"}, {"--no-images"}, exact_queries);
   ASSERT_EQ(inc.rvg_code, 0) << inc.rvg_log;
   ASSERT_EQ(full.rvg_code, 0) << full.rvg_log;
   auto a = read_csv(dir / "inc" / "stats.csv"), b = read_csv(dir / "full" / "stats.csv");
@@ -157,8 +162,7 @@ TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage)
   // the render client's goodbye (which says it failed) came first.
   const int n0_code = n0.wait(30s);
   EXPECT_TRUE(n0_code == 0 || n0_code == 1) << n0.log();
-  EXPECT_TRUE(n0.log().find("switch node 1") != std::string::npos ||
-              n0.log().find("render client failed") != std::string::npos) << n0.log();
+  EXPECT_NE(n0.log().find(n0_code == 1 ? "switch node 1" : "render client failed"), std::string::npos) << n0.log();
   // Every frame file is complete and has its stats row: nothing partial was written.
   size_t pngs = 0;
   for (auto& e : fs::directory_iterator(out)) {
@@ -203,7 +207,10 @@ TEST(Cluster, LatestCameraModeRunsToTheLastCameraWithVerifiedFrames) {
   auto stats = read_csv(dir / "stats.csv");
   ASSERT_FALSE(stats["camera"].empty());
   EXPECT_EQ(stats["camera"].back(), 39);
-  for (size_t i = 1; i < stats["camera"].size(); ++i) EXPECT_GE(stats["camera"][i], stats["camera"][i - 1]);
+  // The two nodes pick their cameras independently: when the newest camera reaches one node a
+  // moment before the other, a frame may use the camera just before the previous frame's. Never
+  // more than that, and every frame's set was verified (the client exits non-zero otherwise).
+  for (size_t i = 1; i < stats["camera"].size(); ++i) EXPECT_GE(stats["camera"][i], stats["camera"][i - 1] - 1);
 }
 
 // Levels of detail (tau > 0): every process verifies every frame (set hash and front hash), the
