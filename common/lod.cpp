@@ -573,6 +573,27 @@ uint64_t Renderables::triangles(uint32_t r) const {
   return m ? m->triangles() : n.triangles;
 }
 
+LodBenefit lod_benefit(const LodData& lod, const Hierarchy& h) {
+  Renderables r(h, &lod);
+  uint64_t full = 0, leaves_coarse = 0;
+  for (uint32_t id = 0; id < h.size(); ++id)
+    if (h.node(id).leaf()) {
+      full += h.node(id).triangles;
+      leaves_coarse += r.triangles(r.id(id, kLeafLodLevels));
+    }
+  if (full == 0) return {};
+  uint64_t below_root = 0;
+  const HNode& root = h.node(0);
+  if (root.leaf()) {
+    below_root = leaves_coarse;
+  } else {
+    for (uint32_t c = root.first_child; c < root.first_child + root.child_count; ++c)
+      below_root += h.node(c).leaf() ? r.triangles(r.id(c, kLeafLodLevels)) : r.triangles(c);
+  }
+  const uint64_t coarse = std::min({leaves_coarse, below_root, full});
+  return {1.0 - double(coarse) / double(full), full - coarse};
+}
+
 double projected_error_px(double object_error, double distance, double viewport_height_px, double fovy_rad) {
   if (!(distance > 0)) return std::numeric_limits<double>::infinity();  // eye in or on the box
   if (!(object_error > 0)) return 0.0;

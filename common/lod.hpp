@@ -121,6 +121,21 @@ std::string lod_cache_path(const std::string& cache_dir, const std::string& scen
 LodData load_or_build_lod(const Scene& scene, const Hierarchy& h, const LodParams& params,
                           const std::string& cache_dir, const std::string& scene_spec, const std::string& who);
 
+// What the LODs can save. The coarsest cut is the better of "every leaf at its coarsest level" and
+// "the root's children at their coarsest representation (HLOD or coarsest leaf level)"; `fraction`
+// is 1 - its triangles / the scene's triangles. A scene whose LODs save less than 10 % or fewer than
+// 20,000 triangles (2-4 ms of llvmpipe, at most) skips LOD selection: low-poly boxes, geometry the
+// simplifier cannot reduce. It draws full detail as with --pixel-error 0 and pays neither the
+// selection nor the LOD memory (load_and_build drops the data; every process decides the same).
+struct LodBenefit {
+  double fraction = 0;
+  uint64_t saved_triangles = 0;
+  static constexpr double kMinFraction = 0.10;
+  static constexpr uint64_t kMinSavedTriangles = 20000;
+  bool worth_selecting() const { return fraction >= kMinFraction && saved_triangles >= kMinSavedTriangles; }
+};
+LodBenefit lod_benefit(const LodData& lod, const Hierarchy& h);
+
 // The renderable-id space (see the design above). Works without LodData (tau = 0): the same ids
 // exist, only level-0 leaves are ever used.
 class Renderables {

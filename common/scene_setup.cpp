@@ -44,9 +44,24 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
     fh.u64(ls.hierarchy.fingerprint());
     fh.u64(ls.lod->hash());
     ls.fingerprint = fh.value();
-    std::snprintf(buf, sizeof buf, "%s: scene fingerprint with LODs %016llx", who.c_str(),
-                  static_cast<unsigned long long>(ls.fingerprint));
+    // Pay only for what the scene calls for: LODs that save (almost) nothing are dropped, so no
+    // process selects, uploads or draws them. Every process decides from the same data (its hash
+    // is in the fingerprint), so the three agree.
+    const LodBenefit benefit = lod_benefit(*ls.lod, ls.hierarchy);
+    std::snprintf(buf, sizeof buf,
+                  "%s: scene fingerprint with LODs %016llx; the coarsest LODs save %.1f %% of the triangles (%llu)",
+                  who.c_str(), static_cast<unsigned long long>(ls.fingerprint), 100.0 * benefit.fraction,
+                  static_cast<unsigned long long>(benefit.saved_triangles));
     std::cerr << buf << "\n";
+    if (!benefit.worth_selecting()) {
+      std::snprintf(buf, sizeof buf,
+                    "%s: LOD selection skipped: LODs that save less than %.0f %% or %llu triangles are not worth "
+                    "selecting; drawing full detail as with --pixel-error 0",
+                    who.c_str(), 100.0 * LodBenefit::kMinFraction,
+                    static_cast<unsigned long long>(LodBenefit::kMinSavedTriangles));
+      std::cerr << buf << "\n";
+      ls.lod.reset();
+    }
   }
   return ls;
 }

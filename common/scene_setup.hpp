@@ -23,7 +23,7 @@ void add_scene_options(Cli& cli, SceneOptions& opts);
 struct LoadedScene {
   Scene scene;
   Hierarchy hierarchy;
-  std::unique_ptr<LodData> lod;  // null unless requested (tau > 0)
+  std::unique_ptr<LodData> lod;  // null unless requested (tau > 0) and worth it (lod_benefit)
   // What Hello carries: the hierarchy fingerprint, combined with LodData::hash() when LODs are
   // loaded (the LOD cache is part of the scene's identity).
   uint64_t fingerprint = 0;

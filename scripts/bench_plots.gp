@@ -14,5 +14,6 @@ unset logscale y
 set output out."/nodes_sent.png"
 set title "Node ids sent per frame, with and without incremental transmission"
 set ylabel "ids per frame"
-plot out."/per_frame.dat" using 1:9 with lines lw 1.5 title "full sets", \
-     out."/per_frame.dat" using 1:8 with lines lw 1.5 title "incremental"
+set xlabel "frame (frames 0-1 left out: frame 0 draws everything, frame 1 removes most of it)"
+plot out."/per_frame.dat" using ($1 > 1 ? $1 : 1/0):9 with lines lw 1.5 title "full sets", \
+     out."/per_frame.dat" using ($1 > 1 ? $1 : 1/0):8 with lines lw 1.5 title "incremental"

@@ -305,3 +305,30 @@ TEST(LodBuild, LodBoxesMatchOriginalWithinError) {
     }
   }
 }
+
+// "Only the effects a scene calls for": a scene whose geometry the simplifier cannot reduce gets
+// benefit ~0 (load_and_build then drops its LODs); a city gets a large one.
+TEST(LodBenefit, LowPolyScenesHaveNoneCitiesHaveMuch) {
+  Scene s;
+  Mesh tri;
+  tri.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  tri.indices = {0, 1, 2};
+  compute_normals(tri);
+  s.meshes.push_back(tri);
+  for (int i = 0; i < 4; ++i)
+    s.objects.push_back({0, glm::translate(glm::dmat4(1.0), glm::dvec3(3.0 * i, 0, 0)), ""});
+  const Hierarchy h = Hierarchy::build(s, BuildParams{});
+  const LodData lod = LodData::build(s, h, {});
+  const LodBenefit low = lod_benefit(lod, h);
+  EXPECT_GE(low.fraction, 0.0);
+  EXPECT_LT(low.fraction, LodBenefit::kMinFraction);
+  EXPECT_FALSE(low.worth_selecting());
+
+  Built city = small_city();
+  const LodBenefit high = lod_benefit(city.lod, city.h);
+  EXPECT_GT(high.fraction, 0.5);
+  EXPECT_LE(high.fraction, 1.0);
+  uint64_t full = 0;
+  for (const HNode& n : city.h.nodes()) full += n.leaf() ? n.triangles : 0;
+  EXPECT_EQ(high.saved_triangles, uint64_t(std::llround(high.fraction * double(full))));
+}

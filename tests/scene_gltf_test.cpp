@@ -16,6 +16,7 @@
 
 #include "common/error.hpp"
 #include "common/scene_io.hpp"
+#include "common/scene_setup.hpp"
 
 using namespace occ;
 using nlohmann::json;
@@ -382,4 +383,22 @@ TEST_F(GltfFiles, LayoutSpecOfAFile) {
   // Footprint 2 x 2, gap 0.25: copies every 2.5 m.
   EXPECT_EQ(s.bounds(), (Aabb{{10, 0, 0}, {10 + 2 * 2.5 + 2, 2, 2.5 + 2}}));
   EXPECT_THROW(load_scene("layout:3x2:" + (dir_ / "none.glb").string()), InputError);
+}
+
+// Only the effects a scene calls for: in a scene of two cubes LODs could save a few triangles at
+// most, so --pixel-error > 0 loads no LODs there (every process draws full detail, as with
+// --pixel-error 0), while a city keeps them.
+TEST_F(GltfFiles, LowPolySceneSkipsLodSelection) {
+  SceneOptions cubes;
+  cubes.spec = write("cubes.gltf", cube());
+  cubes.lod_cache = (dir_ / "cache").string();
+  const LoadedScene a = load_and_build(cubes, "test", /*with_lod=*/true);
+  EXPECT_EQ(a.lod, nullptr);
+
+  SceneOptions city;
+  city.spec = "city:6x6:3:10:1";  // the scene of the cluster LOD tests
+  city.lod_cache = (dir_ / "cache").string();
+  const LoadedScene b = load_and_build(city, "test", true);
+  ASSERT_NE(b.lod, nullptr);
+  EXPECT_TRUE(lod_benefit(*b.lod, b.hierarchy).worth_selecting());
 }
