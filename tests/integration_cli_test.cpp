@@ -39,7 +39,8 @@ void expect_one_error(const Outcome& o, std::initializer_list<std::string> fragm
 }  // namespace
 
 TEST(Cli, EveryBinaryHasHelp) {
-  for (const char* b : {"render_client", "switch_node", "frame_diff"}) {
+  for (const char* b : {"render_client", "switch_node", "frame_diff", "occlusion_server", "link_relay", "cull_overview",
+                        "protocol_bench"}) {
     Outcome o = run({bin(b), "--help"}, std::string(b) + "_help");
     EXPECT_EQ(o.code, 0) << b;
     EXPECT_NE(o.log.find("usage:"), std::string::npos) << b << ": " << o.log;
