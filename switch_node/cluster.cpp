@@ -90,4 +90,20 @@ Endpoint parse_endpoint(const std::string& flag, const std::string& text) {
   return e;
 }
 
+void add_listen_options(Cli& cli, ListenOptions& o) {
+  cli.option("listen", &o.listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
+  cli.option("port", &o.port, -1, 65535,
+             "listen on this port of the --listen address (0 = pick a free one, -1 = the port in --listen)");
+  cli.option("port-file", &o.port_file, "FILE", "write the listening port here (atomically)");
+}
+
+Endpoint resolve_listen(ListenOptions& o) {
+  Endpoint e = parse_endpoint("listen", o.listen);
+  if (o.port >= 0) {
+    e.port = uint16_t(o.port);
+    o.listen = e.host + ":" + std::to_string(o.port);
+  }
+  return e;
+}
+
 }  // namespace occ

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/camera.hpp"
+#include "common/cli.hpp"
 #include "common/hierarchy.hpp"
 #include "protocol/wire.hpp"
 
@@ -43,6 +44,17 @@ struct Endpoint {
 };
 // "HOST:PORT" or "PORT" (host 127.0.0.1); throws InputError naming the flag.
 Endpoint parse_endpoint(const std::string& flag, const std::string& text);
+
+// Where a listening process listens: --listen ADDR:PORT, --port N (the port of that address;
+// shorthand for the common --port 0 --port-file F), --port-file FILE. After parsing,
+// resolve_listen() folds --port into the listen string and checks it.
+struct ListenOptions {
+  std::string listen = "127.0.0.1:0";
+  int port = -1;  // -1: --listen's port
+  std::string port_file;
+};
+void add_listen_options(Cli& cli, ListenOptions& o);
+Endpoint resolve_listen(ListenOptions& o);
 
 inline uint32_t hc_node_of_frame(uint32_t frame) { return frame % 2; }
 

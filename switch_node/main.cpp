@@ -16,8 +16,8 @@ int main(int argc, char** argv) {
     cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width (must match the render client)");
     cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height");
     cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
-    cli.option("listen", &o.listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
-    cli.option("port-file", &o.port_file, "FILE", "write the listening port here");
+    occ::ListenOptions where;
+    occ::add_listen_options(cli, where);
     cli.option("peer", &o.peer, "HOST:PORT", "node 1 only: switch node 0's address");
     cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
                "lockstep: camera f for frame f (reproducible); latest: newest camera");
@@ -30,7 +30,9 @@ int main(int argc, char** argv) {
     if (!cli.parse(argc, argv)) return 0;
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
     if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");
-    occ::parse_endpoint("listen", o.listen);  // fail before loading the scene
+    occ::resolve_listen(where);  // fail before loading the scene
+    o.listen = where.listen;
+    o.port_file = where.port_file;
     if (!o.peer.empty()) occ::parse_endpoint("peer", o.peer);
     return occ::run_switch_node(o);
   });

@@ -173,12 +173,14 @@ int main(int argc, char** argv) {
     cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width (must match the render client)");
     cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height");
     cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
-    cli.option("listen", &o.listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
-    cli.option("port-file", &o.port_file, "FILE", "write the listening port here");
+    occ::ListenOptions where;
+    occ::add_listen_options(cli, where);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for the client or a camera");
     if (!cli.parse(argc, argv)) return 0;
-    occ::parse_endpoint("listen", o.listen);
+    occ::resolve_listen(where);  // fail before loading the scene
+    o.listen = where.listen;
+    o.port_file = where.port_file;
     return occ::serve(o);
   });
 }

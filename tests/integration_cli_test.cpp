@@ -74,3 +74,22 @@ TEST(Cli, SwitchNodeBadInputGetsOneNamedError) {
   expect_one_error(run({sn, "--id", "0", "--listen", "127.0.0.1:99999"}, "badlisten"), {"--listen"});
   expect_one_error(run({sn, "--id", "0", "--camera-mode", "sometimes"}, "mode"), {"--camera-mode 'sometimes'"});
 }
+
+// --port 0 --port-file F (the spelling) listens on a free port of 127.0.0.1 and writes it;
+// a port out of range is one named error.
+TEST(Cli, SwitchNodePortAndPortFile) {
+  fs::path dir = fresh_dir("cli_port");
+  const fs::path pf = dir / "node0.port";
+  Outcome o = run({bin("switch_node"), "--id", "0", "--scene", "city:2x2:1:2:1", "--width", "64", "--height", "64",
+                   "--port", "0", "--port-file", pf.string(), "--timeout-ms", "300"},
+                  "port0");
+  EXPECT_EQ(o.code, 1) << o.log;  // nobody connects: a clear timeout
+  std::ifstream in(pf);
+  long port = 0;
+  ASSERT_TRUE(in >> port) << o.log;
+  EXPECT_GT(port, 0);
+  EXPECT_NE(o.log.find("listening on 127.0.0.1:" + std::to_string(port)), std::string::npos) << o.log;
+  EXPECT_NE(o.log.find("no valid peer"), std::string::npos) << o.log;
+  expect_one_error(run({bin("switch_node"), "--port", "70000"}, "port70000"), {"--port '70000'"});
+  expect_one_error(run({bin("occlusion_server"), "--port", "x"}, "portx"), {"--port 'x'"});
+}
