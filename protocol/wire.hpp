@@ -57,7 +57,8 @@
 //    40  u32  or_us               time spent on the OR for this frame (microseconds),
 //    44  u64  triangles           triangles drawn at the chosen LOD (0 = unknown)
 //
-// Bye (2 + reason_bytes; 2..1026) — clean shutdown; the sender closes after it
+// Bye (2 + reason_bytes; 2..1026) — the sender closes after it. Reason kByeDone ("done") means it
+// finished cleanly; any other reason says why it failed or gave up.
 //     0  u16  reason_bytes      <= kMaxReasonBytes
 //     2  u8[] reason
 #pragma once
@@ -139,6 +140,8 @@ struct EndOfFrame {
   uint64_t triangles = 0;
   bool operator==(const EndOfFrame&) const = default;
 };
+
+inline constexpr const char* kByeDone = "done";
 
 struct Bye {
   std::string reason;

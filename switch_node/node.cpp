@@ -65,9 +65,9 @@ class SwitchNode {
       }
     }
     if (code == 0) {
-      peer_->close("done");
+      peer_->close(wire::kByeDone);
     }
-    rvg_->close(code ? "failed" : "done");
+    rvg_->close(code ? "failed" : wire::kByeDone);
     camera_thread.join();
     print_summary();
     return code;
@@ -228,7 +228,13 @@ class SwitchNode {
       const Clock::time_point wait_start = Clock::now();
       net::Received r = peer_->receive(Millis(o_.timeout_ms));
       waited += Clock::now() - wait_start;
-      if (r.status == net::Received::Status::closed) return false;
+      if (r.status == net::Received::Status::closed) {
+        // The other node finished cleanly (the render client said goodbye to it first): the run
+        // is over. Any other goodbye is its failure, and this node fails with it, naming it.
+        if (rvg_bye_ || r.reason == std::string("peer said bye: ") + wire::kByeDone) return false;
+        throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
+                          peer_->peer() + ") ended: " + r.reason);
+      }
       if (!r.ok())
         throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
                           peer_->peer() + ") " + (r.status == net::Received::Status::timeout ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms" : r.reason));

@@ -154,7 +154,7 @@ int serve(const ServerOptions& o) {
       code = 1;
     }
   }
-  if (code == 0) rvg.close("done");
+  if (code == 0) rvg.close(wire::kByeDone);
   receiver.join();
   return code;
 }

@@ -69,6 +69,8 @@ void stop_link_mid_run(const std::string& name, const std::string& command) {
   const std::string log = rvg.log();
   EXPECT_NE(log.find("error: render_client: frame "), std::string::npos) << log;
   EXPECT_NE(log.find("switch node 1"), std::string::npos) << log;
+  // A clean goodbye is never the cause of an error: node 0 ends with node 1's failure, not "done".
+  EXPECT_EQ(log.find("said bye: done"), std::string::npos) << log;
   size_t pngs = 0;
   for (auto& e : fs::directory_iterator(out)) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos);
