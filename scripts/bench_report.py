@@ -44,7 +44,9 @@ for key, label, procs in methods:
             stage = f"HC {hc:.1f}, OR {orr:.1f}, RVG {rvg:.1f}"
     per_frame[key] = frame_ms
     n = min(len(nodes), len(exact))
-    pvs_ratio = statistics.mean(nodes[i] / max(exact[i]["exact_visible"], 1) for i in range(n))
+    # A frame that sees nothing and draws nothing is exact (ratio 1), not a ratio of 0.
+    pvs_ratio = statistics.mean(1.0 if nodes[i] == 0 and exact[i]["exact_visible"] == 0
+                                else nodes[i] / max(exact[i]["exact_visible"], 1) for i in range(n))
     results.append(dict(method=key, label=label, processes=procs, frames=len(r),
                         mean_ms=statistics.mean(frame_ms), median_ms=statistics.median(frame_ms),
                         mean_fps=1000 * len(frame_ms) / sum(frame_ms), median_fps=1000 / statistics.median(frame_ms),
