@@ -39,52 +39,11 @@ std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullSt
 
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                     const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
-  CullStats local;
-  CullStats& st = stats ? *stats : local;
-  const Frustum fr = cam.frustum();
-  std::vector<uint32_t> out, level{0}, next;
-  std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
-  std::vector<uint32_t> visible;
-  while (!level.empty()) {
-    pending.clear();
-    visible.clear();
-    for (uint32_t id : level) {
-      const HNode& n = h.node(id);
-      ++st.nodes_visited;
-      if (n.item_count == 0) continue;
-      if (fr.classify(n.box) == Containment::Outside) {
-        ++st.frustum_culled;
-      } else if (visible_without_query(n.box, cam)) {
-        ++st.near_visible;
-        visible.push_back(id);
-      } else {
-        pending.emplace_back(id, q.issue(n.box));
-        ++st.queries;
-      }
-    }
-    if (!pending.empty()) ++st.levels;
-    for (auto [id, handle] : pending) {
-      if (q.result(handle) > 0)
-        visible.push_back(id);
-      else
-        ++st.occluded;
-    }
-    q.end_batch();
-    next.clear();
-    std::sort(visible.begin(), visible.end());
-    for (uint32_t id : visible) {
-      const HNode& n = h.node(id);
-      if (n.leaf()) {
-        out.push_back(id);
-        if (on_visible) on_visible(id);
-      } else {
-        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) next.push_back(ch);
-      }
-    }
-    level.swap(next);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
+  // Without LOD data and with tau = 0 every renderable is a leaf at full detail: the LOD
+  // traversal from the root is exactly Algorithm 4.1.
+  const Renderables r(h, nullptr);
+  const LodSelector sel(r, cam, 1.0, 0.0);
+  return hardware_cull_lod(h, cam, q, sel, false, {}, on_visible, stats);
 }
 
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,

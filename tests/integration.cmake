@@ -7,7 +7,7 @@ occ_test(baselines_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOUR
 add_dependencies(baselines_test render_client frame_diff occlusion_server)
 occ_test(overview_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/overview_test.cpp)
 add_dependencies(overview_test cull_overview)
-occ_test(netns_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_netns_test.cpp)
+occ_test(netns_test integration LOCK netns LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_netns_test.cpp)
 add_dependencies(netns_test switch_node render_client link_relay)
 occ_test(link_faults_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_link_faults_test.cpp)
 add_dependencies(link_faults_test switch_node render_client link_relay frame_diff)
