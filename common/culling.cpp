@@ -37,13 +37,17 @@ std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullSt
   return out;
 }
 
+std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, OcclusionQueries& q,
+                                    const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
+  // With tau = 0 every accepted node is a leaf at full detail (LOD data, if any, is never used):
+  // the LOD traversal from the root is exactly Algorithm 4.1.
+  const LodSelector sel(r, cam, 1.0, 0.0);
+  return hardware_cull_lod(r.hierarchy(), cam, q, sel, false, {}, on_visible, stats);
+}
+
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                     const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
-  // Without LOD data and with tau = 0 every renderable is a leaf at full detail: the LOD
-  // traversal from the root is exactly Algorithm 4.1.
-  const Renderables r(h, nullptr);
-  const LodSelector sel(r, cam, 1.0, 0.0);
-  return hardware_cull_lod(h, cam, q, sel, false, {}, on_visible, stats);
+  return hardware_cull(Renderables(h, nullptr), cam, q, on_visible, stats);
 }
 
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,

@@ -74,6 +74,11 @@ std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullSt
 // before any result is read. Children of visible interior nodes form the next level; each
 // visible leaf is reported through on_visible as soon as its level's results are in (streaming).
 // Returns the visible leaves in ascending id order.
+// `r`: the hierarchy's renderables, built once by a caller that culls every frame (its LOD data,
+// if any, is not used). The Hierarchy overload builds them per call, for one-off culls.
+std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, OcclusionQueries& q,
+                                    const std::function<void(uint32_t)>& on_visible,
+                                    CullStats* stats = nullptr);
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                     const std::function<void(uint32_t)>& on_visible,
                                     CullStats* stats = nullptr);

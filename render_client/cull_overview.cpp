@@ -57,6 +57,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   std::cerr << "cull_overview: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
   SceneRenderer renderer(*ctx, ls.scene, h);
   BoxQuerier querier(*ctx);
+  const Renderables renderables(h, nullptr);
   std::vector<uint32_t> before, prev;  // V_{f-2}, V_{f-1} (sorted)
   for (uint32_t f = 0; f <= last; ++f) {
     // OR(f): the OR node's own V_{f-2}, then the other node's streamed additions of V_{f-1}.
@@ -67,7 +68,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     // HC(f).
     CullStats st;
     querier.begin(path[f]);
-    std::vector<uint32_t> v = hardware_cull(h, path[f], querier, nullptr, &st);
+    std::vector<uint32_t> v = hardware_cull(renderables, path[f], querier, nullptr, &st);
     querier.end();
     before = std::move(prev);
     prev = std::move(v);

@@ -97,6 +97,7 @@ int serve(const ServerOptions& o) {
     if (auto err = rvg.send(m)) throw std::runtime_error("sending to the render client: " + *err);
   };
   VisibleSet visible(uint32_t(h.size()));
+  const Renderables renderables(h, nullptr);
   DepthPyramid pyramid;
   int code = 0;
   try {
@@ -122,7 +123,7 @@ int serve(const ServerOptions& o) {
       SetDiff diff;
       std::vector<uint32_t> pending;
       std::vector<uint32_t> leaves = hardware_cull(
-          h, cam->camera, queries,
+          renderables, cam->camera, queries,
           [&](uint32_t id) {
             if (visible.contains(id)) return;
             diff.added.push_back(id);
