@@ -72,19 +72,25 @@ void Cli::option(const std::string& name, double* out, double min, double max, c
                    def.str()});
 }
 
-void Cli::choice(const std::string& name, std::string* out, std::vector<std::string> words, const std::string& help) {
+void Cli::word_option(const std::string& name, const std::vector<std::string>& words, const std::string& default_word,
+                      const std::string& help, std::function<void(size_t)> set) {
   std::string alts;
   for (auto& w : words) alts += (alts.empty() ? "" : "|") + w;
   opts_.push_back({name, alts, help, true,
                    [=](const std::string& v) {
-                     for (auto& w : words)
-                       if (v == w) {
-                         *out = v;
-                         return;
-                       }
+                     for (size_t i = 0; i < words.size(); ++i)
+                       if (v == words[i]) return set(i);
                      throw InputError("--" + name + " '" + v + "': expected one of " + alts);
                    },
-                   *out});
+                   default_word});
+}
+
+void Cli::choice(const std::string& name, std::string* out, std::vector<std::string> words, const std::string& help) {
+  word_option(name, words, *out, help, [out, words](size_t i) { *out = words[i]; });
+}
+
+void Cli::on_off(const std::string& name, bool* out, const std::string& help) {
+  choice<bool>(name, out, {{"on", true}, {"off", false}}, help);
 }
 
 void Cli::multi(const std::string& name, std::vector<std::string>* out, const std::string& value,

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace occ {
@@ -20,6 +21,11 @@ class Cli {
   void option(const std::string& name, double* out, double min, double max, const std::string& help);
   // One of a fixed set of words.
   void choice(const std::string& name, std::string* out, std::vector<std::string> words, const std::string& help);
+  // One of a fixed set of words, each naming a value of T (an enum): typed configuration.
+  template <class T>
+  void choice(const std::string& name, T* out, std::vector<std::pair<std::string, T>> words, const std::string& help);
+  // "on" | "off" into a bool.
+  void on_off(const std::string& name, bool* out, const std::string& help);
   // Repeatable option: each occurrence appends.
   void multi(const std::string& name, std::vector<std::string>* out, const std::string& value, const std::string& help);
 
@@ -34,11 +40,26 @@ class Cli {
     std::function<void(const std::string&)> set;
     std::string default_text;
   };
+  // Registers a --name WORD option: set(word) is called for words in `words`, others are refused.
+  void word_option(const std::string& name, const std::vector<std::string>& words, const std::string& default_word,
+                   const std::string& help, std::function<void(size_t)> set);
   template <class T>
   void integer(const std::string& name, T* out, long min, long max, const std::string& help);
   std::string program_, usage_, description_;
   std::vector<Opt> opts_;
 };
+
+template <class T>
+void Cli::choice(const std::string& name, T* out, std::vector<std::pair<std::string, T>> words,
+                 const std::string& help) {
+  std::vector<std::string> names;
+  std::string def;
+  for (auto& [w, v] : words) {
+    names.push_back(w);
+    if (v == *out) def = w;
+  }
+  word_option(name, names, def, help, [out, words](size_t i) { *out = words[i].second; });
+}
 
 // Runs body(); InputError -> "error: <what>" exit 2, other exceptions -> "error: <what>" exit 1.
 int run_main(const std::function<int()>& body);

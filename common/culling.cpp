@@ -42,7 +42,7 @@ std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, Occ
   // With tau = 0 every accepted node is a leaf at full detail (LOD data, if any, is never used):
   // the LOD traversal from the root is exactly Algorithm 4.1.
   const LodSelector sel(r, cam, 1.0, 0.0);
-  return hardware_cull_lod(r.hierarchy(), cam, q, sel, false, {}, on_visible, stats);
+  return hardware_cull_lod(r.hierarchy(), cam, q, sel, {.on_visible = on_visible, .stats = stats});
 }
 
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
@@ -51,20 +51,18 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
 }
 
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
-                                        const LodSelector& sel, bool visible_pixel_lod,
-                                        std::span<const uint32_t> start,
-                                        const std::function<void(uint32_t)>& on_visible, CullStats* stats,
-                                        QuerySkipper* skipper) {
+                                        const LodSelector& sel, const HcOptions& o) {
   CullStats local;
-  CullStats& st = stats ? *stats : local;
+  CullStats& st = o.stats ? *o.stats : local;
+  QuerySkipper* const skipper = o.skipper;
   const Frustum fr = cam.frustum();
   const double tau = sel.tau();
-  const bool pixel_lod = visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
+  const bool pixel_lod = o.visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
   std::vector<uint32_t> out, level, next;
-  if (start.empty())
+  if (o.start.empty())
     level.push_back(0);
   else
-    level.assign(start.begin(), start.end());
+    level.assign(o.start.begin(), o.start.end());
   constexpr uint64_t kNoQuery = ~uint64_t(0);
   std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
   std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples)
@@ -117,7 +115,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       }
       if (r != kNoNode) {
         out.push_back(r);
-        if (on_visible) on_visible(r);
+        if (o.on_visible) o.on_visible(r);
       } else {
         for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) next.push_back(ch);
       }

@@ -83,18 +83,32 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
                                     const std::function<void(uint32_t)>& on_visible,
                                     CullStats* stats = nullptr);
 
+// How LODs are chosen for one viewport: tau and the viewport height go together everywhere.
+struct LodPolicy {
+  double tau = 0;                  // pixels of error (0: original geometry only)
+  double viewport_height_px = 1;
+  bool visible_pixel_lod = false;  // accept a node whose query saw fewer than tau samples (4.7.2)
+  LodSelector selector(const Renderables& r, const Camera& cam) const { return {r, cam, viewport_height_px, tau}; }
+};
+
+// What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
+struct HcOptions {
+  bool visible_pixel_lod = false;
+  std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
+  QuerySkipper* skipper = nullptr;       // adaptive queries (null: query every node)
+  std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
+  CullStats* stats = nullptr;
+};
+
 // HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like
 // hardware_cull, but a visible node is accepted when sel.satisfies() it (interior: its HLOD meets
 // tau; leaves always, at sel.leaf_level()), or, with visible_pixel_lod and tau > 0, when its query
 // saw fewer than tau samples (then at its coarsest representation); other visible interior nodes
-// are refined. The first batch is `start` (the fronts, occluded first; empty = the root).
-// on_visible gets each accepted renderable id (lod.hpp) as its batch resolves. Returns the
-// renderables, ascending. With tau = 0 it returns exactly hardware_cull's leaves.
+// are refined. The first batch is o.start. on_visible gets each accepted renderable id (lod.hpp)
+// as its batch resolves. Returns the renderables, ascending. With tau = 0 it returns exactly
+// hardware_cull's leaves.
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
-                                        const LodSelector& sel, bool visible_pixel_lod,
-                                        std::span<const uint32_t> start,
-                                        const std::function<void(uint32_t)>& on_visible,
-                                        CullStats* stats = nullptr, QuerySkipper* skipper = nullptr);
+                                        const LodSelector& sel, const HcOptions& o = {});
 
 // The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
 // identically in every renderer).

@@ -7,6 +7,7 @@
 // list: every operation is O(1) per id and the hash is maintained incrementally.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -84,6 +85,36 @@ class DiffReceiver {
   std::optional<uint32_t> open_frame_;  // frame whose chunks are arriving
   std::optional<uint32_t> last_frame_;
   uint64_t added_ = 0, removed_ = 0;  // totals of the open frame
+};
+
+// Sending end of one diff stream (HC, or the depth-readback server): streams V_f's new ids in
+// NodeDiff chunks of at most chunk_ids as the traversal finds them, then V_{f-1}'s removed ids,
+// then hands back the EndOfFrame. With full sets every visible id is streamed and nothing is
+// removed (the receiver clears its set at the frame's first message). send() throws to abort.
+class DiffSender {
+ public:
+  using Send = std::function<void(const wire::Message&)>;
+  DiffSender(uint32_t chunk_ids, bool full_sets, Send send);
+
+  // Starts frame `frame` against `prev` (V_{f-1}; with front tracking the coarsened V'), which
+  // must stay unchanged until end().
+  void begin(uint32_t frame, const VisibleSet& prev);
+  // The traversal accepted `id`: sent (in a chunk) unless prev already holds it.
+  void visible(uint32_t id);
+  // Flushes the added ids and sends the removed ones (prev − cur); returns EndOfFrame(frame) with
+  // the set fields filled, for the caller to add its statistics and send with send().
+  wire::EndOfFrame end(const VisibleSet& cur);
+  void send(const wire::Message& m) { send_(m); }
+
+ private:
+  void flush(bool force);
+  uint32_t chunk_ids_;
+  bool full_sets_;
+  Send send_;
+  uint32_t frame_ = 0;
+  const VisibleSet* prev_ = nullptr;
+  SetDiff diff_;
+  std::vector<uint32_t> pending_;
 };
 
 }  // namespace occ

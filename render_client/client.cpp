@@ -11,10 +11,11 @@
 #include "common/camera_path.hpp"
 #include "common/progress.hpp"
 #include "common/culling.hpp"
-#include "common/front.hpp"
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
+#include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
+#include "protocol/cluster/switch_step.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/visible_set.hpp"
 #include "render_client/frame_output.hpp"
@@ -45,8 +46,7 @@ class Client {
     fingerprint_ = ls.fingerprint;
     renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
     path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
-    ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
-    std::cerr << "render_client: GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
+    ctx_ = start_gl("render_client", o_.gl, o_.width, o_.height);
     renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
     leaf_count_ = 0;
     for (const HNode& n : h_->nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
@@ -70,7 +70,7 @@ class Client {
     const wire::Hello mine = make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, fingerprint_,
                                         h_->params(), o_.config, "render_client");
     for (const std::string& text : o_.connect) {
-      Endpoint e = parse_endpoint("connect", text);
+      const net::Endpoint e = net::parse_endpoint("connect", text);
       auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
       if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
       auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, std::nullopt}, Millis(o_.timeout_ms));
@@ -105,12 +105,14 @@ class Client {
   }
 
   void loop() {
-    const bool lockstep = o_.config.camera_mode == "lockstep";
+    const bool lockstep = o_.config.camera_mode == CameraMode::lockstep;
     const uint32_t n = uint32_t(path_.size());
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms"});
     VisibleSet visible(renderables_->count());
+    // Front tracking is the switch's (both nodes): a single server sends plain diffs.
+    const SwitchStep step(*renderables_, o_.config.lod_policy(o_.height), nodes_[1] && o_.config.tracks_fronts());
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
     if (lockstep)
@@ -133,20 +135,12 @@ class Client {
       if (lockstep && wcam->frame != frame)
         throw ClientFailure("frame " + std::to_string(frame) + ": lockstep, but switch node " + std::to_string(k) +
                             " used camera " + std::to_string(wcam->frame));
+      if (auto err = viewport_mismatch(*wcam, {o_.width, o_.height}))
+        throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) + " sent " + *err);
       const Camera cam = from_wire(*wcam);
-      // Front tracking (front.hpp, occlusion switch only): coarsen V_{f-1} for camera f exactly
-      // as both switch nodes do; the diff is relative to the result, whose hash
-      // EndOfFrame.front_hash carries.
-      uint64_t expected_front = 0;
-      if (nodes_[1] && o_.config.front_tracking == "on" && !o_.config.full_sets) {
-        LodSelector sel(*renderables_, cam, o_.height, o_.config.pixel_error);
-        std::vector<uint32_t> prime = coarsen_visible(sel, visible.ids()), gone;
-        for (uint32_t id : visible.ids())
-          if (!std::binary_search(prime.begin(), prime.end(), id)) gone.push_back(id);
-        for (uint32_t id : gone) visible.erase(id);
-        for (uint32_t id : prime) visible.insert(id);
-        expected_front = front_hash(prime);
-      }
+      // Front tracking (switch_step.hpp): coarsen V_{f-1} for camera f exactly as both switch
+      // nodes do; the diff is relative to the result, whose hash EndOfFrame.front_hash carries.
+      const uint64_t expected_front = step.coarsen(visible, cam);
       // 2. Diff chunks, then EndOfFrame.
       bool cleared = false;
       wire::EndOfFrame eof;
@@ -175,7 +169,7 @@ class Client {
         }
       }
       // Keep the nodes busy: the next camera goes out before this frame is rendered.
-      if (lockstep ? next_camera < n : next_camera < n) send_camera(next_camera++);
+      if (next_camera < n) send_camera(next_camera++);
       // 3. Render V_f with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());

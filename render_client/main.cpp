@@ -2,6 +2,7 @@
 // single-process reference renderer.
 #include "common/cli.hpp"
 #include "common/error.hpp"
+#include "common/gl/startup.hpp"
 #include "render_client/options.hpp"
 
 int main(int argc, char** argv) {
@@ -16,18 +17,13 @@ int main(int argc, char** argv) {
     cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
     cli.option("out", &o.out, "DIR", "write DIR/frame_%05d.png and DIR/stats.csv");
     cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
-    cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width in pixels");
-    cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height in pixels");
-    cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
+    occ::add_view_options(cli, &o.width, &o.height, &o.gl);
     cli.flag("reference", &o.reference, "single-process reference renderer");
     cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
                "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
-    cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
-               "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");
-    cli.flag("full-sets", &o.config.full_sets, "nodes send all of V_f every frame instead of the diff");
-    occ::add_lod_options(cli, o.config);
+    occ::add_cluster_options(cli, o.config);
     cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
     if (!cli.parse(argc, argv)) return 0;
@@ -39,7 +35,7 @@ int main(int argc, char** argv) {
       throw occ::InputError(
           "give --connect twice (both switch nodes), once (an occlusion_server), or --reference (see render_client "
           "--help)");
-    for (const auto& c : o.connect) occ::parse_endpoint("connect", c);  // fail before loading the scene
+    for (const auto& c : o.connect) occ::net::parse_endpoint("connect", c);  // fail before loading the scene
     return occ::run_cluster_client(o);
   });
 }

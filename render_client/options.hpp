@@ -5,8 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "common/gl/context.hpp"
 #include "common/scene_setup.hpp"
-#include "switch_node/cluster.hpp"
+#include "protocol/cluster/cluster.hpp"
 
 namespace occ {
 
@@ -17,7 +18,7 @@ struct ClientOptions {
   std::string out;
   bool no_images = false;
   int width = 512, height = 512;
-  std::string gl = "auto";
+  GlBackend gl = GlBackend::Auto;
   // reference mode
   bool reference = false;
   std::string cull = "frustum";

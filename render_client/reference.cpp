@@ -11,9 +11,10 @@
 #include "common/culling.hpp"
 #include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
+#include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/progress.hpp"
-#include "render_client/baselines.hpp"
+#include "render_client/baselines/single_process.hpp"
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
 
@@ -24,8 +25,7 @@ int run_reference(const ClientOptions& o) {
   const Hierarchy& h = ls.hierarchy;
   const Viewport vp{o.width, o.height};
   const std::vector<Camera> path = load_camera_path(o.path, ls.scene.bounds(), vp);
-  auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
-  std::cerr << "render_client: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
+  auto ctx = start_gl("render_client", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   BoxQuerier querier(*ctx);
   ChcRenderer chc(h);

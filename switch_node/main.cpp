@@ -1,6 +1,7 @@
 // switch_node: one half of the occlusion switch. Run two (--id 0 and --id 1) and a render_client.
 #include "common/cli.hpp"
 #include "common/error.hpp"
+#include "common/gl/startup.hpp"
 #include "switch_node/node.hpp"
 
 int main(int argc, char** argv) {
@@ -13,27 +14,19 @@ int main(int argc, char** argv) {
                  "node 1 connects to node 0 (--peer) and listens for the render client.");
     cli.option("id", &o.id, 0, 1, "which node of the switch (HC on frames f with f % 2 == id)");
     occ::add_scene_options(cli, o.scene);
-    cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width (must match the render client)");
-    cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height");
-    cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
-    occ::ListenOptions where;
-    occ::add_listen_options(cli, where);
+    occ::add_view_options(cli, &o.width, &o.height, &o.gl, "must match the render client");
+    occ::add_listen_options(cli, o.listen);
     cli.option("peer", &o.peer, "HOST:PORT", "node 1 only: switch node 0's address");
-    cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
-               "lockstep: camera f for frame f (reproducible); latest: newest camera");
-    cli.flag("full-sets", &o.config.full_sets, "send all of V_f every frame instead of the diff");
-    occ::add_lod_options(cli, o.config);
+    occ::add_cluster_options(cli, o.config);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
-    cli.choice("adaptive-queries", &o.adaptive_queries, {"on", "off"},
+    cli.on_off("adaptive-queries", &o.adaptive_queries,
                "assume nodes whose queries keep coming back visible visible for a while (no query)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer, a camera or a message");
     if (!cli.parse(argc, argv)) return 0;
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
     if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");
-    occ::resolve_listen(where);  // fail before loading the scene
-    o.listen = where.listen;
-    o.port_file = where.port_file;
-    if (!o.peer.empty()) occ::parse_endpoint("peer", o.peer);
+    occ::resolve_listen(o.listen);  // fail before loading the scene
+    if (!o.peer.empty()) occ::net::parse_endpoint("peer", o.peer);
     return occ::run_switch_node(o);
   });
 }

@@ -9,11 +9,13 @@
 
 #include "common/camera_buffer.hpp"
 #include "common/culling.hpp"
-#include "common/front.hpp"
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
-#include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
+#include "common/gl/startup.hpp"
+#include "common/hash.hpp"
+#include "protocol/cluster/camera_receiver.hpp"
+#include "protocol/cluster/switch_step.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/visible_set.hpp"
 
@@ -28,6 +30,12 @@ uint32_t micros_since(Clock::time_point t0) {
   return uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count());
 }
 
+std::string hex(uint64_t v) {  // TODO(merge): occ::hex from common/hash.hpp
+  char b[17];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+  return b;
+}
+
 struct NodeFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -39,66 +47,60 @@ class SwitchNode {
   int run() {
     LoadedScene ls = load_and_build(o_.scene, who_, o_.config.lod());
     h_ = &ls.hierarchy;
-    if (o_.adaptive_queries == "on") skipper_.emplace(ls.hierarchy.size());
+    if (o_.adaptive_queries) skipper_.emplace(ls.hierarchy.size());
     fingerprint_ = ls.fingerprint;
     renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
-    ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
-    std::cerr << who_ << ": GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
+    step_.emplace(*renderables_, o_.config, o_.height);
+    ctx_ = start_gl(who_, o_.gl, o_.width, o_.height);
     renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
     querier_ = std::make_unique<BoxQuerier>(*ctx_);
     connect();
-    std::thread camera_thread([this] { receive_cameras(); });
+    cameras_in_.emplace(*rvg_, cameras_, Viewport{o_.width, o_.height});
     int code = 0;
     try {
       loop();
     } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
       // A frame in flight when the render client finished (latest mode) is not a failure.
-      for (int i = 0; i < 300 && !rvg_->is_open() && !cameras_done_; ++i)
+      for (int i = 0; i < 300 && !rvg_->is_open() && !cameras_in_->done(); ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
-      if (!rvg_bye_) {
+      if (!cameras_in_->client_said_bye()) {
         std::cerr << "error: " << who_ << ": " << e.what() << "\n";
         code = 1;
         peer_->close_with_error(who_ + " failed: " + e.what());
         rvg_->close_with_error(who_ + " failed: " + e.what());
       } else {
-        std::cerr << who_ << ": stopped: " << e.what() << " (after the " << rvg_end_ << ")\n";
+        std::cerr << who_ << ": stopped: " << e.what() << " (after the " << cameras_in_->end_reason() << ")\n";
       }
     }
     if (code == 0) {
       peer_->close(wire::kByeDone);
     }
     rvg_->close(code ? "failed" : wire::kByeDone);
-    camera_thread.join();
+    cameras_in_->join();
     print_summary();
     return code;
   }
 
  private:
   void connect() {
-    Endpoint listen = parse_endpoint("listen", o_.listen);
-    auto listener = net::Listener::open(listen.port, listen.host);
-    if (!listener) throw std::runtime_error(who_ + ": cannot listen on " + o_.listen + ": " + listener.error());
-    if (!o_.port_file.empty())
-      if (auto err = net::write_port_file(o_.port_file, listener->port()))
-        throw InputError("--port-file '" + o_.port_file + "': " + *err);
-    std::cerr << who_ << ": listening on " << listener->address() << ":" << listener->port() << "\n";
+    net::Listener listener = open_listener(who_, o_.listen);
     const Millis timeout(o_.timeout_ms);
     const wire::Hello mine = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height},
                                         fingerprint_, h_->params(), o_.config, who_);
     if (o_.id == 1) {
-      Endpoint pe = parse_endpoint("peer", o_.peer);
+      const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
       auto conn = net::Connection::connect(pe.host, pe.port, timeout);
       if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
       auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, uint8_t(0)}, timeout);
       if (!hello) throw std::runtime_error(who_ + ": " + hello.error());
       peer_ = std::make_unique<net::Connection>(std::move(*conn));
-      auto rvg = listener->accept_peer(mine, {wire::Role::render_client, std::nullopt}, timeout);
+      auto rvg = listener.accept_peer(mine, {wire::Role::render_client, std::nullopt}, timeout);
       if (!rvg) throw std::runtime_error(who_ + ": no render client: " + rvg.error());
       rvg_ = std::make_unique<net::Connection>(std::move(rvg->connection));
     } else {
       // Node 0 accepts both the render client and switch node 1, in whatever order they come.
       while (!peer_ || !rvg_) {
-        auto p = listener->accept_peer(mine, {}, timeout);
+        auto p = listener.accept_peer(mine, {}, timeout);
         if (!p) throw std::runtime_error(who_ + ": waiting for peers: " + p.error());
         const bool is_node1 = p->hello.role == wire::Role::switch_node && p->hello.node_id == 1;
         const bool is_rvg = p->hello.role == wire::Role::render_client;
@@ -114,57 +116,9 @@ class SwitchNode {
     std::cerr << who_ << ": connected: peer " << peer_->peer() << ", render client " << rvg_->peer() << "\n";
   }
 
-  // Camera-receiver thread (paper Fig. 2): every camera from the render client goes into the
-  // buffer; its Bye or failure closes the buffer.
-  void receive_cameras() {
-    for (;;) {
-      net::Received r = rvg_->receive(Millis(1000));
-      if (r.status == net::Received::Status::timeout) continue;
-      if (r.ok()) {
-        if (auto* c = std::get_if<wire::Camera>(&r.message)) {
-          cameras_.put({c->frame, from_wire(*c)});
-          continue;
-        }
-        rvg_->close_with_error(std::string("unexpected ") + std::string(wire::type_name(wire::type_of(r.message))) +
-                               " from the render client");
-        cameras_.close("render client sent an unexpected message");
-        cameras_done_ = true;
-        return;
-      }
-      rvg_end_ = (r.status == net::Received::Status::closed ? "render client closed: " : "render client failed: ") + r.reason;
-      rvg_bye_ = r.status == net::Received::Status::closed;
-      cameras_.close(rvg_end_);
-      cameras_done_ = true;
-      return;
-    }
-  }
-
   void send_both(const wire::Message& m) {
     if (auto err = rvg_->send(m)) throw NodeFailure("sending to the render client: " + *err);
     if (auto err = peer_->send(m)) throw NodeFailure("sending to switch node " + std::to_string(1 - o_.id) + ": " + *err);
-  }
-
-  std::vector<uint32_t> sorted(const VisibleSet& s) const {
-    std::vector<uint32_t> ids(s.ids().begin(), s.ids().end());
-    std::sort(ids.begin(), ids.end());
-    return ids;
-  }
-
-  // Front tracking needs V_{f-1} on every process: not with --full-sets (each frame replaces it).
-  bool tracking() const { return o_.config.front_tracking == "on" && !o_.config.full_sets; }
-
-  // Front tracking step 1 (front.hpp) on this process's copy of V_{f-1} for camera f: the set
-  // becomes V' (what frame f's diff is relative to); returns set_hash(V'), 0 when not tracking.
-  uint64_t coarsen_set(VisibleSet& visible, const Camera& cam) {
-    if (!tracking()) return 0;
-    LodSelector sel(*renderables_, cam, o_.height, o_.config.pixel_error);
-    std::vector<uint32_t> prime = coarsen_visible(sel, visible.ids());
-    std::vector<uint32_t> gone;
-    for (uint32_t id : visible.ids())
-      if (!std::binary_search(prime.begin(), prime.end(), id)) gone.push_back(id);
-    for (uint32_t id : gone) visible.erase(id);
-    for (uint32_t id : prime) visible.insert(id);
-    return front_hash(prime);
   }
 
   void loop() {
@@ -176,11 +130,11 @@ class SwitchNode {
       // ---- OR(frame): camera, clear depth, draw V_{frame-2} then V_{frame-1}'s additions.
       std::string why;
       std::optional<NumberedCamera> cam =
-          o_.config.camera_mode == "lockstep"
+          o_.config.camera_mode == CameraMode::lockstep
               ? cameras_.take(frame, timeout, &why)
               : cameras_.take_latest(last_camera ? *last_camera + 1 : 0, timeout, &why);
       if (!cam) {
-        if (rvg_bye_) {  // the render client finished (or gave up: its reason says which)
+        if (cameras_in_->client_said_bye()) {  // the render client finished (or gave up: its reason says which)
           std::cerr << who_ << ": " << why << "\n";
           return;
         }
@@ -190,7 +144,8 @@ class SwitchNode {
       const Clock::time_point or_start = Clock::now();
       renderer_->begin_frame(cam->camera, false);
       std::vector<uint8_t> drawn(renderables_->count(), 0);
-      std::vector<uint32_t> ids = sorted(visible);
+      std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
+      std::sort(ids.begin(), ids.end());
       for (uint32_t id : ids) drawn[id] = 1;
       renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::DepthOnly);
       Clock::duration waited{0};  // for the other node's stream: not OR work
@@ -231,7 +186,7 @@ class SwitchNode {
       if (r.status == net::Received::Status::closed) {
         // The other node finished cleanly (the render client said goodbye to it first): the run
         // is over. Any other goodbye is its failure, and this node fails with it, naming it.
-        if (rvg_bye_ || r.reason == std::string("peer said bye: ") + wire::kByeDone) return false;
+        if (cameras_in_->client_said_bye() || r.reason == std::string("peer said bye: ") + wire::kByeDone) return false;
         throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
                           peer_->peer() + ") ended: " + r.reason);
       }
@@ -242,7 +197,9 @@ class SwitchNode {
         if (have_camera)
           throw NodeFailure("frame " + std::to_string(frame) + ": two cameras from switch node " + std::to_string(1 - o_.id));
         have_camera = true;
-        expected_front = coarsen_set(visible, from_wire(*c));
+        if (auto err = viewport_mismatch(*c, {o_.width, o_.height}))
+          throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " sent " + *err);
+        expected_front = step_->coarsen(visible, from_wire(*c));
       } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
         start_frame();
         if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
@@ -269,67 +226,19 @@ class SwitchNode {
   }
 
   void hc_frame(uint32_t frame, const Camera& cam, VisibleSet& visible, uint32_t or_us, Clock::time_point hc_start) {
-    const uint32_t b = uint32_t(o_.diff_chunk_ids);
-    std::vector<uint32_t> pending;
-    auto flush = [&](bool force) {
-      if (pending.empty() || (!force && pending.size() < b)) return;
-      send_both(wire::NodeDiff{frame, pending, {}});
-      pending.clear();
-    };
-    // Front tracking (front.hpp): V' = coarsened V_{frame-1}; fronts derived from it.
-    const uint64_t fhash = coarsen_set(visible, cam);
-    LodSelector sel(*renderables_, cam, o_.height, o_.config.pixel_error);
-    std::vector<uint32_t> start;
-    if (tracking()) {
-      std::vector<uint32_t> vnodes = nodes_of(*renderables_, sorted(visible)), above;
-      start = derive_occluded_front(*h_, vnodes, &above);
-      const Frustum fr = cam.frustum();
-      if (o_.config.visible_pixel_lod != "on") vnodes = update_cut(*h_, sel, vnodes, &fr);
-      start.insert(start.end(), vnodes.begin(), vnodes.end());  // occluded front first
-      for (uint32_t a : above)  // what a root traversal would have queried above the fronts
-        if (!fr.culls(h_->node(a).box) && !visible_without_query(h_->node(a).box, cam)) ++skipped_;
-    }
+    DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_both(m); });
     querier_->begin(cam);
-    CullStats stats;
-    SetDiff diff;
-    std::vector<uint32_t> leaves = hardware_cull_lod(
-        *h_, cam, *querier_, sel, o_.config.visible_pixel_lod == "on", start,
-        [&](uint32_t id) {
-          if (o_.config.full_sets || !visible.contains(id)) {
-            pending.push_back(id);
-            diff.added.push_back(id);
-            flush(false);
-          }
-        },
-        &stats, skipper_ ? &*skipper_ : nullptr);
+    HcFrame hc = step_->hc(frame, visible, cam, *querier_, skipper_ ? &*skipper_ : nullptr, out);
     querier_->end();
-    flush(true);
-    VisibleSet cur(renderables_->count());
-    for (uint32_t id : leaves) cur.insert(id);
-    if (!o_.config.full_sets) {
-      for (uint32_t id : visible.ids())
-        if (!cur.contains(id)) diff.removed.push_back(id);
-      for (auto& chunk : wire::chunk_node_diff(frame, {}, diff.removed, b)) send_both(chunk);
-    }
-    wire::EndOfFrame eof = make_end_of_frame(frame, diff, cur);
-    eof.front_hash = fhash;
-    eof.queries = stats.queries;
-    eof.or_us = or_us;
-    eof.hc_us = micros_since(hc_start);
-    for (uint32_t id : leaves) eof.triangles += renderables_->triangles(id);
-    send_both(eof);
-    visible = std::move(cur);
+    hc.eof.or_us = or_us;
+    hc.eof.hc_us = micros_since(hc_start);
+    out.send(hc.eof);
     ++frames_;
-    queries_ += stats.queries;
-    assumed_visible_ += stats.skipped;
-    pixel_stops_ += stats.pixel_stops;
-    hlods_ += stats.hlods;
-  }
-
-  static std::string hex(uint64_t v) {
-    char b[17];
-    std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
-    return b;
+    queries_ += hc.stats.queries;
+    assumed_visible_ += hc.stats.skipped;
+    pixel_stops_ += hc.stats.pixel_stops;
+    hlods_ += hc.stats.hlods;
+    skipped_ += hc.tests_above_fronts;
   }
 
   void print_summary() const {
@@ -341,8 +250,8 @@ class SwitchNode {
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
                  "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
-                 who_.c_str(), o_.config.pixel_error, o_.config.visible_pixel_lod.c_str(),
-                 o_.config.front_tracking.c_str(), (unsigned long long)hlods_, (unsigned long long)pixel_stops_,
+                 who_.c_str(), o_.config.pixel_error, o_.config.visible_pixel_lod ? "on" : "off",
+                 o_.config.front_tracking ? "on" : "off", (unsigned long long)hlods_, (unsigned long long)pixel_stops_,
                  (unsigned long long)skipped_, frames_ ? double(skipped_) / double(frames_) : 0.0);
   }
 
@@ -356,8 +265,8 @@ class SwitchNode {
   std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
   CameraBuffer cameras_;
-  std::string rvg_end_;  // why the render client's connection ended (written before cameras_done_)
-  std::atomic<bool> rvg_bye_{false}, cameras_done_{false};
+  std::optional<CameraReceiver> cameras_in_;
+  std::optional<SwitchStep> step_;
   uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
 };

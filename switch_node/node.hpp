@@ -1,13 +1,14 @@
 // One switch node of the occlusion switch (paper 3.2, 4.2-4.4): alternately builds the
 // occlusion representation (OR, depth only, from the visible set streamed by the other node)
 // and performs hardware culling (HC, batched occlusion queries against that depth buffer),
-// streaming the visible-set diff to the render client and to the other node. See cluster.hpp
-// for the schedule.
+// streaming the visible-set diff to the render client and to the other node. The schedule is in
+// protocol/cluster/cluster.hpp, the per-frame logic in protocol/cluster/switch_step.hpp.
 #pragma once
 #include <string>
 
+#include "common/gl/context.hpp"
 #include "common/scene_setup.hpp"
-#include "switch_node/cluster.hpp"
+#include "protocol/cluster/cluster.hpp"
 
 namespace occ {
 
@@ -16,12 +17,11 @@ struct NodeOptions {
   SceneOptions scene;
   ClusterConfig config;
   int width = 512, height = 512;
-  std::string gl = "auto";
-  std::string listen = "127.0.0.1:0";
-  std::string port_file;
+  GlBackend gl = GlBackend::Auto;
+  ListenOptions listen;
   std::string peer;  // node 1: where node 0 listens
   int diff_chunk_ids = 100;
-  std::string adaptive_queries = "on";  // skip queries of nodes that keep coming back visible
+  bool adaptive_queries = true;  // skip queries of nodes that keep coming back visible
   int timeout_ms = 30000;
 };
 

@@ -167,8 +167,8 @@ TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
       truth_q.visible_points.resize(16);
       fast_q.visible_points.resize(16);
     }
-    auto truth = hardware_cull_lod(h, cam, truth_q, sel, false, {}, nullptr, &plain_stats);
-    auto fast = hardware_cull_lod(h, cam, fast_q, sel, false, {}, nullptr, &skip_stats, &skipper);
+    auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain_stats});
+    auto fast = hardware_cull_lod(h, cam, fast_q, sel, {.skipper = &skipper, .stats = &skip_stats});
     EXPECT_TRUE(std::includes(fast.begin(), fast.end(), truth.begin(), truth.end())) << "frame " << frame;
     if (frame < 15 || frame >= 15 + QuerySkipper::kMaxWait + 1) {
       EXPECT_EQ(fast, truth) << "frame " << frame;

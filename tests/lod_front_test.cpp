@@ -7,6 +7,7 @@
 #include "common/culling.hpp"
 #include "common/front.hpp"
 #include "common/scene_io.hpp"
+#include "protocol/cluster/switch_step.hpp"
 
 using namespace occ;
 
@@ -188,44 +189,56 @@ TEST(FrontCull, TauZeroLodTraversalEqualsHardwareCull) {
     const Camera cam = random_camera(rng, w.h.node(0).box);
     LodSelector sel(r, cam, 480, 0.0);
     auto plain = hardware_cull(w.h, cam, q, nullptr);
-    auto lod = hardware_cull_lod(w.h, cam, q, sel, true, {}, nullptr);
+    auto lod = hardware_cull_lod(w.h, cam, q, sel, {.visible_pixel_lod = true});
     EXPECT_EQ(lod, plain);
   }
 }
 
-// The switch-node loop without GL: V_{f-1} -> coarsen -> fronts -> traversal, against a fresh
-// root traversal of the same frame. With a monotone occlusion oracle and visible-pixel LOD off
-// the two must agree exactly, for tau = 0 and tau > 0, and the front must save queries.
+// The switch step itself (SwitchStep, what the nodes and the render client run), frame after
+// frame: V_{f-1} -> coarsen -> fronts -> traversal, against a fresh root traversal of the same
+// frame. With a monotone occlusion oracle and visible-pixel LOD off the two must agree exactly,
+// for tau = 0 and tau > 0, and the front must save queries. The stream it sends, applied by a
+// receiver that coarsens with its own SwitchStep (the OR node, the render client), rebuilds V_f
+// with matching set and front hashes.
 TEST(FrontCull, FrontTrackedTraversalEqualsFreshTraversal) {
   const World& w = world();
   Renderables r(w.h, &w.lod);
   for (double tau : {0.0, 1.0, 5.0}) {
     std::mt19937 rng(6 + int(tau));
-    std::vector<uint32_t> visible;  // V_{f-1}
+    ClusterConfig config;
+    config.pixel_error = tau;
+    const SwitchStep hc_step(r, config, 480), receiver_step(r, config, 480);
+    ASSERT_TRUE(hc_step.tracking());
+    VisibleSet visible(r.count()), received(r.count());  // V_{f-1} on the HC node and on a receiver
+    std::vector<wire::Message> stream;
+    DiffSender out(7, false, [&](const wire::Message& m) { stream.push_back(m); });
+    DiffReceiver in;
     uint64_t fresh_queries = 0, front_queries = 0;
     Camera cam = random_camera(rng, w.h.node(0).box);
     std::vector<glm::dvec3> points = random_points(rng, w.h.node(0).box, 30);
-    for (int f = 0; f < 60; ++f) {
+    for (uint32_t f = 0; f < 60; ++f) {
       // A coherent path: small moves, occasional jumps; a few visible points change.
       if (f % 15 == 14) cam = random_camera(rng, w.h.node(0).box);
       else cam.eye += glm::dvec3(0.7, 0, 0.4);
       points[rng() % points.size()] = random_points(rng, w.h.node(0).box, 1)[0];
       PointQueries q;
       q.points = points;
-      LodSelector sel(r, cam, 480, tau);
-      CullStats fresh_st, front_st;
-      auto fresh = hardware_cull_lod(w.h, cam, q, sel, false, {}, nullptr, &fresh_st);
-      const std::vector<uint32_t> prime = coarsen_visible(sel, visible);
-      std::vector<uint32_t> vnodes = nodes_of(r, prime);
-      std::vector<uint32_t> start = derive_occluded_front(w.h, vnodes);
-      const Frustum fr = cam.frustum();
-      vnodes = update_cut(w.h, sel, vnodes, &fr);
-      start.insert(start.end(), vnodes.begin(), vnodes.end());
-      auto tracked = hardware_cull_lod(w.h, cam, q, sel, false, start, nullptr, &front_st);
+      const LodSelector sel = config.lod_policy(480).selector(r, cam);
+      CullStats fresh_st;
+      auto fresh = hardware_cull_lod(w.h, cam, q, sel, {.stats = &fresh_st});
+      stream.clear();
+      const HcFrame hc = hc_step.hc(f, visible, cam, q, nullptr, out);
+      std::vector<uint32_t> tracked(visible.ids().begin(), visible.ids().end());
+      std::sort(tracked.begin(), tracked.end());
       ASSERT_EQ(tracked, fresh) << "tau " << tau << " frame " << f;
       fresh_queries += fresh_st.queries;
-      front_queries += front_st.queries;
-      visible = tracked;
+      front_queries += hc.stats.queries;
+      // The receiving end.
+      const uint64_t front = receiver_step.coarsen(received, cam);
+      EXPECT_EQ(front, hc.eof.front_hash) << "frame " << f;
+      for (const wire::Message& m : stream) ASSERT_FALSE(in.on_diff(received, std::get<wire::NodeDiff>(m)));
+      ASSERT_FALSE(in.on_end_of_frame(received, hc.eof)) << "frame " << f;
+      EXPECT_TRUE(received == visible);
     }
     EXPECT_GT(fresh_queries, 0u);
     EXPECT_LT(front_queries, fresh_queries) << "tau " << tau;
@@ -243,8 +256,8 @@ TEST(FrontCull, VisiblePixelLodStopsWhereFewPixelsShow) {
     const Camera cam = random_camera(rng, w.h.node(0).box);
     LodSelector sel(r, cam, 480, 10.0);
     CullStats on_st, off_st;
-    auto on = hardware_cull_lod(w.h, cam, q, sel, true, {}, nullptr, &on_st);
-    auto off = hardware_cull_lod(w.h, cam, q, sel, false, {}, nullptr, &off_st);
+    auto on = hardware_cull_lod(w.h, cam, q, sel, {.visible_pixel_lod = true, .stats = &on_st});
+    auto off = hardware_cull_lod(w.h, cam, q, sel, {.stats = &off_st});
     EXPECT_LE(on_st.queries, off_st.queries);
     stops += on_st.pixel_stops;
     // Every accepted node: visible, and either within tau or it had fewer than tau samples.

@@ -8,32 +8,11 @@
 
 #include "common/cli.hpp"
 #include "common/error.hpp"
+#include "protocol/net/endpoint.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/relay/relay.hpp"
 
 namespace {
-
-struct HostPort {
-  std::string host;
-  uint16_t port = 0;
-};
-
-HostPort parse_host_port(const std::string& flag, const std::string& text, long min_port) {
-  const auto colon = text.rfind(':');
-  const std::string host = colon == std::string::npos ? "" : text.substr(0, colon);
-  const std::string port = colon == std::string::npos ? "" : text.substr(colon + 1);
-  size_t used = 0;
-  long p = -1;
-  try {
-    p = std::stol(port, &used);
-  } catch (...) {
-    used = 0;
-  }
-  if (host.empty() || used == 0 || used != port.size() || p < min_port || p > 65535)
-    throw occ::InputError("--" + flag + " '" + text + "': expected HOST:PORT with PORT " + std::to_string(min_port) +
-                          "..65535");
-  return {host, uint16_t(p)};
-}
 
 // An override of -1 means "same as the symmetric flag".
 occ::relay::LinkParams direction(double delay, double jitter, double rate, double d, double j, double r) {
@@ -87,7 +66,8 @@ int main(int argc, char** argv) {
     if (target.empty()) throw occ::InputError("--target HOST:PORT is required (see link_relay --help)");
 
     occ::relay::RelayOptions o;
-    const HostPort l = parse_host_port("listen", listen, 0), t = parse_host_port("target", target, 1);
+    const occ::net::Endpoint l = occ::net::parse_endpoint("listen", listen, {true, 0}),
+                             t = occ::net::parse_endpoint("target", target, {true, 1});
     o.listen_address = l.host;
     o.listen_port = l.port;
     o.target_host = t.host;

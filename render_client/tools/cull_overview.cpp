@@ -1,7 +1,8 @@
 // cull_overview: a picture of what the occlusion switch culls in one frame (the paper's colour
 // plate). It replays the cluster's lockstep culling in one process up to frame F (the OR of
-// frame f renders V_{f-2} and then the streamed additions of V_{f-1} depth-only, exactly as
-// switch_node/node.cpp does; HC then queries the hierarchy against that depth), classifies every
+// frame f renders V_{f-2} and then the streamed additions of V_{f-1} depth-only, as the switch
+// nodes do; HC is the nodes' own SwitchStep, with front tracking and each node's adaptive
+// queries, against that depth), classifies every
 // non-empty leaf for frame F (visible = yellow, frustum-culled = violet, occlusion-culled =
 // orange) and renders the scene from up and behind the camera, each pixel coloured by its
 // node's class and shaded by the scene's own lighting, with camera F's frustum and a legend.
@@ -24,7 +25,9 @@
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/image.hpp"
+#include "common/gl/startup.hpp"
 #include "common/scene_setup.hpp"
+#include "protocol/cluster/switch_step.hpp"
 
 namespace occ {
 namespace {
@@ -39,7 +42,8 @@ struct Options {
   double pitch_deg = 50;
   double reach = 0.3;  // overview: frames at most this fraction of the scene diagonal around the focus
   double cut = -1;  // section cut height above the eye (< 0: auto)
-  std::string gl = "auto";
+  GlBackend gl = GlBackend::Auto;
+  bool front_tracking = true, adaptive_queries = true;  // as the switch nodes' flags
 };
 
 enum Category : uint8_t { kNone = 0, kVisible = 1, kFrustum = 2, kOccluded = 3 };
@@ -49,32 +53,39 @@ struct Rgb {
 constexpr Rgb kCategoryColour[4] = {{0, 0, 0}, {255, 214, 0}, {150, 70, 255}, {255, 110, 0}};
 constexpr uint8_t kBackground[3] = {16, 18, 24};
 
-// ---- The cluster's visible set of frame F, replayed in one process (lockstep mode).
+// ---- The cluster's visible set of frame F, replayed in one process (lockstep mode, tau 0).
 std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vector<Camera>& path, uint32_t last,
                                          const Options& o, CullStats& last_stats) {
   const Hierarchy& h = ls.hierarchy;
-  auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
-  std::cerr << "cull_overview: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
+  auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   BoxQuerier querier(*ctx);
   const Renderables renderables(h, nullptr);
-  std::vector<uint32_t> before, prev;  // V_{f-2}, V_{f-1} (sorted)
+  ClusterConfig config;
+  config.front_tracking = o.front_tracking;
+  const SwitchStep step(renderables, config, o.height);
+  std::vector<QuerySkipper> skippers;  // one per switch node: node f % 2 does HC(f)
+  if (o.adaptive_queries) skippers.assign(2, QuerySkipper(h.size()));
+  DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
+  VisibleSet visible(renderables.count());  // V_{f-1}
+  std::vector<uint32_t> before;             // V_{f-2} (sorted)
   for (uint32_t f = 0; f <= last; ++f) {
     // OR(f): the OR node's own V_{f-2}, then the other node's streamed additions of V_{f-1}.
-    std::vector<uint32_t> occluders;
+    std::vector<uint32_t> prev(visible.ids().begin(), visible.ids().end()), occluders;
+    std::sort(prev.begin(), prev.end());
     std::set_union(before.begin(), before.end(), prev.begin(), prev.end(), std::back_inserter(occluders));
     renderer.begin_frame(path[f], false);
     renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
     // HC(f).
-    CullStats st;
     querier.begin(path[f]);
-    std::vector<uint32_t> v = hardware_cull(renderables, path[f], querier, nullptr, &st);
+    HcFrame hc = step.hc(f, visible, path[f], querier, skippers.empty() ? nullptr : &skippers[f % 2], nowhere);
     querier.end();
     before = std::move(prev);
-    prev = std::move(v);
-    last_stats = st;
+    last_stats = hc.stats;
   }
-  return prev;
+  std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
+  std::sort(v.begin(), v.end());
+  return v;
 }
 
 // ---- The overview camera: up and behind camera F, looking a little ahead of it, pulled back
@@ -395,7 +406,7 @@ int run(const Options& o) {
   const Camera ov = overview_camera(cam, bounds, double(o.view_width) / o.view_height, o.pitch_deg, o.reach);
   Image shaded, ids;
   {
-    auto ctx = GlContext::create(parse_gl_backend(o.gl), o.view_width, o.view_height);
+    auto ctx = GlContext::create(o.gl, o.view_width, o.view_height);
     SceneRenderer renderer(*ctx, ls.scene, h);
     renderer.begin_frame(ov, true);
     renderer.draw_items(items_of_nodes(h, shown), SceneRenderer::Mode::Shaded);
@@ -431,8 +442,7 @@ int main(int argc, char** argv) {
     cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
     cli.option("frame", &o.frame, 0, 10000000, "the frame to show");
     cli.option("out", &o.out, "FILE.png", "the overview image");
-    cli.option("width", &o.width, 16, occ::kMaxViewportPx, "the cluster's viewport width (culling)");
-    cli.option("height", &o.height, 16, occ::kMaxViewportPx, "the cluster's viewport height (culling)");
+    occ::add_view_options(cli, &o.width, &o.height, &o.gl, "the cluster's, for culling");
     cli.option("view-width", &o.view_width, 16, occ::kMaxViewportPx, "overview image width");
     cli.option("view-height", &o.view_height, 16, occ::kMaxViewportPx, "overview image height");
     cli.option("pitch", &o.pitch_deg, 10.0, 89.0, "overview: degrees above the horizon");
@@ -441,7 +451,8 @@ int main(int argc, char** argv) {
     cli.option("cut", &o.cut, -1.0, 1e9,
                "overview: leave out leaves starting this far above the eye (-1: auto, cut at a ceiling "
                "right above the eye)");
-    cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
+    cli.on_off("front-tracking", &o.front_tracking, "as the switch nodes' --front-tracking");
+    cli.on_off("adaptive-queries", &o.adaptive_queries, "as the switch nodes' --adaptive-queries");
     if (!cli.parse(argc, argv)) return 0;
     return occ::run(o);
   });

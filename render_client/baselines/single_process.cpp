@@ -1,4 +1,4 @@
-#include "render_client/baselines.hpp"
+#include "render_client/baselines/single_process.hpp"
 
 #include <deque>
 #include <queue>

@@ -14,11 +14,14 @@
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
+#include "common/gl/startup.hpp"
 #include "common/hzb.hpp"
 #include "common/scene_setup.hpp"
+#include "protocol/cluster/camera_receiver.hpp"
+#include "protocol/cluster/cluster.hpp"
+#include "protocol/cluster/switch_step.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/visible_set.hpp"
-#include "switch_node/cluster.hpp"
 
 namespace occ {
 namespace {
@@ -49,7 +52,8 @@ class PyramidQueries : public OcclusionQueries {
 struct ServerOptions {
   SceneOptions scene;
   int width = 512, height = 512;
-  std::string gl = "auto", listen = "127.0.0.1:0", port_file;
+  GlBackend gl = GlBackend::Auto;
+  ListenOptions listen;
   int diff_chunk_ids = 100, timeout_ms = 30000;
 };
 
@@ -57,47 +61,26 @@ int serve(const ServerOptions& o) {
   const std::string who = "occlusion_server";
   LoadedScene ls = load_and_build(o.scene, who);
   const Hierarchy& h = ls.hierarchy;
-  auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
-  std::cerr << who << ": GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
+  auto ctx = start_gl(who, o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
 
-  Endpoint listen = parse_endpoint("listen", o.listen);
-  auto listener = net::Listener::open(listen.port, listen.host);
-  if (!listener) throw std::runtime_error("cannot listen on " + o.listen + ": " + listener.error());
-  if (!o.port_file.empty())
-    if (auto err = net::write_port_file(o.port_file, listener->port())) throw InputError("--port-file: " + *err);
-  ClusterConfig config;  // lockstep, incremental
+  net::Listener listener = open_listener(who, o.listen);
+  const ClusterConfig config;  // lockstep, incremental: what the render client expects by default
   const wire::Hello mine =
       make_hello(wire::Role::switch_node, 0, {o.width, o.height}, ls.fingerprint, h.params(), config, who);
-  auto peer = listener->accept_peer(mine, {wire::Role::render_client, std::nullopt}, net::Millis(o.timeout_ms));
+  auto peer = listener.accept_peer(mine, {wire::Role::render_client, std::nullopt}, net::Millis(o.timeout_ms));
   if (!peer) throw std::runtime_error("no render client: " + peer.error());
   net::Connection& rvg = peer->connection;
 
   CameraBuffer cameras;
-  std::atomic<bool> bye{false};
-  std::thread receiver([&] {
-    for (;;) {
-      net::Received r = rvg.receive(net::Millis(1000));
-      if (r.status == net::Received::Status::timeout) continue;
-      if (r.ok()) {
-        if (auto* c = std::get_if<wire::Camera>(&r.message)) {
-          cameras.put({c->frame, from_wire(*c)});
-          continue;
-        }
-        cameras.close("unexpected message from the render client");
-        return;
-      }
-      bye = r.status == net::Received::Status::closed;
-      cameras.close(r.reason);
-      return;
-    }
-  });
-
-  auto send = [&](const wire::Message& m) {
-    if (auto err = rvg.send(m)) throw std::runtime_error("sending to the render client: " + *err);
-  };
+  CameraReceiver cameras_in(rvg, cameras, {o.width, o.height});
   VisibleSet visible(uint32_t(h.size()));
   const Renderables renderables(h, nullptr);
+  // The switch's step without LODs or fronts: one server does every frame from the root.
+  const SwitchStep step(renderables, LodPolicy{}, false);
+  DiffSender out(uint32_t(o.diff_chunk_ids), false, [&](const wire::Message& m) {
+    if (auto err = rvg.send(m)) throw std::runtime_error("sending to the render client: " + *err);
+  });
   DepthPyramid pyramid;
   int code = 0;
   try {
@@ -105,7 +88,7 @@ int serve(const ServerOptions& o) {
       std::string why;
       auto cam = cameras.take(frame, net::Millis(o.timeout_ms), &why);
       if (!cam) {
-        if (bye) break;
+        if (cameras_in.client_said_bye()) break;
         throw std::runtime_error("frame " + std::to_string(frame) + ": " + why);
       }
       // Occluders: the previous visible set, depth only, then readback and the pyramid.
@@ -116,47 +99,23 @@ int serve(const ServerOptions& o) {
       pyramid.build(ctx->read_depth(), o.width, o.height);
       const uint32_t or_us = micros_since(or_start);
       // Culling on the CPU, streamed like HC.
-      send(to_wire(cam->number, cam->camera, {o.width, o.height}));
+      out.send(to_wire(cam->number, cam->camera, {o.width, o.height}));
       const Clock::time_point hc_start = Clock::now();
       PyramidQueries queries(pyramid, cam->camera);
-      CullStats stats;
-      SetDiff diff;
-      std::vector<uint32_t> pending;
-      std::vector<uint32_t> leaves = hardware_cull(
-          renderables, cam->camera, queries,
-          [&](uint32_t id) {
-            if (visible.contains(id)) return;
-            diff.added.push_back(id);
-            pending.push_back(id);
-            if (pending.size() >= size_t(o.diff_chunk_ids)) {
-              send(wire::NodeDiff{frame, pending, {}});
-              pending.clear();
-            }
-          },
-          &stats);
-      if (!pending.empty()) send(wire::NodeDiff{frame, pending, {}});
-      VisibleSet cur(uint32_t(h.size()));
-      for (uint32_t id : leaves) cur.insert(id);
-      for (uint32_t id : visible.ids())
-        if (!cur.contains(id)) diff.removed.push_back(id);
-      for (auto& chunk : wire::chunk_node_diff(frame, {}, diff.removed, uint32_t(o.diff_chunk_ids))) send(chunk);
-      wire::EndOfFrame eof = make_end_of_frame(frame, diff, cur);
-      eof.queries = stats.queries;  // boxes tested against the pyramid
-      eof.or_us = or_us;
-      eof.hc_us = micros_since(hc_start);
-      for (uint32_t id : leaves) eof.triangles += h.node(id).triangles;
-      send(eof);
-      visible = std::move(cur);
+      HcFrame hc = step.hc(frame, visible, cam->camera, queries, nullptr, out);  // queries: boxes tested
+      hc.eof.or_us = or_us;
+      hc.eof.hc_us = micros_since(hc_start);
+      out.send(hc.eof);
     }
   } catch (const std::exception& e) {
-    if (!bye) {
+    if (!cameras_in.client_said_bye()) {
       std::cerr << "error: " << who << ": " << e.what() << "\n";
       rvg.close_with_error(who + " failed: " + e.what());
       code = 1;
     }
   }
   if (code == 0) rvg.close(wire::kByeDone);
-  receiver.join();
+  cameras_in.join();
   return code;
 }
 
@@ -171,17 +130,12 @@ int main(int argc, char** argv) {
                  "previous visible set depth-only, reads the depth back, builds a software hierarchical Z\n"
                  "pyramid and culls the hierarchy on the CPU; a render_client with one --connect displays.");
     occ::add_scene_options(cli, o.scene);
-    cli.option("width", &o.width, 16, occ::kMaxViewportPx, "viewport width (must match the render client)");
-    cli.option("height", &o.height, 16, occ::kMaxViewportPx, "viewport height");
-    cli.choice("gl", &o.gl, {"auto", "egl", "osmesa"}, "GL back end");
-    occ::ListenOptions where;
-    occ::add_listen_options(cli, where);
+    occ::add_view_options(cli, &o.width, &o.height, &o.gl, "must match the render client");
+    occ::add_listen_options(cli, o.listen);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for the client or a camera");
     if (!cli.parse(argc, argv)) return 0;
-    occ::resolve_listen(where);  // fail before loading the scene
-    o.listen = where.listen;
-    o.port_file = where.port_file;
+    occ::resolve_listen(o.listen);  // fail before loading the scene
     return occ::serve(o);
   });
 }

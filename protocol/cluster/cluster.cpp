@@ -1,4 +1,6 @@
-#include "switch_node/cluster.hpp"
+#include "protocol/cluster/cluster.hpp"
+
+#include <iostream>
 
 #include "common/cli.hpp"
 #include "common/error.hpp"
@@ -34,6 +36,15 @@ Camera from_wire(const wire::Camera& w) {
   return c;
 }
 
+std::optional<std::string> viewport_mismatch(const wire::Camera& w, const Viewport& vp) {
+  if (w.viewport_width_px == uint32_t(vp.width) && w.viewport_height_px == uint32_t(vp.height)) return std::nullopt;
+  return "camera " + std::to_string(w.frame) + " is for a " + std::to_string(w.viewport_width_px) + "x" +
+         std::to_string(w.viewport_height_px) + " viewport, this process renders " + std::to_string(vp.width) + "x" +
+         std::to_string(vp.height);
+}
+
+const char* camera_mode_name(CameraMode m) { return m == CameraMode::lockstep ? "lockstep" : "latest"; }
+
 wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
                        const BuildParams& build, const ClusterConfig& config, const std::string& name) {
   wire::Hello h;
@@ -51,43 +62,28 @@ wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uin
 }
 
 uint64_t ClusterConfig::hash() const {
+  // The flag words, as the command lines spell them.
+  auto on_off = [](bool b) { return b ? "on" : "off"; };
   Hasher h;
-  h.str(camera_mode);
+  h.str(camera_mode_name(camera_mode));
   h.u32(full_sets);
   h.f64(pixel_error);
-  h.str(visible_pixel_lod);
-  h.str(front_tracking);
+  h.str(on_off(visible_pixel_lod));
+  h.str(on_off(front_tracking));
   return h.value();
 }
 
-void add_lod_options(Cli& cli, ClusterConfig& c) {
+void add_cluster_options(Cli& cli, ClusterConfig& c) {
+  cli.choice<CameraMode>("camera-mode", &c.camera_mode,
+                         {{"lockstep", CameraMode::lockstep}, {"latest", CameraMode::latest}},
+                         "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");
+  cli.flag("full-sets", &c.full_sets, "send all of V_f every frame instead of the diff");
   cli.option("pixel-error", &c.pixel_error, 0.0, 1e6,
              "tau: screen-space error bound in pixels for LOD/HLOD selection (0 = original geometry, conservative)");
-  cli.choice("visible-pixel-lod", &c.visible_pixel_lod, {"on", "off"},
+  cli.on_off("visible-pixel-lod", &c.visible_pixel_lod,
              "stop refining a node whose occlusion query saw fewer than tau pixels (paper 4.7.2)");
-  cli.choice("front-tracking", &c.front_tracking, {"on", "off"},
+  cli.on_off("front-tracking", &c.front_tracking,
              "HC starts from the previous frame's fronts (paper 4.6) instead of the root");
-}
-
-Endpoint parse_endpoint(const std::string& flag, const std::string& text) {
-  Endpoint e{"127.0.0.1", 0};
-  std::string port = text;
-  if (auto colon = text.rfind(':'); colon != std::string::npos) {
-    e.host = text.substr(0, colon);
-    port = text.substr(colon + 1);
-    if (e.host.empty()) throw InputError("--" + flag + " '" + text + "': empty host");
-  }
-  size_t used = 0;
-  long p = -1;
-  try {
-    p = std::stol(port, &used);
-  } catch (...) {
-    used = 0;
-  }
-  if (used == 0 || used != port.size() || p < 0 || p > 65535)
-    throw InputError("--" + flag + " '" + text + "': expected HOST:PORT with PORT 0..65535");
-  e.port = uint16_t(p);
-  return e;
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {
@@ -97,13 +93,24 @@ void add_listen_options(Cli& cli, ListenOptions& o) {
   cli.option("port-file", &o.port_file, "FILE", "write the listening port here (atomically)");
 }
 
-Endpoint resolve_listen(ListenOptions& o) {
-  Endpoint e = parse_endpoint("listen", o.listen);
+net::Endpoint resolve_listen(ListenOptions& o) {
+  net::Endpoint e = net::parse_endpoint("listen", o.listen);
   if (o.port >= 0) {
     e.port = uint16_t(o.port);
     o.listen = e.host + ":" + std::to_string(o.port);
   }
   return e;
+}
+
+net::Listener open_listener(const std::string& who, const ListenOptions& o) {
+  const net::Endpoint at = net::parse_endpoint("listen", o.listen);
+  auto listener = net::Listener::open(at.port, at.host);
+  if (!listener) throw std::runtime_error(who + ": cannot listen on " + o.listen + ": " + listener.error());
+  if (!o.port_file.empty())
+    if (auto err = net::write_port_file(o.port_file, listener->port()))
+      throw InputError("--port-file '" + o.port_file + "': " + *err);
+  std::cerr << who << ": listening on " << listener->address() << ":" << listener->port() << "\n";
+  return std::move(*listener);
 }
 
 }  // namespace occ

@@ -1,0 +1,76 @@
+// What the three cluster processes share beyond the wire format: the camera conversion, the
+// settings that must agree (config hash in Hello), the switch schedule, and the listening flags.
+//
+// Schedule (paper Algorithm 4.2; README "Architecture"). Frame f: node f % 2 performs HC(f) and
+// streams V_f as a diff against V_{f-1}; node (f+1) % 2 builds OR(f+1) from that stream. So
+// node k runs OR(k), HC(k), OR(k+2), HC(k+2), ... OR(f+1) draws V_{f-1} (which it holds) at
+// once and each added node as it arrives: the depth of any subset of real geometry is
+// conservative, and V_{f-1} ∪ δ+ = V_{f-1} ∪ V_f occludes at least as much as V_f.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "common/camera.hpp"
+#include "common/culling.hpp"
+#include "common/hierarchy.hpp"
+#include "protocol/net/endpoint.hpp"
+#include "protocol/net/transport.hpp"
+#include "protocol/wire.hpp"
+
+namespace occ {
+
+class Cli;
+
+wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp);
+Camera from_wire(const wire::Camera& w);
+// Why a camera packet does not fit a process rendering `vp` (nullopt when it does).
+std::optional<std::string> viewport_mismatch(const wire::Camera& w, const Viewport& vp);
+
+enum class CameraMode {
+  lockstep,  // frame f uses camera f (reproducible)
+  latest,    // the OR node takes the newest camera (the paper's interactive system)
+};
+const char* camera_mode_name(CameraMode m);
+
+// Settings that must agree on all three processes (they are in hash(), checked in the hello).
+struct ClusterConfig {
+  CameraMode camera_mode = CameraMode::lockstep;
+  bool full_sets = false;          // send all of V_f each frame instead of the diff
+  double pixel_error = 0;          // tau, the paper's pixels of error (0 = original geometry)
+  bool visible_pixel_lod = false;  // stop refining where fewer than tau pixels show (4.7.2)
+  bool front_tracking = true;      // HC starts from the fronts (4.6) or the root
+
+  bool lod() const { return pixel_error > 0; }  // LODs are loaded/built only when used
+  // Front tracking needs V_{f-1} on every process: not with full sets (each frame replaces it).
+  bool tracks_fronts() const { return front_tracking && !full_sets; }
+  LodPolicy lod_policy(int viewport_height_px) const {
+    return {pixel_error, double(viewport_height_px), visible_pixel_lod};
+  }
+  uint64_t hash() const;
+};
+
+// The Hello every process sends: who it is and everything that must agree between processes.
+wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
+                       const BuildParams& build, const ClusterConfig& config, const std::string& name);
+
+// --camera-mode, --full-sets, --pixel-error, --visible-pixel-lod, --front-tracking.
+void add_cluster_options(Cli& cli, ClusterConfig& c);
+
+// Where a listening process listens: --listen ADDR:PORT, --port N (the port of that address;
+// shorthand for the common --port 0 --port-file F), --port-file FILE. After parsing,
+// resolve_listen() folds --port into the listen string and checks it.
+struct ListenOptions {
+  std::string listen = "127.0.0.1:0";
+  int port = -1;  // -1: --listen's port
+  std::string port_file;
+};
+void add_listen_options(Cli& cli, ListenOptions& o);
+net::Endpoint resolve_listen(ListenOptions& o);
+// Opens the listening socket (after resolve_listen), writes --port-file and prints
+// "<who>: listening on ADDR:PORT". Throws naming the address.
+net::Listener open_listener(const std::string& who, const ListenOptions& o);
+
+inline uint32_t hc_node_of_frame(uint32_t frame) { return frame % 2; }
+
+}  // namespace occ
