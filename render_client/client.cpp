@@ -41,16 +41,11 @@ class Client {
   explicit Client(const ClientOptions& o) : o_(o) {}
 
   int run() {
-    LoadedScene ls = load_and_build(o_.scene, "render_client", o_.config.lod());
-    h_ = &ls.hierarchy;
-    fingerprint_ = ls.fingerprint;
-    renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
-    path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
-    ctx_ = start_gl("render_client", o_.gl, o_.width, o_.height);
-    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
+    g_ = start_scene_gl("render_client", o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height,
+                        [&](const LoadedScene& ls) { path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height}); });
     leaf_count_ = 0;
-    for (const HNode& n : h_->nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
-    total_triangles_ = ls.scene.triangle_count();
+    for (const HNode& n : g_.hierarchy().nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
+    total_triangles_ = g_.scene().triangle_count();
     connect();
     int code = 0;
     try {
@@ -67,8 +62,8 @@ class Client {
 
  private:
   void connect() {
-    const wire::Hello mine = make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, fingerprint_,
-                                        h_->params(), o_.config, "render_client");
+    const wire::Hello mine = make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, g_.fingerprint(),
+                                        g_.hierarchy().params(), o_.config, "render_client");
     for (const std::string& text : o_.connect) {
       const net::Endpoint e = net::parse_endpoint("connect", text);
       auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
@@ -110,9 +105,9 @@ class Client {
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms"});
-    VisibleSet visible(renderables_->count());
+    VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes): a single server sends plain diffs.
-    const SwitchStep step(*renderables_, o_.config.lod_policy(o_.height), nodes_[1] && o_.config.tracks_fronts());
+    const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), nodes_[1] && o_.config.tracks_fronts());
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
     if (lockstep)
@@ -173,11 +168,11 @@ class Client {
       // 3. Render V_f with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
-      renderer_->begin_frame(cam, true);
-      DrawStats st = renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::Shaded);
-      ctx_->gl().Finish();
+      g_.renderer->begin_frame(cam, true);
+      DrawStats st = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::Shaded);
+      g_.ctx->gl().Finish();
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
-      if (out.writes_images()) out.write_frame(frame, ctx_->read_rgba());
+      if (out.writes_images()) out.write_frame(frame, g_.ctx->read_rgba());
       const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
       const uint64_t bytes = received_bytes() - bytes_before;
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
@@ -231,12 +226,8 @@ class Client {
   }
 
   const ClientOptions& o_;
-  const Hierarchy* h_ = nullptr;
-  uint64_t fingerprint_ = 0;
-  std::unique_ptr<Renderables> renderables_;
+  SceneGl g_;
   std::vector<Camera> path_;
-  std::unique_ptr<GlContext> ctx_;
-  std::unique_ptr<SceneRenderer> renderer_;
   std::unique_ptr<net::Connection> nodes_[2];
   std::map<uint32_t, Clock::time_point> sent_at_;
   uint32_t frame_ = 0;  // the frame being received (for messages)

@@ -13,11 +13,10 @@ int main(int argc, char** argv) {
                  "Drives the camera along a path, receives the visible set of every frame from the switch\n"
                  "node doing HC, verifies it, renders it and writes frames and statistics. With --reference\n"
                  "it renders the whole scene itself (no culling or frustum culling only): the ground truth.");
-    occ::add_scene_options(cli, o.scene);
     cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
     cli.option("out", &o.out, "DIR", "write DIR/frame_%05d.png and DIR/stats.csv");
     cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
-    occ::add_view_options(cli, &o.width, &o.height, &o.gl);
+    occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl);
     cli.flag("reference", &o.reference, "single-process reference renderer");
     cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
                "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");

@@ -21,12 +21,13 @@
 namespace occ {
 
 int run_reference(const ClientOptions& o) {
-  LoadedScene ls = load_and_build(o.scene, "render_client");
-  const Hierarchy& h = ls.hierarchy;
   const Viewport vp{o.width, o.height};
-  const std::vector<Camera> path = load_camera_path(o.path, ls.scene.bounds(), vp);
-  auto ctx = start_gl("render_client", o.gl, o.width, o.height);
-  SceneRenderer renderer(*ctx, ls.scene, h);
+  std::vector<Camera> path;
+  SceneGl g = start_scene_gl("render_client", o.scene, false, o.gl, o.width, o.height,
+                             [&](const LoadedScene& ls) { path = load_camera_path(o.path, ls.scene.bounds(), vp); });
+  const Hierarchy& h = g.hierarchy();
+  GlContext* ctx = g.ctx.get();
+  SceneRenderer& renderer = *g.renderer;
   BoxQuerier querier(*ctx);
   ChcRenderer chc(h);
   std::vector<std::string> columns{"frame", "nodes_drawn", "triangles_drawn", "render_ms", "queries"};

@@ -13,8 +13,7 @@ int main(int argc, char** argv) {
                  "render client and to the other node. Node 0 listens for node 1 and the render client;\n"
                  "node 1 connects to node 0 (--peer) and listens for the render client.");
     cli.option("id", &o.id, 0, 1, "which node of the switch (HC on frames f with f % 2 == id)");
-    occ::add_scene_options(cli, o.scene);
-    occ::add_view_options(cli, &o.width, &o.height, &o.gl, "must match the render client");
+    occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl, "must match the render client");
     occ::add_listen_options(cli, o.listen);
     cli.option("peer", &o.peer, "HOST:PORT", "node 1 only: switch node 0's address");
     occ::add_cluster_options(cli, o.config);

@@ -45,15 +45,10 @@ class SwitchNode {
   explicit SwitchNode(const NodeOptions& o) : o_(o), who_("switch_node " + std::to_string(o.id)) {}
 
   int run() {
-    LoadedScene ls = load_and_build(o_.scene, who_, o_.config.lod());
-    h_ = &ls.hierarchy;
-    if (o_.adaptive_queries) skipper_.emplace(ls.hierarchy.size());
-    fingerprint_ = ls.fingerprint;
-    renderables_ = std::make_unique<Renderables>(ls.hierarchy, ls.lod.get());
-    step_.emplace(*renderables_, o_.config, o_.height);
-    ctx_ = start_gl(who_, o_.gl, o_.width, o_.height);
-    renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
-    querier_ = std::make_unique<BoxQuerier>(*ctx_);
+    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
+    if (o_.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
+    step_.emplace(*g_.renderables, o_.config, o_.height);
+    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
     connect();
     cameras_in_.emplace(*rvg_, cameras_, Viewport{o_.width, o_.height});
     int code = 0;
@@ -86,7 +81,7 @@ class SwitchNode {
     net::Listener listener = open_listener(who_, o_.listen);
     const Millis timeout(o_.timeout_ms);
     const wire::Hello mine = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height},
-                                        fingerprint_, h_->params(), o_.config, who_);
+                                        g_.fingerprint(), g_.hierarchy().params(), o_.config, who_);
     if (o_.id == 1) {
       const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
       auto conn = net::Connection::connect(pe.host, pe.port, timeout);
@@ -123,7 +118,7 @@ class SwitchNode {
 
   void loop() {
     const Millis timeout(o_.timeout_ms);
-    VisibleSet visible(renderables_->count());
+    VisibleSet visible(g_.renderables->count());
     DiffReceiver stream;  // diffs of the other node's HC frames
     std::optional<uint32_t> last_camera;
     for (uint32_t frame = uint32_t(o_.id);; frame += 2) {
@@ -142,12 +137,12 @@ class SwitchNode {
       }
       last_camera = cam->number;
       const Clock::time_point or_start = Clock::now();
-      renderer_->begin_frame(cam->camera, false);
-      std::vector<uint8_t> drawn(renderables_->count(), 0);
+      g_.renderer->begin_frame(cam->camera, false);
+      std::vector<uint8_t> drawn(g_.renderables->count(), 0);
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
       std::sort(ids.begin(), ids.end());
       for (uint32_t id : ids) drawn[id] = 1;
-      renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::DepthOnly);
+      g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly);
       Clock::duration waited{0};  // for the other node's stream: not OR work
       if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
       const uint32_t or_us =
@@ -209,7 +204,7 @@ class SwitchNode {
             drawn[id] = 1;
             fresh.push_back(id);
           }
-        renderer_->draw_renderables(*renderables_, fresh, SceneRenderer::Mode::DepthOnly);
+        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
         if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
@@ -257,11 +252,7 @@ class SwitchNode {
 
   const NodeOptions& o_;
   std::string who_;
-  const Hierarchy* h_ = nullptr;
-  uint64_t fingerprint_ = 0;
-  std::unique_ptr<Renderables> renderables_;
-  std::unique_ptr<GlContext> ctx_;
-  std::unique_ptr<SceneRenderer> renderer_;
+  SceneGl g_;
   std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
   CameraBuffer cameras_;

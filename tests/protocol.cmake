@@ -6,3 +6,6 @@ occ_test(protocol_test unit LIBS occ_protocol SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/protocol_visible_set_test.cpp)
 occ_test(net_transport_test integration LIBS occ_net Boost::system SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/net_transport_test.cpp)
+# what the three processes share (protocol/cluster): diff sender, typed config, endpoints
+occ_test(switch_step_test unit LIBS occ_cluster SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/switch_step_test.cpp)

@@ -1,21 +1,41 @@
-// What every GL process does first, written once: the viewport and --gl flags, and the context,
-// announced on one line ("switch_node 0: GL_RENDERER llvmpipe (...) (egl-surfaceless)").
-// The scene comes from load_and_build() (common/scene_setup.hpp).
+// What every GL process does first, written once: the scene, viewport and --gl flags, then the
+// scene (load_and_build), its renderables and a context with a renderer, announced on one line
+// each ("switch_node 0: GL_RENDERER llvmpipe (...) (egl-surfaceless)").
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 
 #include "common/gl/context.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "common/scene_setup.hpp"
 
 namespace occ {
 
 class Cli;
 
-// --width, --height (16..kMaxViewportPx; `what` says whose viewport, e.g. "must match the render
-// client") and --gl auto|egl|osmesa.
-void add_view_options(Cli& cli, int* width, int* height, GlBackend* backend, const std::string& what = "");
+// --scene and the hierarchy flags, --width, --height (16..kMaxViewportPx; `what` says whose
+// viewport, e.g. "must match the render client") and --gl auto|egl|osmesa.
+void add_view_options(Cli& cli, SceneOptions& scene, int* width, int* height, GlBackend* backend,
+                      const std::string& what = "");
 
 // Creates the context and prints "<who>: GL_RENDERER <renderer> (<back end>)" to stderr.
 std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, int width, int height);
+
+// A process's scene and GL state. The members refer to each other: keep the object in place.
+struct SceneGl {
+  std::unique_ptr<LoadedScene> loaded;
+  std::unique_ptr<Renderables> renderables;  // with the LOD data when loaded with LODs
+  std::unique_ptr<GlContext> ctx;
+  std::unique_ptr<SceneRenderer> renderer;
+  const Scene& scene() const { return loaded->scene; }
+  const Hierarchy& hierarchy() const { return loaded->hierarchy; }
+  uint64_t fingerprint() const { return loaded->fingerprint; }
+};
+
+// load_and_build(scene, who, with_lod), then `before_gl` (e.g. check the camera path against
+// the scene before paying for a context), then start_gl() and a SceneRenderer (with the LODs).
+SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
+                       int width, int height, const std::function<void(const LoadedScene&)>& before_gl = nullptr);
 
 }  // namespace occ

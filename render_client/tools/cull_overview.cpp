@@ -438,11 +438,10 @@ int main(int argc, char** argv) {
                  "Replays the occlusion switch's culling (lockstep, one process) up to frame F and draws an\n"
                  "overview from up and behind camera F: visible nodes yellow, frustum-culled violet,\n"
                  "occlusion-culled orange, with the camera's frustum and a legend.");
-    occ::add_scene_options(cli, o.scene);
     cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
     cli.option("frame", &o.frame, 0, 10000000, "the frame to show");
     cli.option("out", &o.out, "FILE.png", "the overview image");
-    occ::add_view_options(cli, &o.width, &o.height, &o.gl, "the cluster's, for culling");
+    occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl, "the cluster's, for culling");
     cli.option("view-width", &o.view_width, 16, occ::kMaxViewportPx, "overview image width");
     cli.option("view-height", &o.view_height, 16, occ::kMaxViewportPx, "overview image height");
     cli.option("pitch", &o.pitch_deg, 10.0, 89.0, "overview: degrees above the horizon");

@@ -59,15 +59,13 @@ struct ServerOptions {
 
 int serve(const ServerOptions& o) {
   const std::string who = "occlusion_server";
-  LoadedScene ls = load_and_build(o.scene, who);
-  const Hierarchy& h = ls.hierarchy;
-  auto ctx = start_gl(who, o.gl, o.width, o.height);
-  SceneRenderer renderer(*ctx, ls.scene, h);
+  SceneGl g = start_scene_gl(who, o.scene, false, o.gl, o.width, o.height);
+  const Hierarchy& h = g.hierarchy();
 
   net::Listener listener = open_listener(who, o.listen);
   const ClusterConfig config;  // lockstep, incremental: what the render client expects by default
   const wire::Hello mine =
-      make_hello(wire::Role::switch_node, 0, {o.width, o.height}, ls.fingerprint, h.params(), config, who);
+      make_hello(wire::Role::switch_node, 0, {o.width, o.height}, g.fingerprint(), h.params(), config, who);
   auto peer = listener.accept_peer(mine, {wire::Role::render_client, std::nullopt}, net::Millis(o.timeout_ms));
   if (!peer) throw std::runtime_error("no render client: " + peer.error());
   net::Connection& rvg = peer->connection;
@@ -75,9 +73,8 @@ int serve(const ServerOptions& o) {
   CameraBuffer cameras;
   CameraReceiver cameras_in(rvg, cameras, {o.width, o.height});
   VisibleSet visible(uint32_t(h.size()));
-  const Renderables renderables(h, nullptr);
   // The switch's step without LODs or fronts: one server does every frame from the root.
-  const SwitchStep step(renderables, LodPolicy{}, false);
+  const SwitchStep step(*g.renderables, LodPolicy{}, false);
   DiffSender out(uint32_t(o.diff_chunk_ids), false, [&](const wire::Message& m) {
     if (auto err = rvg.send(m)) throw std::runtime_error("sending to the render client: " + *err);
   });
@@ -93,10 +90,10 @@ int serve(const ServerOptions& o) {
       }
       // Occluders: the previous visible set, depth only, then readback and the pyramid.
       const Clock::time_point or_start = Clock::now();
-      renderer.begin_frame(cam->camera, false);
+      g.renderer->begin_frame(cam->camera, false);
       std::vector<uint32_t> prev(visible.ids().begin(), visible.ids().end());
-      renderer.draw_items(items_of_nodes(h, prev), SceneRenderer::Mode::DepthOnly);
-      pyramid.build(ctx->read_depth(), o.width, o.height);
+      g.renderer->draw_items(items_of_nodes(h, prev), SceneRenderer::Mode::DepthOnly);
+      pyramid.build(g.ctx->read_depth(), o.width, o.height);
       const uint32_t or_us = micros_since(or_start);
       // Culling on the CPU, streamed like HC.
       out.send(to_wire(cam->number, cam->camera, {o.width, o.height}));
@@ -129,8 +126,7 @@ int main(int argc, char** argv) {
                  "Depth-readback occlusion server (the paper's \"Distributed GigaWalk\" baseline): renders the\n"
                  "previous visible set depth-only, reads the depth back, builds a software hierarchical Z\n"
                  "pyramid and culls the hierarchy on the CPU; a render_client with one --connect displays.");
-    occ::add_scene_options(cli, o.scene);
-    occ::add_view_options(cli, &o.width, &o.height, &o.gl, "must match the render client");
+    occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl, "must match the render client");
     occ::add_listen_options(cli, o.listen);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for the client or a camera");
