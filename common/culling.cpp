@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <queue>
 
 namespace occ {
 
@@ -58,18 +60,55 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
   const Frustum fr = cam.frustum();
   const double tau = sel.tau();
   const bool pixel_lod = o.visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
-  std::vector<uint32_t> out, level, next;
+  std::vector<uint32_t> out, accepted, batch;
+  // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
+  std::vector<uint32_t> next;
+  using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  const bool near_first = o.order == HcOrder::near_first;
+  auto push = [&](uint32_t id) {
+    if (near_first)
+      queue.emplace(h.node(id).box.distance2(cam.eye), id);
+    else
+      next.push_back(id);
+  };
   if (o.start.empty())
-    level.push_back(0);
+    push(0);
   else
-    level.assign(o.start.begin(), o.start.end());
+    for (uint32_t id : o.start) push(id);
+  uint32_t batch_size = std::max<uint32_t>(1, getenv("OCC_FB") ? atoi(getenv("OCC_FB")) : o.first_batch);
+  bool grow = true;
+  auto take_batch = [&] {
+    batch.clear();
+    if (!near_first) {
+      batch.swap(next);
+      return !batch.empty();
+    }
+    if (getenv("OCC_SHELL")) {
+      // A shell: the nearest box at distance d0, and every box within 2 d0 (at least a few, at
+      // most max_batch), so the next batch starts twice as far out.
+      const double limit2 = queue.empty() ? 0 : 4.0 * queue.top().first;
+      while (!queue.empty() && batch.size() < o.max_batch &&
+             (batch.size() < batch_size || queue.top().first <= limit2)) {
+        batch.push_back(queue.top().second);
+        queue.pop();
+      }
+      return !batch.empty();
+    }
+    while (!queue.empty() && batch.size() < batch_size) {
+      batch.push_back(queue.top().second);
+      queue.pop();
+    }
+    if (grow) batch_size = std::min<uint32_t>(batch_size * 2, std::max<uint32_t>(o.max_batch, 1));
+    return !batch.empty();
+  };
   constexpr uint64_t kNoQuery = ~uint64_t(0);
   std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
   std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples)
-  while (!level.empty()) {
+  while (take_batch()) {
     pending.clear();
     visible.clear();
-    for (uint32_t id : level) {
+    for (uint32_t id : batch) {
       const HNode& n = h.node(id);
       ++st.nodes_visited;
       if (n.item_count == 0) continue;
@@ -96,7 +135,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
         ++st.occluded;
     }
     q.end_batch();
-    next.clear();
+    accepted.clear();
     std::sort(visible.begin(), visible.end());
     for (auto [id, samples] : visible) {
       const HNode& n = h.node(id);
@@ -115,12 +154,14 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       }
       if (r != kNoNode) {
         out.push_back(r);
+        accepted.push_back(r);
         if (o.on_visible) o.on_visible(r);
       } else {
-        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) next.push_back(ch);
+        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
       }
     }
-    level.swap(next);
+    if (o.occluders && !accepted.empty()) o.occluders(accepted);
+    grow = !(o.occluders && !accepted.empty()) || getenv("OCC_GROW");
   }
   std::sort(out.begin(), out.end());
   return out;

@@ -91,6 +91,13 @@ struct LodPolicy {
   LodSelector selector(const Renderables& r, const Camera& cam) const { return {r, cam, viewport_height_px, tau}; }
 };
 
+// The order in which the traversal batches its queries.
+enum class HcOrder {
+  levels,      // breadth-first: a whole level of the hierarchy per batch (paper 4.7.1)
+  near_first,  // nearest boxes first: batches of growing size from a distance-ordered queue, so
+               // the near occluders found (and drawn, HcOptions::occluders) hide what follows
+};
+
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {
   bool visible_pixel_lod = false;
@@ -98,6 +105,13 @@ struct HcOptions {
   QuerySkipper* skipper = nullptr;       // adaptive queries (null: query every node)
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
+  HcOrder order = HcOrder::levels;
+  uint32_t first_batch = 32, max_batch = 1024;  // near_first: batch sizes (doubling)
+  // Occluder fusion: called after each batch with the renderables it accepted, before the next
+  // batch is issued; the caller draws them (depth only) into the buffer the queries test, so what
+  // was just found visible hides what lies behind it in the same frame. Real geometry only adds
+  // depth that is really there: the traversal stays conservative.
+  std::function<void(std::span<const uint32_t>)> occluders = nullptr;
 };
 
 // HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like

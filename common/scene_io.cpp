@@ -444,6 +444,24 @@ Scene hard_walls(int walls) {
   return s;
 }
 
+// hard:exit (layout in scene_io.hpp): a closed room and a dense field of cubes outside it.
+Scene hard_exit(int n) {
+  Scene s;
+  const uint32_t ground = add_mesh(s, Mesh{});
+  add_grid(s.meshes[ground], {-2, 0, float(-n - 2)}, {0, 0, float(2 * n + 8)}, {float(2 * n + 12), 0, 0}, 1, 1);
+  s.meshes[ground].name = "ground";
+  s.objects.push_back(Object{ground, glm::dmat4(1.0), "ground"});
+  place(s, add_mesh(s, box_mesh("room", {0, 0, 0}, {4, 3, 4})), {0, 0, 0}, "room");
+  const uint32_t cube = add_mesh(s, box_mesh("cube", {0, 0, 0}, {1.6f, 1, 1.6f}));
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k) {
+      const double height = 1.5 + 2.5 * double((i * 7 + k * 13) % 11) / 10.0;
+      place(s, cube, {6.0 + 2.0 * i, 0, 2.0 - n + 2.0 * k}, "cube " + std::to_string(i) + "," + std::to_string(k),
+            {1, height, 1});
+    }
+  return s;
+}
+
 // hard:span: parts from 1e-3 to 1e3 units on a bench, a tiny part behind a tiny plate, inside a
 // hall 1e5 wide (inward faces), with 1e4-unit pillars.
 Scene hard_span() {
@@ -674,12 +692,14 @@ Scene load_scene(const std::string& spec) {
     const std::string_view kind = f[1];
     if (kind == "walls" && f.size() <= 3) {
       scene = hard_walls(f.size() == 3 ? parse_int(spec, "walls", f[2], 1, 100) : 5);
+    } else if (kind == "exit" && f.size() <= 3) {
+      scene = hard_exit(f.size() == 3 ? parse_int(spec, "field", f[2], 2, 100) : 16);
     } else if (kind == "span" && f.size() == 2) {
       scene = hard_span();
     } else if (kind == "degenerate" && f.size() == 2) {
       scene = hard_degenerate();
     } else {
-      throw InputError("--scene '" + spec + "': unknown hard case; expected hard:walls[:N], hard:span or hard:degenerate");
+      throw InputError("--scene '" + spec + "': unknown hard case; expected hard:walls[:N], hard:exit[:N], hard:span or hard:degenerate");
     }
   } else if (spec.rfind("layout:", 0) == 0) {
     const auto f = split(3);
@@ -702,7 +722,7 @@ Scene load_scene(const std::string& spec) {
     throw InputError("--scene '" + spec +
                      "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
                      "(blocks, buildings per block side, max floors, detail), layout:NXxNZ:path.gltf|.glb, "
-                     "hard:walls[:N], hard:span, hard:degenerate or offset:DX,DY,DZ:<spec>");
+                     "hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate or offset:DX,DY,DZ:<spec>");
   }
   scene.source = spec;
   return scene;

@@ -47,6 +47,11 @@ Scene layout_grid(const Scene& asset, int nx, int nz, double gap);
 //                    degenerate triangles inside, two huge triangles (a 2e6 ground at y = 0 and a
 //                    backdrop in the plane x = 300), a wall at x = 20..20.2 and a 12x12 field of
 //                    2e-3 cubes (sub-pixel) at x = 25..47 behind and beside it
+//   hard:exit[:N]    a closed 4 m room (0..4 in x and z, y 0..3, every face, the eye can stand in
+//                    it), and in front of its +x face an N x N field (default 16, 2..100) of cubes
+//                    1.6 m wide and 1.5..4 m tall on a 2 m grid from x = 6, z = 2 - N: the eye
+//                    walking out of the room through its wall (the occlusion switch's worst case:
+//                    nothing it saw last frame hides the field)
 // Throws InputError for unknown specs and bad numbers.
 Scene load_scene(const std::string& spec);
 

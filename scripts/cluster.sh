@@ -9,7 +9,7 @@
 # --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N) and node-only ones
-# (--diff-chunk B, --adaptive-queries on|off), which go where they belong. OCC_BIN overrides the binaries' folder;
+# (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
@@ -36,7 +36,7 @@ while [ $# -gt 0 ]; do
     --netns) netns=1; shift ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --lookahead) rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries) node_only+=("$1" "$2"); shift 2 ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion) node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
     -h|--help) sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --*) [ $# -ge 2 ] || { echo "error: $1 needs a value" >&2; exit 2; }

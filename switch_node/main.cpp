@@ -18,8 +18,7 @@ int main(int argc, char** argv) {
     cli.option("peer", &o.peer, "HOST:PORT", "node 1 only: switch node 0's address");
     occ::add_cluster_options(cli, o.config);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
-    cli.on_off("adaptive-queries", &o.adaptive_queries,
-               "assume nodes whose queries keep coming back visible visible for a while (no query)");
+    occ::add_hc_options(cli, o.hc);
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer, a camera or a message");
     if (!cli.parse(argc, argv)) return 0;
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");

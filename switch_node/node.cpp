@@ -46,7 +46,7 @@ class SwitchNode {
 
   int run() {
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
-    if (o_.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
+    if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
     step_.emplace(*g_.renderables, o_.config, o_.height);
     querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
     connect();
@@ -138,7 +138,8 @@ class SwitchNode {
       last_camera = cam->number;
       const Clock::time_point or_start = Clock::now();
       g_.renderer->begin_frame(cam->camera, false);
-      std::vector<uint8_t> drawn(g_.renderables->count(), 0);
+      std::vector<uint8_t>& drawn = drawn_;  // what this frame's depth buffer holds
+      drawn.assign(g_.renderables->count(), 0);
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
       std::sort(ids.begin(), ids.end());
       for (uint32_t id : ids) drawn[id] = 1;
@@ -222,8 +223,21 @@ class SwitchNode {
 
   void hc_frame(uint32_t frame, const Camera& cam, VisibleSet& visible, uint32_t or_us, Clock::time_point hc_start) {
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_both(m); });
+    HcLocal local{skipper_ ? &*skipper_ : nullptr, o_.hc.order, nullptr};
+    if (o_.hc.occluder_fusion)
+      local.occluders = [&](std::span<const uint32_t> found) {
+        std::vector<uint32_t> fresh;
+        for (uint32_t id : found)
+          if (!drawn_[id]) {
+            drawn_[id] = 1;
+            fresh.push_back(id);
+          }
+        if (fresh.empty()) return;
+        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
+        querier_->begin(cam);  // the renderer changed the GL state the queries need
+      };
     querier_->begin(cam);
-    HcFrame hc = step_->hc(frame, visible, cam, *querier_, skipper_ ? &*skipper_ : nullptr, out);
+    HcFrame hc = step_->hc(frame, visible, cam, *querier_, local, out);
     querier_->end();
     hc.eof.or_us = or_us;
     hc.eof.hc_us = micros_since(hc_start);
@@ -258,6 +272,7 @@ class SwitchNode {
   CameraBuffer cameras_;
   std::optional<CameraReceiver> cameras_in_;
   std::optional<SwitchStep> step_;
+  std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
   uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
 };

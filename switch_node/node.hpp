@@ -21,7 +21,7 @@ struct NodeOptions {
   ListenOptions listen;
   std::string peer;  // node 1: where node 0 listens
   int diff_chunk_ids = 100;
-  bool adaptive_queries = true;  // skip queries of nodes that keep coming back visible
+  HcChoices hc;
   int timeout_ms = 30000;
 };
 

@@ -227,7 +227,7 @@ TEST(FrontCull, FrontTrackedTraversalEqualsFreshTraversal) {
       CullStats fresh_st;
       auto fresh = hardware_cull_lod(w.h, cam, q, sel, {.stats = &fresh_st});
       stream.clear();
-      const HcFrame hc = hc_step.hc(f, visible, cam, q, nullptr, out);
+      const HcFrame hc = hc_step.hc(f, visible, cam, q, {}, out);
       std::vector<uint32_t> tracked(visible.ids().begin(), visible.ids().end());
       std::sort(tracked.begin(), tracked.end());
       ASSERT_EQ(tracked, fresh) << "tau " << tau << " frame " << f;

@@ -86,6 +86,15 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
              "HC starts from the previous frame's fronts (paper 4.6) instead of the root");
 }
 
+void add_hc_options(Cli& cli, HcChoices& c) {
+  cli.on_off("adaptive-queries", &c.adaptive_queries,
+             "assume nodes whose queries keep coming back visible visible for a while (no query)");
+  cli.choice<HcOrder>("hc-order", &c.order, {{"levels", HcOrder::levels}, {"near-first", HcOrder::near_first}},
+                      "HC query batches: a hierarchy level each, or nearest boxes first in growing batches");
+  cli.on_off("occluder-fusion", &c.occluder_fusion,
+             "HC draws (depth only) what each batch found visible before the next batch's queries");
+}
+
 void add_listen_options(Cli& cli, ListenOptions& o) {
   cli.option("listen", &o.listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
   cli.option("port", &o.port, -1, 65535,

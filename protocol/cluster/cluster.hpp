@@ -50,6 +50,15 @@ struct ClusterConfig {
   uint64_t hash() const;
 };
 
+// How a culling node runs HC (switch_step.hpp HcLocal): node-local, not in the config hash.
+struct HcChoices {
+  bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
+  HcOrder order = HcOrder::levels;
+  bool occluder_fusion = false;    // draw what each batch found visible before the next batch
+};
+// --adaptive-queries, --hc-order, --occluder-fusion.
+void add_hc_options(Cli& cli, HcChoices& c);
+
 // The Hello every process sends: who it is and everything that must agree between processes.
 wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
                        const BuildParams& build, const ClusterConfig& config, const std::string& name);

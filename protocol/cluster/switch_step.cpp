@@ -30,7 +30,7 @@ uint64_t SwitchStep::coarsen(VisibleSet& visible, const Camera& cam) const {
 }
 
 HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q,
-                       QuerySkipper* skipper, DiffSender& out) const {
+                       const HcLocal& local, DiffSender& out) const {
   const Hierarchy& h = r_.hierarchy();
   HcFrame result;
   const uint64_t fhash = coarsen(visible, cam);
@@ -50,9 +50,11 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
       hardware_cull_lod(h, cam, q, sel,
                         {.visible_pixel_lod = lod_.visible_pixel_lod,
                          .start = start,
-                         .skipper = skipper,
+                         .skipper = local.skipper,
                          .on_visible = [&](uint32_t id) { out.visible(id); },
-                         .stats = &result.stats});
+                         .stats = &result.stats,
+                         .order = local.order,
+                         .occluders = local.occluders});
   VisibleSet cur(visible.id_limit());
   for (uint32_t id : found) cur.insert(id);
   result.eof = out.end(cur);

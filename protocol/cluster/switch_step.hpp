@@ -20,6 +20,16 @@
 
 namespace occ {
 
+// HC's node-local choices: how V_f is found, never what it must contain (adaptive queries and
+// occluder fusion only change which nodes are queried and what the queries see; the set stays a
+// conservative superset of the visible one). They need not agree between processes.
+struct HcLocal {
+  QuerySkipper* skipper = nullptr;  // adaptive queries
+  HcOrder order = HcOrder::levels;
+  // Occluder fusion (HcOptions::occluders): draws the renderables a batch accepted, depth only.
+  std::function<void(std::span<const uint32_t>)> occluders = nullptr;
+};
+
 struct HcFrame {
   wire::EndOfFrame eof;  // set fields, front_hash, queries and triangles; the caller adds times
   CullStats stats;
@@ -42,7 +52,7 @@ class SwitchStep {
 
   // HC(f) on V_{f-1}: coarsens it (above), starts from its fronts (or the root), queries, streams
   // the diff through `out` and leaves V_f in `visible`. Returns EndOfFrame(f), not yet sent.
-  HcFrame hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q, QuerySkipper* skipper,
+  HcFrame hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q, const HcLocal& local,
              DiffSender& out) const;
 
  private:

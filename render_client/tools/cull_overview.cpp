@@ -43,7 +43,8 @@ struct Options {
   double reach = 0.3;  // overview: frames at most this fraction of the scene diagonal around the focus
   double cut = -1;  // section cut height above the eye (< 0: auto)
   GlBackend gl = GlBackend::Auto;
-  bool front_tracking = true, adaptive_queries = true;  // as the switch nodes' flags
+  bool front_tracking = true;  // as the switch nodes' flags
+  HcChoices hc;
 };
 
 enum Category : uint8_t { kNone = 0, kVisible = 1, kFrustum = 2, kOccluded = 3 };
@@ -65,7 +66,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   config.front_tracking = o.front_tracking;
   const SwitchStep step(renderables, config, o.height);
   std::vector<QuerySkipper> skippers;  // one per switch node: node f % 2 does HC(f)
-  if (o.adaptive_queries) skippers.assign(2, QuerySkipper(h.size()));
+  if (o.hc.adaptive_queries) skippers.assign(2, QuerySkipper(h.size()));
   DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
   VisibleSet visible(renderables.count());  // V_{f-1}
   std::vector<uint32_t> before;             // V_{f-2} (sorted)
@@ -76,9 +77,20 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     std::set_union(before.begin(), before.end(), prev.begin(), prev.end(), std::back_inserter(occluders));
     renderer.begin_frame(path[f], false);
     renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
-    // HC(f).
+    // HC(f), with the node's choices (occluder fusion draws what it finds that OR did not).
+    std::vector<uint8_t> drawn(h.size(), 0);
+    for (uint32_t id : occluders) drawn[id] = 1;
+    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], o.hc.order, nullptr};
+    if (o.hc.occluder_fusion)
+      local.occluders = [&](std::span<const uint32_t> found) {
+        std::vector<uint32_t> fresh;
+        for (uint32_t id : found)
+          if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
+        renderer.draw_items(items_of_nodes(h, fresh), SceneRenderer::Mode::DepthOnly);
+        querier.begin(path[f]);
+      };
     querier.begin(path[f]);
-    HcFrame hc = step.hc(f, visible, path[f], querier, skippers.empty() ? nullptr : &skippers[f % 2], nowhere);
+    HcFrame hc = step.hc(f, visible, path[f], querier, local, nowhere);
     querier.end();
     before = std::move(prev);
     last_stats = hc.stats;
@@ -451,7 +463,7 @@ int main(int argc, char** argv) {
                "overview: leave out leaves starting this far above the eye (-1: auto, cut at a ceiling "
                "right above the eye)");
     cli.on_off("front-tracking", &o.front_tracking, "as the switch nodes' --front-tracking");
-    cli.on_off("adaptive-queries", &o.adaptive_queries, "as the switch nodes' --adaptive-queries");
+    occ::add_hc_options(cli, o.hc);
     if (!cli.parse(argc, argv)) return 0;
     return occ::run(o);
   });

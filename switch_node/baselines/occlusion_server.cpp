@@ -99,7 +99,7 @@ int serve(const ServerOptions& o) {
       out.send(to_wire(cam->number, cam->camera, {o.width, o.height}));
       const Clock::time_point hc_start = Clock::now();
       PyramidQueries queries(pyramid, cam->camera);
-      HcFrame hc = step.hc(frame, visible, cam->camera, queries, nullptr, out);  // queries: boxes tested
+      HcFrame hc = step.hc(frame, visible, cam->camera, queries, {}, out);  // queries: boxes tested
       hc.eof.or_us = or_us;
       hc.eof.hc_us = micros_since(hc_start);
       out.send(hc.eof);
