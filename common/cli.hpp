@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,5 +43,9 @@ class Cli {
 
 // Runs body(); InputError -> "error: <what>" exit 2, other exceptions -> "error: <what>" exit 1.
 int run_main(const std::function<int()>& body);
+
+// The whole of `text` as a finite number (std::stod syntax: leading white space allowed, nothing
+// after the number); nullopt for anything else (empty, junk after it, out of range, inf, nan).
+std::optional<double> parse_finite(const std::string& text);
 
 }  // namespace occ
