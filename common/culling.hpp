@@ -10,7 +10,7 @@
 
 #include "common/camera.hpp"
 #include "common/hierarchy.hpp"
-#include "common/lod.hpp"
+#include "common/lod_select.hpp"
 
 namespace occ {
 

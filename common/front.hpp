@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "common/hierarchy.hpp"
-#include "common/lod.hpp"
+#include "common/lod_select.hpp"
 #include "common/math.hpp"
 
 namespace occ {
