@@ -88,7 +88,7 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
 // tau; leaves always, at sel.leaf_level()), or, with visible_pixel_lod and tau > 0, when its query
 // saw fewer than tau samples (then at its coarsest representation); other visible interior nodes
 // are refined. The first batch is `start` (the fronts, occluded first; empty = the root).
-// on_visible gets each accepted renderable id (lod.hpp) as its batch resolves. Returns the
+// on_visible gets each accepted renderable id (lod_select.hpp) as its batch resolves. Returns the
 // renderables, ascending. With tau = 0 it returns exactly hardware_cull's leaves.
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, bool visible_pixel_lod,

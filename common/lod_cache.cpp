@@ -4,40 +4,28 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <vector>
 
 #include "common/hash.hpp"
 #include "common/progress.hpp"
 
 namespace occ {
 
+// ---- Serialisation: header (magic, version, key, payload bytes, payload hash) + payload.
+
 namespace {
 
 // Bump whenever the builder (lod_build.cpp, lod_simplify.cpp) changes its output.
 constexpr uint32_t kCacheVersion = 2;
 constexpr char kCacheMagic[8] = {'O', 'C', 'C', 'L', 'O', 'D', '\r', '\n'};
-
-}  // namespace
-
-uint64_t LodData::cache_key(const Hierarchy& h, const LodParams& p) {
-  Hasher k;
-  k.u32(kCacheVersion);
-  k.u64(h.fingerprint());
-  k.f32(p.level_ratio);
-  k.f32(p.hlod_ratio);
-  k.u32(p.min_triangles);
-  k.u32(kLeafLodLevels);
-  return k.value();
-}
-
-// ---- Serialisation: header (magic, version, key, payload bytes, payload hash) + payload.
-
-namespace {
 
 class Writer {
  public:
@@ -127,6 +115,17 @@ std::vector<uint8_t> serialize(const std::vector<LodMesh>& clusters, const std::
 }
 
 }  // namespace
+
+uint64_t LodData::cache_key(const Hierarchy& h, const LodParams& p) {
+  Hasher k;
+  k.u32(kCacheVersion);
+  k.u64(h.fingerprint());
+  k.f32(p.level_ratio);
+  k.f32(p.hlod_ratio);
+  k.u32(p.min_triangles);
+  k.u32(kLeafLodLevels);
+  return k.value();
+}
 
 void LodData::finish_hash() {
   hash_ = payload_hash(serialize(cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_));

@@ -1,7 +1,7 @@
 // The LOD cache file: where it lives and load-or-build. The format (lod_cache.cpp): a header
 // (magic "OCCLOD\r\n", format version, LodData::cache_key, payload bytes, payload hash) and the
-// payload (every LodMesh and table of LodData, raw little-endian). LodData::save/load read and
-// write it (lod_data.hpp). No GL.
+// payload (every LodMesh and table of LodData, copied in host byte order; its hash is
+// LodData::hash()). LodData::save/load write and read it (lod_data.hpp). No GL.
 #pragma once
 #include <string>
 
