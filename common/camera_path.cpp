@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "common/cli.hpp"
 #include "common/error.hpp"
 
 namespace occ {
@@ -64,19 +65,15 @@ std::vector<Camera> generated(const std::string& spec, const std::string& kind, 
   return path;
 }
 
+// A cell: a finite number, white space allowed around it.
 double parse_field(const std::string& file, int line, const char* column, const std::string& text) {
-  size_t used = 0;
-  double v = NAN;
-  try {
-    v = std::stod(text, &used);
-  } catch (...) {
-    used = 0;
-  }
-  while (used < text.size() && std::isspace(static_cast<unsigned char>(text[used]))) ++used;
-  if (used == 0 || used != text.size() || !std::isfinite(v))
+  size_t end = text.size();
+  while (end > 0 && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
+  const std::optional<double> v = parse_finite(text.substr(0, end));
+  if (!v)
     throw InputError(file + ": line " + std::to_string(line) + ": column " + column + ": '" +
                      text + "' is not a finite number");
-  return v;
+  return *v;
 }
 
 std::vector<Camera> from_csv(const std::string& file, const Aabb& b, const Viewport& vp) {

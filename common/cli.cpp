@@ -53,15 +53,9 @@ void Cli::option(const std::string& name, double* out, double min, double max, c
   def << *out;
   opts_.push_back({name, "X", help, true,
                    [=](const std::string& v) {
-                     size_t used = 0;
-                     double x = NAN;
-                     try {
-                       x = std::stod(v, &used);
-                     } catch (...) {
-                       used = 0;
-                     }
-                     if (used == 0 || used != v.size() || !std::isfinite(x))
-                       throw InputError("--" + name + " '" + v + "': not a finite number");
+                     const std::optional<double> parsed = parse_finite(v);
+                     if (!parsed) throw InputError("--" + name + " '" + v + "': not a finite number");
+                     const double x = *parsed;
                      if (x < min || x > max) {
                        std::ostringstream r;
                        r << "--" << name << " '" << v << "': must be in [" << min << ", " << max << "]";
@@ -70,6 +64,18 @@ void Cli::option(const std::string& name, double* out, double min, double max, c
                      *out = x;
                    },
                    def.str()});
+}
+
+std::optional<double> parse_finite(const std::string& text) {
+  size_t used = 0;
+  double v = NAN;
+  try {
+    v = std::stod(text, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
 }
 
 void Cli::word_option(const std::string& name, const std::vector<std::string>& words, const std::string& default_word,

@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,5 +64,9 @@ void Cli::choice(const std::string& name, T* out, std::vector<std::pair<std::str
 
 // Runs body(); InputError -> "error: <what>" exit 2, other exceptions -> "error: <what>" exit 1.
 int run_main(const std::function<int()>& body);
+
+// The whole of `text` as a finite number (std::stod syntax: leading white space allowed, nothing
+// after the number); nullopt for anything else (empty, junk after it, out of range, inf, nan).
+std::optional<double> parse_finite(const std::string& text);
 
 }  // namespace occ

@@ -10,7 +10,7 @@
 
 #include "common/camera.hpp"
 #include "common/hierarchy.hpp"
-#include "common/lod.hpp"
+#include "common/lod_select.hpp"
 
 namespace occ {
 
@@ -118,9 +118,9 @@ struct HcOptions {
 // hardware_cull, but a visible node is accepted when sel.satisfies() it (interior: its HLOD meets
 // tau; leaves always, at sel.leaf_level()), or, with visible_pixel_lod and tau > 0, when its query
 // saw fewer than tau samples (then at its coarsest representation); other visible interior nodes
-// are refined. The first batch is o.start. on_visible gets each accepted renderable id (lod.hpp)
-// as its batch resolves. Returns the renderables, ascending. With tau = 0 it returns exactly
-// hardware_cull's leaves.
+// are refined. The first batch is o.start. on_visible gets each accepted renderable id
+// (lod_select.hpp) as its batch resolves. Returns the renderables, ascending. With tau = 0 it
+// returns exactly hardware_cull's leaves.
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, const HcOptions& o = {});
 

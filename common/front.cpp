@@ -122,18 +122,12 @@ std::vector<uint32_t> derive_occluded_front(const Hierarchy& h, std::span<const 
 }
 
 uint64_t front_hash(std::span<const uint32_t> ids) {
-  // Same construction as protocol's set_hash (order-independent), kept here so common/ does not
-  // depend on protocol/.
-  uint64_t sum = 0, x = 0;
-  for (uint32_t id : ids) {
-    const uint64_t m = mix64(uint64_t(id) + 0x9e3779b97f4a7c15ULL);
-    sum += m;
-    x ^= m;
-  }
+  IdSetSums s;
+  for (uint32_t id : ids) s.add(id);
   Hasher h;
   h.u64(ids.size());
-  h.u64(sum);
-  h.u64(x);
+  h.u64(s.sum);
+  h.u64(s.x);
   return h.value();
 }
 

@@ -12,8 +12,9 @@
 //      -> the coarser of (their level, the level the error allows). Never refines: under-refined
 //      nodes stay, because only HC can decide what replaces them (queries, and visible-pixel LOD,
 //      4.7.2, which deliberately keeps under-refined nodes with few visible pixels). The diff of
-//      frame f is relative to V', EndOfFrame.front_hash = set_hash(V') checks that all three
-//      coarsened identically, set_hash(V_f) checks the result.
+//      frame f is relative to V', EndOfFrame.front_hash = front_hash(V') (below; not set_hash)
+//      checks that all three coarsened identically, EndOfFrame.set_hash = set_hash(V_f) checks
+//      the result.
 //   2. HC only: occluded front = derive_occluded_front(nodes of V') — the coarsest complement of
 //      the visible front (every node not inside, above or equal to a visible node, whose parent
 //      is above one). It needs no extra state, so it is the same whichever switch node did HC(f-1).
@@ -27,7 +28,7 @@
 #include <vector>
 
 #include "common/hierarchy.hpp"
-#include "common/lod.hpp"
+#include "common/lod_select.hpp"
 #include "common/math.hpp"
 
 namespace occ {
@@ -57,7 +58,9 @@ std::vector<uint32_t> nodes_of(const Renderables& r, std::span<const uint32_t> r
 std::vector<uint32_t> derive_occluded_front(const Hierarchy& h, std::span<const uint32_t> visible_nodes,
                                             std::vector<uint32_t>* ancestors = nullptr);
 
-// 64-bit hash of a front (order-independent), = set_hash of the ids.
+// 64-bit order-independent hash of a front (distinct ids). Not set_hash: the same IdSetSums
+// (common/hash.hpp) as protocol's set_hash, but finalised by a Hasher over (count, sum, xor), so
+// the value differs from set_hash of the same ids. Compare it only with other front_hash values.
 uint64_t front_hash(std::span<const uint32_t> ids);
 
 }  // namespace occ

@@ -1,9 +1,12 @@
-// Small deterministic 64-bit hashing used for scene fingerprints and content hashes.
-// Not cryptographic; stable across processes and builds (no std::hash).
+// Small deterministic 64-bit hashing used for scene fingerprints, content hashes and the id-set
+// hashes (protocol's set_hash, front_hash), and the one hex formatter for printing them.
+// Not cryptographic; stable across processes and builds (no std::hash). Header-only: protocol/
+// uses it without linking occ_common.
 #pragma once
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <string_view>
 
 namespace occ {
@@ -15,6 +18,32 @@ inline uint64_t mix64(uint64_t x) {  // splitmix64 finaliser
   x *= 0x94d049bb133111ebULL;
   x ^= x >> 31;
   return x;
+}
+
+// Order-independent sums over a set of distinct ids: each id's term (a mix64 of the id) added
+// and xor-ed in; remove() undoes add(). protocol's set_hash and front_hash (front.hpp) are both
+// built on them and differ only in how they finalise (sum, xor, count).
+struct IdSetSums {
+  uint64_t sum = 0, x = 0;
+  static uint64_t term(uint32_t id) { return mix64(id + 0x9e3779b97f4a7c15ULL); }
+  void add(uint32_t id) {
+    const uint64_t e = term(id);
+    sum += e;
+    x ^= e;
+  }
+  void remove(uint32_t id) {
+    const uint64_t e = term(id);
+    sum -= e;
+    x ^= e;
+  }
+};
+
+// "0x" and the low `digits` hexadecimal digits of v, lowercase and zero-padded: hex(v) gives all
+// 16, hex(0x0a, 2) = "0x0a". For error messages and logs.
+inline std::string hex(uint64_t v, int digits = 16) {
+  std::string s = "0x";
+  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
+  return s;
 }
 
 class Hasher {

@@ -15,7 +15,7 @@ struct SceneOptions {
   std::string spec = "city";
   BuildParams build;
   LodParams lod;
-  std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod.hpp)
+  std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod_cache.hpp)
 };
 
 void add_scene_options(Cli& cli, SceneOptions& opts);

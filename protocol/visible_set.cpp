@@ -3,39 +3,22 @@
 #include <bit>
 #include <stdexcept>
 
+#include "common/hash.hpp"
+
 namespace occ {
 namespace {
 
-uint64_t mix64(uint64_t x) {  // splitmix64 finaliser
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  x ^= x >> 31;
-  return x;
-}
-uint64_t element_hash(uint32_t id) { return mix64(id + 0x9e3779b97f4a7c15ULL); }
-uint64_t finish(uint64_t sum, uint64_t x, uint64_t count) {
-  return mix64(sum ^ std::rotl(x, 29) ^ (count * 0xd6e8feb86659fd93ULL));
-}
-
-std::string hex(uint64_t v) {
-  std::string s = "0x";
-  for (int shift = 60; shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
-  return s;
+uint64_t finish(const IdSetSums& s, uint64_t count) {
+  return mix64(s.sum ^ std::rotl(s.x, 29) ^ (count * 0xd6e8feb86659fd93ULL));
 }
 std::string frame_prefix(uint32_t frame) { return "frame " + std::to_string(frame) + ": "; }
 
 }  // namespace
 
 uint64_t set_hash(std::span<const uint32_t> ids) {
-  uint64_t sum = 0, x = 0;
-  for (uint32_t id : ids) {
-    const uint64_t e = element_hash(id);
-    sum += e;
-    x ^= e;
-  }
-  return finish(sum, x, ids.size());
+  IdSetSums s;
+  for (uint32_t id : ids) s.add(id);
+  return finish(s, ids.size());
 }
 
 VisibleSet::VisibleSet(uint32_t id_limit) : slot_(id_limit, 0) {}
@@ -47,9 +30,7 @@ bool VisibleSet::insert(uint32_t id) {
   if (slot_[id] != 0) return false;
   ids_.push_back(id);
   slot_[id] = static_cast<uint32_t>(ids_.size());
-  const uint64_t e = element_hash(id);
-  sum_ += e;
-  xor_ ^= e;
+  sums_.add(id);
   return true;
 }
 
@@ -61,19 +42,17 @@ bool VisibleSet::erase(uint32_t id) {
   slot_[last] = pos + 1;
   ids_.pop_back();
   slot_[id] = 0;
-  const uint64_t e = element_hash(id);
-  sum_ -= e;
-  xor_ ^= e;
+  sums_.remove(id);
   return true;
 }
 
 void VisibleSet::clear() {
   for (uint32_t id : ids_) slot_[id] = 0;
   ids_.clear();
-  sum_ = xor_ = 0;
+  sums_ = {};
 }
 
-uint64_t VisibleSet::hash() const { return finish(sum_, xor_, ids_.size()); }
+uint64_t VisibleSet::hash() const { return finish(sums_, ids_.size()); }
 
 bool VisibleSet::operator==(const VisibleSet& other) const {
   if (size() != other.size()) return false;

@@ -13,12 +13,13 @@
 #include <string>
 #include <vector>
 
+#include "common/hash.hpp"
 #include "protocol/wire.hpp"
 
 namespace occ {
 
-// Order-independent 64-bit hash of a set of distinct ids (sum and xor of a 64-bit mix of each
-// id, with the count, finalised). Identical on every process and build.
+// Order-independent 64-bit hash of a set of distinct ids (IdSetSums of the ids, common/hash.hpp,
+// finalised with the count). Identical on every process and build.
 uint64_t set_hash(std::span<const uint32_t> ids);
 
 // A set of node ids in [0, id_limit) (id_limit = hierarchy node count). Memory: 4 bytes per
@@ -45,7 +46,7 @@ class VisibleSet {
  private:
   std::vector<uint32_t> ids_;
   std::vector<uint32_t> slot_;  // slot_[id] = 1 + position in ids_, 0 = absent
-  uint64_t sum_ = 0, xor_ = 0;
+  IdSetSums sums_;
 };
 
 struct SetDiff {

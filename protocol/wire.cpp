@@ -6,6 +6,9 @@
 #include <cmath>
 #include <concepts>
 #include <stdexcept>
+#include <type_traits>
+
+#include "common/hash.hpp"
 
 namespace occ::wire {
 namespace {
@@ -20,12 +23,6 @@ std::string num(double v) {
 template <std::integral T>
 std::string num(T v) {
   return std::to_string(v);
-}
-std::string hex(uint64_t v, int digits = 16) {
-  std::string s = "0x";
-  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4)
-    s += "0123456789abcdef"[(v >> shift) & 0xf];
-  return s;
 }
 
 // ---- little-endian writer / reader ----
@@ -42,10 +39,28 @@ class Writer {
     u16(static_cast<uint16_t>(s.size()));
     out_.insert(out_.end(), s.begin(), s.end());
   }
+  // Writes a field list (see "field lists" below), each value at the width of its type.
+  template <class... T>
+  void operator()(const T&... v) {
+    (field(v), ...);
+  }
 
  private:
   void le(uint64_t v, int n) {
     for (int i = 0; i < n; ++i) out_.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  }
+  template <class T>
+  void field(const T& v) {
+    if constexpr (std::is_enum_v<T>)
+      field(static_cast<std::underlying_type_t<T>>(v));
+    else if constexpr (std::is_array_v<T>)
+      for (const auto& e : v) field(e);
+    else if constexpr (std::is_same_v<T, double>)
+      f64(v);
+    else {
+      static_assert(std::is_unsigned_v<T>);
+      le(v, sizeof(T));
+    }
   }
   std::vector<uint8_t>& out_;
 };
@@ -69,6 +84,11 @@ class Reader {
     out.resize(n);
     for (auto& id : out) id = u32();
   }
+  // Reads a field list (see "field lists" below) into its members.
+  template <class... T>
+  void operator()(T&... v) {
+    (field(v), ...);
+  }
 
  private:
   uint64_t le(int n) {
@@ -76,6 +96,21 @@ class Reader {
     for (int i = 0; i < n; ++i) v |= uint64_t(b_[pos_ + i]) << (8 * i);
     pos_ += n;
     return v;
+  }
+  template <class T>
+  void field(T& v) {
+    if constexpr (std::is_enum_v<T>) {
+      std::underlying_type_t<T> u;
+      field(u);
+      v = static_cast<T>(u);
+    } else if constexpr (std::is_array_v<T>) {
+      for (auto& e : v) field(e);
+    } else if constexpr (std::is_same_v<T, double>) {
+      v = f64();
+    } else {
+      static_assert(std::is_unsigned_v<T>);
+      v = static_cast<T>(le(sizeof(T)));
+    }
   }
   std::span<const uint8_t> b_;
   size_t pos_ = 0;
@@ -88,6 +123,43 @@ constexpr uint32_t kCameraBytes = 100;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
 constexpr uint32_t kEndOfFrameBytes = 52;
 constexpr uint32_t kByeFixedBytes = 2;
+
+// ---- field lists: the fixed-width fields of a message in wire order (the tables in wire.hpp).
+// One list serves both directions: called with a Writer it encodes `m`, with a Reader it decodes
+// into `m`. A field's width is its type's (enums: the underlying type, arrays: each element).
+
+// Hello between version and name_bytes.
+constexpr void hello_fields(auto& io, auto& m) {
+  io(m.role, m.node_id, m.viewport_width_px, m.viewport_height_px, m.scene_fingerprint, m.arity,
+     m.leaf_items, m.cluster_triangles, m.config_hash);
+}
+constexpr void camera_fields(auto& io, auto& m) {
+  io(m.frame, m.eye, m.orientation, m.fovy_rad, m.aspect, m.near_dist, m.far_dist,
+     m.viewport_width_px, m.viewport_height_px);
+}
+constexpr void end_of_frame_fields(auto& io, auto& m) {
+  io(m.frame, m.total_added, m.total_removed, m.visible_count, m.set_hash, m.front_hash,
+     m.queries, m.hc_us, m.or_us, m.triangles);
+}
+
+// The lists add up to the sizes above.
+struct ByteCount {
+  uint32_t bytes = 0;
+  template <class... T>
+  constexpr void operator()(const T&... v) {
+    ((bytes += sizeof(v)), ...);
+  }
+};
+template <class M>
+constexpr uint32_t list_bytes(void (*list)(ByteCount&, M&)) {
+  ByteCount c;
+  M m{};
+  list(c, m);
+  return c.bytes;
+}
+static_assert(list_bytes<Hello>(hello_fields) == kHelloFixedBytes - 4 - 2 - 2);  // magic, version, name_bytes
+static_assert(list_bytes<Camera>(camera_fields) == kCameraBytes);
+static_assert(list_bytes<EndOfFrame>(end_of_frame_fields) == kEndOfFrameBytes);
 
 struct Bounds {
   uint32_t min_bytes, max_bytes;
@@ -222,29 +294,11 @@ std::optional<std::string> check(const Bye& m) {
 void put(Writer& w, const Hello& m) {
   w.u32(kMagic);
   w.u16(kProtocolVersion);
-  w.u8(static_cast<uint8_t>(m.role));
-  w.u8(m.node_id);
-  w.u32(m.viewport_width_px);
-  w.u32(m.viewport_height_px);
-  w.u64(m.scene_fingerprint);
-  w.u32(m.arity);
-  w.u32(m.leaf_items);
-  w.u32(m.cluster_triangles);
-  w.u64(m.config_hash);
+  hello_fields(w, m);
   w.str(m.name);
 }
 
-void put(Writer& w, const Camera& m) {
-  w.u32(m.frame);
-  for (double v : m.eye) w.f64(v);
-  for (double v : m.orientation) w.f64(v);
-  w.f64(m.fovy_rad);
-  w.f64(m.aspect);
-  w.f64(m.near_dist);
-  w.f64(m.far_dist);
-  w.u32(m.viewport_width_px);
-  w.u32(m.viewport_height_px);
-}
+void put(Writer& w, const Camera& m) { camera_fields(w, m); }
 
 void put(Writer& w, const NodeDiff& m) {
   w.u32(m.frame);
@@ -254,18 +308,7 @@ void put(Writer& w, const NodeDiff& m) {
   for (uint32_t id : m.removed) w.u32(id);
 }
 
-void put(Writer& w, const EndOfFrame& m) {
-  w.u32(m.frame);
-  w.u32(m.total_added);
-  w.u32(m.total_removed);
-  w.u32(m.visible_count);
-  w.u64(m.set_hash);
-  w.u64(m.front_hash);
-  w.u32(m.queries);
-  w.u32(m.hc_us);
-  w.u32(m.or_us);
-  w.u64(m.triangles);
-}
+void put(Writer& w, const EndOfFrame& m) { end_of_frame_fields(w, m); }
 
 void put(Writer& w, const Bye& m) { w.str(m.reason); }
 
@@ -287,32 +330,18 @@ Result<Message> get_hello(Reader& r) {
     return Error{"unsupported protocol version " + num(version) + " (this build speaks " +
                  num(kProtocolVersion) + ")"};
   Hello m;
-  m.role = static_cast<Role>(r.u8());
-  m.node_id = r.u8();
-  m.viewport_width_px = r.u32();
-  m.viewport_height_px = r.u32();
-  m.scene_fingerprint = r.u64();
-  m.arity = r.u32();
-  m.leaf_items = r.u32();
-  m.cluster_triangles = r.u32();
-  m.config_hash = r.u64();
+  hello_fields(r, m);
   auto name = get_str(r, "name");
   if (!name) return Error{name.error()};
   m.name = std::move(*name);
   return Message{std::move(m)};
 }
 
-Result<Message> get_camera(Reader& r) {
-  Camera m;
-  m.frame = r.u32();
-  for (double& v : m.eye) v = r.f64();
-  for (double& v : m.orientation) v = r.f64();
-  m.fovy_rad = r.f64();
-  m.aspect = r.f64();
-  m.near_dist = r.f64();
-  m.far_dist = r.f64();
-  m.viewport_width_px = r.u32();
-  m.viewport_height_px = r.u32();
+// Camera, EndOfFrame: a message that is its field list and nothing else.
+template <class M>
+Result<Message> get_fields(Reader& r, void (*fields)(Reader&, M&)) {
+  M m;
+  fields(r, m);
   return Message{m};
 }
 
@@ -327,21 +356,6 @@ Result<Message> get_node_diff(Reader& r) {
   r.ids(m.added, added);
   r.ids(m.removed, removed);
   return Message{std::move(m)};
-}
-
-Result<Message> get_end_of_frame(Reader& r) {
-  EndOfFrame m;
-  m.frame = r.u32();
-  m.total_added = r.u32();
-  m.total_removed = r.u32();
-  m.visible_count = r.u32();
-  m.set_hash = r.u64();
-  m.front_hash = r.u64();
-  m.queries = r.u32();
-  m.hc_us = r.u32();
-  m.or_us = r.u32();
-  m.triangles = r.u64();
-  return Message{m};
 }
 
 Result<Message> get_bye(Reader& r) {
@@ -410,9 +424,9 @@ Result<Message> decode_payload(Type type, std::span<const uint8_t> payload) {
   Result<Message> m = [&]() -> Result<Message> {
     switch (type) {
       case Type::hello: return get_hello(r);
-      case Type::camera: return get_camera(r);
+      case Type::camera: return get_fields<Camera>(r, camera_fields);
       case Type::node_diff: return get_node_diff(r);
-      case Type::end_of_frame: return get_end_of_frame(r);
+      case Type::end_of_frame: return get_fields<EndOfFrame>(r, end_of_frame_fields);
       case Type::bye: return get_bye(r);
     }
     return Error{"unreachable"};

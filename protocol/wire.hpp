@@ -1,5 +1,5 @@
 // occswitch wire format: the single source of truth for every byte the three processes exchange.
-// Bytes only (no sockets); depends on the standard library alone.
+// Bytes only (no sockets); depends on the standard library (wire.cpp: and common/hash.hpp's hex).
 //
 // Encoding rules
 //   - All integers are little-endian and fixed width; f64 is the IEEE-754 binary64 bit pattern
@@ -51,7 +51,7 @@
 //     8  u32  total_removed     ids removed in all of this frame's NodeDiff chunks
 //    12  u32  visible_count     |V_f|
 //    16  u64  set_hash          set_hash(V_f), see visible_set.hpp
-//    24  u64  front_hash        0 when unused
+//    24  u64  front_hash        front_hash(V') of front tracking (common/front.hpp); 0 when unused
 //    32  u32  queries           sender's per-frame statistics: occlusion queries issued,
 //    36  u32  hc_us               HC time (microseconds),
 //    40  u32  or_us               time spent on the OR for this frame (microseconds),

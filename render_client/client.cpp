@@ -12,6 +12,7 @@
 #include "common/progress.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
+#include "common/hash.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -150,12 +151,10 @@ class Client {
             throw ClientFailure("switch node " + std::to_string(k) + " ended frame " + std::to_string(e->frame) +
                                 ", expected " + std::to_string(frame));
           if (auto err = streams[k].on_end_of_frame(visible, *e)) throw ClientFailure("desync with switch node " + std::to_string(k) + ": " + *err);
-          if (e->front_hash != expected_front) {
-            char msg[160];
-            std::snprintf(msg, sizeof msg, "frame %u: front hash %016llx from switch node %d, %016llx here", frame,
-                          (unsigned long long)e->front_hash, k, (unsigned long long)expected_front);
-            throw ClientFailure(std::string("desync with switch node ") + std::to_string(k) + ": " + msg);
-          }
+          if (e->front_hash != expected_front)
+            throw ClientFailure("desync with switch node " + std::to_string(k) + ": frame " + std::to_string(frame) +
+                                ": front hash " + hex(e->front_hash) + " from switch node " + std::to_string(k) + ", " +
+                                hex(expected_front) + " here");
           eof = *e;
           break;
         } else {

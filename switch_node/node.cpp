@@ -30,12 +30,6 @@ uint32_t micros_since(Clock::time_point t0) {
   return uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count());
 }
 
-std::string hex(uint64_t v) {  // TODO(merge): occ::hex from common/hash.hpp
-  char b[17];
-  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
-  return b;
-}
-
 struct NodeFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
 };

@@ -1,7 +1,7 @@
 // What the three cluster processes share beyond the wire format: the camera conversion, the
 // settings that must agree (config hash in Hello), the switch schedule, and the listening flags.
 //
-// Schedule (paper Algorithm 4.2; README "Architecture"). Frame f: node f % 2 performs HC(f) and
+// Schedule (paper 3.2 and Algorithm 4.2; README "Architecture"). Frame f: node f % 2 performs HC(f) and
 // streams V_f as a diff against V_{f-1}; node (f+1) % 2 builds OR(f+1) from that stream. So
 // node k runs OR(k), HC(k), OR(k+2), HC(k+2), ... OR(f+1) draws V_{f-1} (which it holds) at
 // once and each added node as it arrives: the depth of any subset of real geometry is

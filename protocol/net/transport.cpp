@@ -1,5 +1,7 @@
 #include "protocol/net/transport.hpp"
 
+#include "common/hash.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -24,12 +26,6 @@ namespace {
 
 // Longer waits are clamped (condition_variable::wait_for overflows near Millis::max()).
 constexpr Millis kMaxWait = std::chrono::hours(24 * 365);
-
-std::string hex(uint64_t v) {
-  std::string s = "0x";
-  for (int shift = 60; shift >= 0; shift -= 4) s += "0123456789abcdef"[(v >> shift) & 0xf];
-  return s;
-}
 
 std::string endpoint_string(const tcp::endpoint& ep) {
   return ep.address().to_string() + ":" + std::to_string(ep.port());

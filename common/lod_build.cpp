@@ -1,0 +1,179 @@
+// Builds the leaf LOD chains and the HLODs (lod_data.hpp); the simplifier is lod_simplify.cpp.
+// A change to what it builds needs kCacheVersion (lod_cache.cpp) bumped.
+#include "common/lod_data.hpp"
+
+#include <algorithm>
+#include <unordered_map>
+
+#include "common/lod_simplify.hpp"
+#include "common/progress.hpp"
+
+namespace occ {
+
+namespace {
+
+// Largest axis scale of a transform's linear part (errors scale with it).
+double max_scale(const glm::dmat4& m) {
+  return std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+}
+
+}  // namespace
+
+struct LodBuilder {
+  static LodData run(const Scene& scene, const Hierarchy& h, const LodParams& p, const std::string& label) {
+    LodData d;
+    d.key_ = LodData::cache_key(h, p);
+    const auto& items = h.items();
+    // Distinct (mesh, cluster) slots.
+    std::unordered_map<uint64_t, uint32_t> slot_of;
+    std::vector<std::pair<uint32_t, uint32_t>> slots;
+    d.item_slot_.resize(items.size());
+    for (size_t i = 0; i < items.size(); ++i) {
+      const uint32_t mesh = scene.objects[items[i].object].mesh;
+      const uint64_t key = uint64_t(mesh) << 32 | items[i].cluster;
+      auto [it, fresh] = slot_of.emplace(key, uint32_t(slots.size()));
+      if (fresh) slots.emplace_back(mesh, items[i].cluster);
+      d.item_slot_[i] = it->second;
+    }
+    uint32_t interior = 0;
+    for (const HNode& n : h.nodes()) interior += !n.leaf() && n.item_count > 0;
+    const size_t total = slots.size() + interior;
+    size_t done = 0;
+    const double t0 = now_ms();
+    double last_print = -1e9;
+    auto tick = [&](const char* phase) {
+      ++done;
+      const double t = now_ms();
+      if (label.empty() || (t - last_print < 200 && done != total)) return;
+      last_print = t;
+      const double frac = double(done) / double(std::max<size_t>(total, 1));
+      const double eta = frac > 0 ? (t - t0) * (1 - frac) / frac / 1000.0 : 0;
+      char bar[31];
+      const int filled = int(frac * 30);
+      for (int k = 0; k < 30; ++k) bar[k] = k < filled ? '#' : '.';
+      bar[30] = 0;
+      progress("%s: building LODs [%s] %zu/%zu nodes (%s) ETA %.0f s   ", label.c_str(), bar, done, total, phase, eta);
+    };
+
+    // Leaf LOD chains per slot, in mesh space.
+    d.cluster_lods_.resize(slots.size() * kLeafLodLevels);
+    for (size_t s = 0; s < slots.size(); ++s) {
+      const Mesh& mesh = scene.meshes[slots[s].first];
+      const MeshCluster& cl = mesh.clusters[slots[s].second];
+      LodMesh base;  // the cluster, compacted
+      std::unordered_map<uint32_t, uint32_t> local;
+      for (uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) {
+        const uint32_t v = mesh.indices[i];
+        auto [it, fresh] = local.emplace(v, uint32_t(base.positions.size()));
+        if (fresh) {
+          base.positions.push_back(mesh.positions[v]);
+          base.normals.push_back(v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1));
+        }
+        base.indices.push_back(it->second);
+      }
+      const LodMesh* prev = &base;
+      for (uint32_t l = 1; l <= kLeafLodLevels; ++l) {
+        LodMesh& dst = d.cluster_lods_[s * kLeafLodLevels + l - 1];
+        const size_t target = simplify_target(prev->indices.size(), p.level_ratio, p.min_triangles);
+        if (target < prev->indices.size())
+          dst = simplify_lod_mesh(*prev, target);
+        else
+          dst = *prev;
+        if (dst.indices.size() > prev->indices.size()) dst = *prev;  // never finer
+        dst.error = std::max(dst.error, prev->error);
+        prev = &dst;
+      }
+      tick("leaf LODs");
+    }
+
+    // Errors of leaves (world units), HLODs bottom-up (children have larger ids).
+    const size_t N = h.size();
+    d.errors_.assign(N, {0, 0, 0, 0});
+    d.hlod_of_node_.assign(N, kNoNode);
+    std::vector<uint32_t> hlod_index(N, kNoNode);
+    for (uint32_t id = 0; id < N; ++id) {
+      const HNode& n = h.node(id);
+      if (!n.leaf() || n.item_count == 0) continue;
+      for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) {
+        const double s = max_scale(scene.objects[items[i].object].transform);
+        for (uint32_t l = 1; l <= kLeafLodLevels; ++l)
+          d.errors_[id][l] = std::max(d.errors_[id][l], d.item_lod(i, l).error * s);
+      }
+      for (uint32_t l = 1; l <= kLeafLodLevels; ++l) d.errors_[id][l] = std::max(d.errors_[id][l], d.errors_[id][l - 1]);
+    }
+    // Interior nodes in decreasing id order: children first.
+    std::vector<uint32_t> order;
+    for (uint32_t id = 0; id < N; ++id)
+      if (!h.node(id).leaf() && h.node(id).item_count > 0) order.push_back(id);
+    d.hlods_.resize(order.size());
+    for (size_t k = 0; k < order.size(); ++k) d.hlod_of_node_[order[k]] = uint32_t(k);
+    for (size_t k = order.size(); k-- > 0;) {
+      const uint32_t id = order[k];
+      const HNode& n = h.node(id);
+      LodMesh merged;
+      merged.origin = n.box.center();
+      double child_err = 0;
+      auto append = [&](const LodMesh& m, const glm::dmat4& to_world, uint32_t object) {
+        const uint32_t base = uint32_t(merged.positions.size());
+        const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(to_world)));
+        for (size_t v = 0; v < m.positions.size(); ++v) {
+          const glm::dvec3 world = glm::dvec3(to_world * glm::dvec4(glm::dvec3(m.positions[v]), 1.0));
+          merged.positions.push_back(glm::vec3(world - merged.origin));
+          glm::dvec3 nrm = nm * glm::dvec3(m.normals[v]);
+          const double len = glm::length(nrm);
+          merged.normals.push_back(len > 0 ? glm::vec3(nrm / len) : glm::vec3(0, 0, 1));
+          merged.objects.push_back(m.objects.empty() ? object : m.objects[v]);
+        }
+        for (uint32_t i : m.indices) merged.indices.push_back(base + i);
+      };
+      for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
+        const HNode& cn = h.node(c);
+        if (cn.item_count == 0) continue;
+        child_err = std::max(child_err, d.errors_[c][kLeafLodLevels]);
+        if (cn.leaf()) {
+          for (uint32_t i = cn.first_item; i < cn.first_item + cn.item_count; ++i)
+            append(d.item_lod(i, kLeafLodLevels), scene.objects[items[i].object].transform, items[i].object);
+        } else {
+          const LodMesh& ch = d.hlods_[d.hlod_of_node_[c]];
+          glm::dmat4 shift(1.0);
+          shift[3] = glm::dvec4(ch.origin, 1.0);
+          append(ch, shift, 0);
+        }
+      }
+      merged.error = 0;
+      const size_t target = simplify_target(merged.indices.size(), p.hlod_ratio, p.min_triangles);
+      LodMesh& out = d.hlods_[d.hlod_of_node_[id]];
+      out = target < merged.indices.size() ? simplify_lod_mesh(merged, target) : merged;
+      out.error += child_err;  // children's error + this simplification's: monotone
+      out.error = std::max(out.error, child_err);
+      d.errors_[id].fill(out.error);
+      tick("HLODs");
+    }
+    progress_done();
+    d.finish_hash();
+    return d;
+  }
+};
+
+LodData LodData::build(const Scene& scene, const Hierarchy& h, const LodParams& params, const std::string& label) {
+  return LodBuilder::run(scene, h, params, label);
+}
+
+uint64_t LodData::bytes() const {
+  uint64_t b = 0;
+  auto mesh = [&](const LodMesh& m) {
+    b += m.positions.size() * 24 + m.objects.size() * 4 + m.indices.size() * 4 + sizeof(LodMesh);
+  };
+  for (const auto& m : cluster_lods_) mesh(m);
+  for (const auto& m : hlods_) mesh(m);
+  return b + item_slot_.size() * 4 + hlod_of_node_.size() * 4 + errors_.size() * sizeof(errors_[0]);
+}
+
+uint64_t LodData::total_triangles() const {
+  uint64_t t = 0;
+  for (const auto& m : cluster_lods_) t += m.triangles();
+  for (const auto& m : hlods_) t += m.triangles();
+  return t;
+}
+
+}  // namespace occ
