@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <queue>
 
 namespace occ {
@@ -76,30 +75,21 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
     push(0);
   else
     for (uint32_t id : o.start) push(id);
-  uint32_t batch_size = std::max<uint32_t>(1, getenv("OCC_FB") ? atoi(getenv("OCC_FB")) : o.first_batch);
-  bool grow = true;
   auto take_batch = [&] {
     batch.clear();
     if (!near_first) {
       batch.swap(next);
       return !batch.empty();
     }
-    if (getenv("OCC_SHELL")) {
-      // A shell: the nearest box at distance d0, and every box within 2 d0 (at least a few, at
-      // most max_batch), so the next batch starts twice as far out.
-      const double limit2 = queue.empty() ? 0 : 4.0 * queue.top().first;
-      while (!queue.empty() && batch.size() < o.max_batch &&
-             (batch.size() < batch_size || queue.top().first <= limit2)) {
-        batch.push_back(queue.top().second);
-        queue.pop();
-      }
-      return !batch.empty();
-    }
-    while (!queue.empty() && batch.size() < batch_size) {
+    // A shell: the nearest box, at distance d0, and every box within 2 d0 (at least first_batch,
+    // at most max_batch), so each batch reaches twice as far as the one before and what it finds
+    // is drawn before farther boxes are tested.
+    const double limit2 = queue.empty() ? 0 : 4.0 * queue.top().first;
+    while (!queue.empty() && batch.size() < std::max<uint32_t>(o.max_batch, 1) &&
+           (batch.size() < o.first_batch || queue.top().first <= limit2)) {
       batch.push_back(queue.top().second);
       queue.pop();
     }
-    if (grow) batch_size = std::min<uint32_t>(batch_size * 2, std::max<uint32_t>(o.max_batch, 1));
     return !batch.empty();
   };
   constexpr uint64_t kNoQuery = ~uint64_t(0);
@@ -161,7 +151,6 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       }
     }
     if (o.occluders && !accepted.empty()) o.occluders(accepted);
-    grow = !(o.occluders && !accepted.empty()) || getenv("OCC_GROW");
   }
   std::sort(out.begin(), out.end());
   return out;

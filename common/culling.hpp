@@ -94,8 +94,9 @@ struct LodPolicy {
 // The order in which the traversal batches its queries.
 enum class HcOrder {
   levels,      // breadth-first: a whole level of the hierarchy per batch (paper 4.7.1)
-  near_first,  // nearest boxes first: batches of growing size from a distance-ordered queue, so
-               // the near occluders found (and drawn, HcOptions::occluders) hide what follows
+  near_first,  // nearest boxes first: shells from a distance-ordered queue (the nearest box at d
+               // and all within 2d), so the near occluders found (and drawn, HcOptions::occluders)
+               // hide what the next shell holds
 };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
@@ -106,7 +107,7 @@ struct HcOptions {
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
   HcOrder order = HcOrder::levels;
-  uint32_t first_batch = 32, max_batch = 1024;  // near_first: batch sizes (doubling)
+  uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
   // Occluder fusion: called after each batch with the renderables it accepted, before the next
   // batch is issued; the caller draws them (depth only) into the buffer the queries test, so what
   // was just found visible hides what lies behind it in the same frame. Real geometry only adds

@@ -18,3 +18,6 @@ occ_test(hard_depth_test hard LIBS occ_gl SOURCES
 occ_test(hard_faults_test hard LIBS occ_common occ_protocol SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/hard_faults_test.cpp)
 add_dependencies(hard_faults_test switch_node render_client frame_diff)
+occ_test(hard_exit_test hard LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_exit_test.cpp)
+add_dependencies(hard_exit_test switch_node render_client frame_diff)

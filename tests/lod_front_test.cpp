@@ -245,6 +245,38 @@ TEST(FrontCull, FrontTrackedTraversalEqualsFreshTraversal) {
   }
 }
 
+// Near-first shells find exactly what level-by-level batches find when the occlusion oracle does
+// not change (no fusion), and hand every accepted renderable to the occluder hook once, shell
+// after shell, before the next shell's queries.
+TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  std::mt19937 rng(12);
+  for (int k = 0; k < 30; ++k) {
+    PointQueries q;
+    q.points = random_points(rng, w.h.node(0).box, 1 + k % 25);
+    const Camera cam = random_camera(rng, w.h.node(0).box);
+    const LodSelector sel(r, cam, 480, k % 3 == 0 ? 2.0 : 0.0);
+    CullStats lv, nf;
+    const auto by_level = hardware_cull_lod(w.h, cam, q, sel, {.stats = &lv});
+    std::vector<uint32_t> offered;
+    size_t hook_calls = 0;
+    const auto near_first =
+        hardware_cull_lod(w.h, cam, q, sel,
+                          {.stats = &nf,
+                           .order = HcOrder::near_first,
+                           .occluders = [&](std::span<const uint32_t> ids) {
+                             ++hook_calls;
+                             offered.insert(offered.end(), ids.begin(), ids.end());
+                           }});
+    EXPECT_EQ(near_first, by_level) << "camera " << k;
+    std::sort(offered.begin(), offered.end());
+    EXPECT_EQ(offered, near_first) << "camera " << k;
+    EXPECT_EQ(nf.queries, lv.queries) << "the same nodes are tested, in another order";
+    if (near_first.size() > 4) EXPECT_GT(hook_calls, 1u) << "shells, not one batch";
+  }
+}
+
 TEST(FrontCull, VisiblePixelLodStopsWhereFewPixelsShow) {
   const World& w = world();
   Renderables r(w.h, &w.lod);

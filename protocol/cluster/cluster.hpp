@@ -53,8 +53,8 @@ struct ClusterConfig {
 // How a culling node runs HC (switch_step.hpp HcLocal): node-local, not in the config hash.
 struct HcChoices {
   bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
-  HcOrder order = HcOrder::levels;
-  bool occluder_fusion = false;    // draw what each batch found visible before the next batch
+  HcOrder order = HcOrder::near_first;
+  bool occluder_fusion = true;     // draw what each batch found visible before the next batch
 };
 // --adaptive-queries, --hc-order, --occluder-fusion.
 void add_hc_options(Cli& cli, HcChoices& c);
