@@ -59,7 +59,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
   const Frustum fr = cam.frustum();
   const double tau = sel.tau();
   const bool pixel_lod = o.visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
-  std::vector<uint32_t> out, accepted, batch;
+  std::vector<uint32_t> out, accepted, batch, whole;
   // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
   std::vector<uint32_t> next;
   using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
@@ -101,6 +101,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
     for (uint32_t id : batch) {
       const HNode& n = h.node(id);
       ++st.nodes_visited;
+      if (o.budget) o.budget->visited(id);
       if (n.item_count == 0) continue;
       if (fr.classify(n.box) == Containment::Outside) {
         ++st.frustum_culled;
@@ -119,6 +120,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
     for (auto [id, handle] : pending) {
       const uint64_t samples = q.result(handle);
       if (skipper) skipper->record(id, samples > 0);
+      if (o.budget) o.budget->queried(id, samples > 0);
       if (samples > 0)
         visible.emplace_back(id, samples);
       else
@@ -142,18 +144,97 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
         ++st.hlods;
         ++st.pixel_stops;
       }
-      if (r != kNoNode) {
+      auto accept = [&](uint32_t r) {
         out.push_back(r);
         accepted.push_back(r);
         if (o.on_visible) o.on_visible(r);
+      };
+      if (r != kNoNode) {
+        accept(r);
+      } else if (o.budget && o.budget->accept_whole(id)) {
+        // Queries do not pay here: the subtree's leaves in the frustum, as the selector draws them.
+        ++st.whole;
+        whole.assign(1, id);
+        while (!whole.empty()) {
+          const uint32_t w = whole.back();
+          whole.pop_back();
+          const HNode& wn = h.node(w);
+          if (wn.item_count == 0 || fr.classify(wn.box) == Containment::Outside) continue;
+          if (wn.leaf())
+            accept(sel.renderable(w));
+          else if (w != id && sel.satisfies(w))
+            accept(w);
+          else
+            for (uint32_t ch = wn.first_child; ch < wn.first_child + wn.child_count; ++ch) whole.push_back(ch);
+        }
       } else {
         for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
       }
     }
     if (o.occluders && !accepted.empty()) o.occluders(accepted);
   }
+  if (o.budget) o.budget->end_traversal();
   std::sort(out.begin(), out.end());
   return out;
+}
+
+QueryBudget::QueryBudget(const Hierarchy& h) : h_(h), state_(h.size()) {}
+
+void QueryBudget::set_costs(double ms_per_query, double ms_per_triangle) {
+  ms_per_query_ = ms_per_query;
+  ms_per_triangle_ = ms_per_triangle;
+}
+
+bool QueryBudget::accept_whole(uint32_t node) {
+  State& s = state_.at(node);
+  auto whole = [&] {
+    s.probe = s.remaining == 0;
+    s.whole_now = true;
+    return true;
+  };
+  if (s.remaining > 0) {
+    --s.remaining;
+    return whole();
+  }
+  if (s.probe) {
+    s.probe = false;
+    return false;
+  }
+  if (ms_per_query_ <= 0 || ms_per_triangle_ <= 0 || s.queries == 0) return false;
+  if (double(s.queries) * ms_per_query_ <= double(s.saved) * ms_per_triangle_) {
+    s.wait = 0;  // the queries paid: keep testing
+    return false;
+  }
+  s.wait = s.wait == 0 ? kFirstWait : uint8_t(std::min<int>(kMaxWait, 2 * s.wait));
+  s.remaining = uint8_t(s.wait - 1);
+  return whole();
+}
+
+void QueryBudget::queried(uint32_t node, bool visible) { state_.at(node).result = visible ? 1 : 0; }
+
+void QueryBudget::end_traversal() {
+  // Children have larger ids than their parents: fold from the deepest visited nodes upward.
+  std::sort(touched_.begin(), touched_.end(), std::greater<uint32_t>());
+  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
+  for (uint32_t id : touched_) {
+    State& s = state_[id];
+    const uint32_t q = s.q_now + (s.result >= 0 ? 1 : 0);
+    const uint64_t saved = s.result == 0 ? h_.node(id).triangles : s.s_now;
+    if (!s.whole_now) {  // a subtree accepted whole keeps its last tested figures
+      s.queries = q;
+      s.saved = saved;
+    }
+    s.whole_now = false;
+    s.q_now = 0;
+    s.s_now = 0;
+    s.result = -1;
+    const uint32_t p = h_.node(id).parent;
+    if (p != kNoNode) {
+      state_[p].q_now += q;
+      state_[p].s_now += saved;
+    }
+  }
+  touched_.clear();
 }
 
 bool QuerySkipper::skip(uint32_t node) {

@@ -41,6 +41,7 @@ struct CullStats {
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
   uint32_t hlods = 0;              // interior nodes accepted at their HLOD
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
+  uint32_t whole = 0;              // subtrees accepted whole by a QueryBudget (no queries)
 };
 
 // Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
@@ -64,6 +65,46 @@ class QuerySkipper {
     uint8_t streak = 0, wait = 0, remaining = 0;
   };
   std::vector<State> state_;
+};
+
+// Occlusion only where it pays (cost model): for every subtree, what its queries cost the last
+// time HC tested it (queries issued x measured time per query) against what they saved (the
+// triangles they found occluded x measured time to draw a triangle, in OR and RVG). A visible
+// interior node whose subtree's queries cost more than they saved is accepted whole — every
+// non-empty leaf of it in the frustum, without queries (interior nodes at their HLOD where the
+// selector allows) — for its next `wait` visits (4, doubling up to 32), then tested again to
+// refresh the figures. Accepting more than is visible is conservative: frames never change, only
+// what is drawn. Until costs are set (set_costs) every subtree is tested.
+class QueryBudget {
+ public:
+  static constexpr uint8_t kFirstWait = 4, kMaxWait = 32;
+  explicit QueryBudget(const Hierarchy& h);
+  void set_costs(double ms_per_query, double ms_per_triangle);
+  // True when the visible interior `node` is to be accepted whole this visit (consumes a visit).
+  bool accept_whole(uint32_t node);
+  // The traversal reports what it tested; end_traversal() folds it into per-subtree figures.
+  void visited(uint32_t node) { touched_.push_back(node); }
+  void queried(uint32_t node, bool visible);
+  void end_traversal();
+  // Figures of the last test of `node`'s subtree (for tests and logs).
+  uint32_t subtree_queries(uint32_t node) const { return state_.at(node).queries; }
+  uint64_t subtree_saved_triangles(uint32_t node) const { return state_.at(node).saved; }
+
+ private:
+  struct State {
+    uint32_t queries = 0;  // last test: queries in the subtree
+    uint64_t saved = 0;    // last test: triangles found occluded in the subtree
+    uint8_t wait = 0, remaining = 0;
+    bool probe = false;      // the wait is over: test the subtree once to refresh the figures
+    bool whole_now = false;  // accepted whole in this traversal (its figures stay)
+    uint32_t q_now = 0;    // this traversal (folded by end_traversal)
+    uint64_t s_now = 0;
+    int8_t result = -1;    // this traversal: -1 not queried, 0 occluded, 1 visible
+  };
+  const Hierarchy& h_;
+  std::vector<State> state_;
+  std::vector<uint32_t> touched_;
+  double ms_per_query_ = 0, ms_per_triangle_ = 0;
 };
 
 // Leaves whose boxes are not outside the frustum, in ascending id order.
@@ -104,6 +145,7 @@ struct HcOptions {
   bool visible_pixel_lod = false;
   std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
   QuerySkipper* skipper = nullptr;       // adaptive queries (null: query every node)
+  QueryBudget* budget = nullptr;         // accept subtrees whole where queries do not pay
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
   HcOrder order = HcOrder::levels;

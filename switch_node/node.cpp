@@ -41,6 +41,7 @@ class SwitchNode {
   int run() {
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
     if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
+    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
     step_.emplace(*g_.renderables, o_.config, o_.height);
     querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
     connect();
@@ -137,7 +138,7 @@ class SwitchNode {
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
       std::sort(ids.begin(), ids.end());
       for (uint32_t id : ids) drawn[id] = 1;
-      g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly);
+      or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
       Clock::duration waited{0};  // for the other node's stream: not OR work
       if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
       const uint32_t or_us =
@@ -199,7 +200,7 @@ class SwitchNode {
             drawn[id] = 1;
             fresh.push_back(id);
           }
-        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
+        or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
         if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
@@ -217,7 +218,7 @@ class SwitchNode {
 
   void hc_frame(uint32_t frame, const Camera& cam, VisibleSet& visible, uint32_t or_us, Clock::time_point hc_start) {
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_both(m); });
-    HcLocal local{skipper_ ? &*skipper_ : nullptr, o_.hc.order, nullptr};
+    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr};
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
@@ -236,19 +237,35 @@ class SwitchNode {
     hc.eof.or_us = or_us;
     hc.eof.hc_us = micros_since(hc_start);
     out.send(hc.eof);
+    if (budget_) update_costs(hc.eof);
     ++frames_;
     queries_ += hc.stats.queries;
     assumed_visible_ += hc.stats.skipped;
     pixel_stops_ += hc.stats.pixel_stops;
     hlods_ += hc.stats.hlods;
     skipped_ += hc.tests_above_fronts;
+    whole_ += hc.stats.whole;
+  }
+
+  // The query budget's prices, measured on this node (moving averages): a query = HC time per
+  // query; a triangle = OR time per triangle drawn, twice (the OR and the render client draw it).
+  void update_costs(const wire::EndOfFrame& eof) {
+    constexpr double a = 0.2;
+    if (eof.queries >= 16) ms_per_query_ = ms_per_query_ == 0 ? eof.hc_us / 1e3 / eof.queries
+                                                              : (1 - a) * ms_per_query_ + a * eof.hc_us / 1e3 / eof.queries;
+    if (or_triangles_ >= 10000) {
+      const double t = 2.0 * eof.or_us / 1e3 / double(or_triangles_);
+      ms_per_triangle_ = ms_per_triangle_ == 0 ? t : (1 - a) * ms_per_triangle_ + a * t;
+    }
+    budget_->set_costs(ms_per_query_, ms_per_triangle_);
   }
 
   void print_summary() const {
     if (!rvg_ || !peer_) return;
     auto r = rvg_->stats(), p = peer_->stats();
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
-              << " more skipped by adaptive queries), sent " << r.sent.bytes
+              << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
+              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us), sent " << r.sent.bytes
               << " B to the render client and " << p.sent.bytes << " B to the other node\n";
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
@@ -267,7 +284,10 @@ class SwitchNode {
   std::optional<CameraReceiver> cameras_in_;
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
-  uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
+  std::optional<QueryBudget> budget_;
+  uint64_t or_triangles_ = 0;  // drawn by the current OR
+  double ms_per_query_ = 0, ms_per_triangle_ = 0;
+  uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
 };
 

@@ -93,6 +93,8 @@ void add_hc_options(Cli& cli, HcChoices& c) {
                       "HC query batches: a hierarchy level each, or nearest boxes first in growing batches");
   cli.on_off("occluder-fusion", &c.occluder_fusion,
              "HC draws (depth only) what each batch found visible before the next batch's queries");
+  cli.on_off("query-budget", &c.query_budget,
+             "accept a subtree without queries where its queries cost more (measured) than they saved");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {

@@ -55,8 +55,9 @@ struct HcChoices {
   bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
   HcOrder order = HcOrder::near_first;
   bool occluder_fusion = true;     // draw what each batch found visible before the next batch
+  bool query_budget = true;        // accept subtrees whole where measured costs say queries do not pay
 };
-// --adaptive-queries, --hc-order, --occluder-fusion.
+// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.

@@ -51,6 +51,7 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
                         {.visible_pixel_lod = lod_.visible_pixel_lod,
                          .start = start,
                          .skipper = local.skipper,
+                         .budget = local.budget,
                          .on_visible = [&](uint32_t id) { out.visible(id); },
                          .stats = &result.stats,
                          .order = local.order,

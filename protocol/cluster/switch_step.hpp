@@ -25,6 +25,7 @@ namespace occ {
 // conservative superset of the visible one). They need not agree between processes.
 struct HcLocal {
   QuerySkipper* skipper = nullptr;  // adaptive queries
+  QueryBudget* budget = nullptr;    // accept subtrees whole where queries do not pay
   HcOrder order = HcOrder::levels;
   // Occluder fusion (HcOptions::occluders): draws the renderables a batch accepted, depth only.
   std::function<void(std::span<const uint32_t>)> occluders = nullptr;

@@ -80,7 +80,8 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     // HC(f), with the node's choices (occluder fusion draws what it finds that OR did not).
     std::vector<uint8_t> drawn(h.size(), 0);
     for (uint32_t id : occluders) drawn[id] = 1;
-    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], o.hc.order, nullptr};
+    // (No query budget: its choices follow the nodes' measured timings, which a replay cannot.)
+    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], nullptr, o.hc.order, nullptr};
     if (o.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
