@@ -50,8 +50,11 @@ class SwitchNode {
     try {
       loop();
     } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
-      // A frame in flight when the render client finished (latest mode) is not a failure.
-      for (int i = 0; i < 300 && !rvg_->is_open() && !cameras_in_->done(); ++i)
+      // A frame in flight when the render client finished (latest mode) is not a failure; nor is
+      // the other node's clean goodbye racing the render client's own goodbye to this node (the
+      // client says goodbye to node 0 first): wait for it a little before calling it a failure.
+      const bool peer_done = peer_ended_cleanly_;
+      for (int i = 0; i < 300 && (peer_done || !rvg_->is_open()) && !cameras_in_->done(); ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
       if (!cameras_in_->client_said_bye()) {
         std::cerr << "error: " << who_ << ": " << e.what() << "\n";
@@ -108,7 +111,10 @@ class SwitchNode {
 
   void send_both(const wire::Message& m) {
     if (auto err = rvg_->send(m)) throw NodeFailure("sending to the render client: " + *err);
-    if (auto err = peer_->send(m)) throw NodeFailure("sending to switch node " + std::to_string(1 - o_.id) + ": " + *err);
+    if (auto err = peer_->send(m)) {
+      peer_ended_cleanly_ = err->find(std::string("peer said bye: ") + wire::kByeDone) != std::string::npos;
+      throw NodeFailure("sending to switch node " + std::to_string(1 - o_.id) + ": " + *err);
+    }
   }
 
   void loop() {
@@ -285,6 +291,7 @@ class SwitchNode {
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
   std::optional<QueryBudget> budget_;
+  bool peer_ended_cleanly_ = false;  // a send to the other node failed after its clean goodbye
   uint64_t or_triangles_ = 0;  // drawn by the current OR
   double ms_per_query_ = 0, ms_per_triangle_ = 0;
   uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;

@@ -1,27 +1,13 @@
 #include <gtest/gtest.h>
 
-#include <glm/gtc/matrix_transform.hpp>
-
 #include "common/culling.hpp"
 #include "common/lod.hpp"
+#include "scene_fixtures.hpp"
 
 using namespace occ;
+using occtest::cube_grid;
 
 namespace {
-
-// Unit cubes on an n x n grid in the xz plane, one object each.
-Scene cube_grid(int n, double spacing) {
-  Scene s;
-  Mesh cube;
-  for (int i = 0; i < 8; ++i) cube.positions.push_back({float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
-  cube.indices = {0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3};
-  compute_normals(cube);
-  s.meshes.push_back(cube);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      s.objects.push_back({0, glm::translate(glm::dmat4(1.0), glm::dvec3(spacing * i, 0, spacing * j)), ""});
-  return s;
-}
 
 // Fake occlusion: a box passes when it contains one of the "visible points". Records the call
 // sequence to check batching.

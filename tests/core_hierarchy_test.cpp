@@ -5,18 +5,14 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/hierarchy.hpp"
+#include "scene_fixtures.hpp"
 
 using namespace occ;
 
 namespace {
-// A grid of unit cubes, one mesh shared by all objects, plus one big tessellated plane mesh.
+// A grid of unit cubes 3 apart, one mesh shared by all objects, plus one big tessellated plane mesh.
 Scene grid_scene(int n, int plane_res) {
-  Scene s;
-  Mesh cube;
-  for (int i = 0; i < 8; ++i) cube.positions.push_back({float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
-  cube.indices = {0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3};
-  compute_normals(cube);
-  s.meshes.push_back(cube);
+  Scene s = occtest::cube_grid(n, 3.0);
   Mesh plane;
   for (int z = 0; z <= plane_res; ++z)
     for (int x = 0; x <= plane_res; ++x) plane.positions.push_back({float(x), 0.f, float(z)});
@@ -27,13 +23,6 @@ Scene grid_scene(int n, int plane_res) {
     }
   compute_normals(plane);
   s.meshes.push_back(plane);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      Object o;
-      o.mesh = 0;
-      o.transform = glm::translate(glm::dmat4(1.0), glm::dvec3(3.0 * i, 0, 3.0 * j));
-      s.objects.push_back(o);
-    }
   s.objects.push_back(Object{1, glm::translate(glm::dmat4(1.0), glm::dvec3(0, -1, 0)), "plane"});
   return s;
 }

@@ -136,55 +136,47 @@ TEST(HardFaults, StrangersAtEveryListeningPortAreRefusedWithAReasonAndTheCluster
   const std::string scene = "hard:walls:2";
   const fs::path dir = fresh_dir("hard_faults");
   const fs::path out = dir / "cluster";
-  fs::create_directories(out);
   std::vector<Camera> path;
   for (int i = 0; i < 30; ++i) path.push_back(cam({-12.0 + i, 1.5, 0.1 * i}, {30, 1.5, 0}));
   const std::string csv = write_path(dir / "path.csv", path);
 
-  std::vector<std::string> common = {"--scene", scene, "--timeout-ms", "20000"};
-  for (auto& a : view.args()) common.push_back(a);
-  auto args = [&](std::vector<std::string> a) {
-    a.insert(a.end(), common.begin(), common.end());
-    return a;
-  };
-  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}), out / "node0.log");
-  const int p0 = wait_port(out / "n0.port", n0);
-  ASSERT_NE(p0, 0) << n0.log();
+  ClusterOptions o = hard_cluster(scene, csv, view);
+  o.timeout_ms = 20000;
+  o.client_wait = 120s;
+  o.node_wait = 30s;
+  Cluster c(out, o);
+  const int p0 = c.start_node0();
+  ASSERT_NE(p0, 0) << c.node0().log();
   auto at0 = visit(p0, 1);
   at0->wrong_version_reply = at0->wrong_version.read_until_closed(10s);
 
-  Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (out / "n1.port").string()}),
-          out / "node1.log");
-  const int p1 = wait_port(out / "n1.port", n1);
-  ASSERT_NE(p1, 0) << n1.log();
+  const int p1 = c.start_node1();
+  ASSERT_NE(p1, 0) << c.node1().log();
   auto at1 = visit(p1, 2);
 
-  Proc rvg(args({bin("render_client"), "--path", csv, "--out", out.string(), "--connect",
-                 "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}),
-           out / "render_client.log");
+  c.start_client();
   at1->wrong_version_reply = at1->wrong_version.read_until_closed(10s);
   // While frames flow: the listening ports are closed once the peers are in; more random bytes
   // (refused by the OS or ignored) must not disturb the run.
-  for (int i = 0; i < 200 && read_csv(out / "stats.csv")["frame"].size() < 5 && rvg.running(); ++i)
-    std::this_thread::sleep_for(20ms);
+  wait_frames(c.stats(), 5, 4s, &c.client());
   for (int port : {p0, p1}) {
     Stranger late(port);
     late.send(random_bytes(3, 256));
   }
-  const int code = rvg.wait(120s);
-  ASSERT_EQ(code, 0) << rvg.log() << n0.log() << n1.log();
-  EXPECT_EQ(n0.wait(30s), 0) << n0.log();
-  EXPECT_EQ(n1.wait(30s), 0) << n1.log();
+  const ClusterRun r = c.finish();
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(r.node0_code, 0) << r.node0_log;
+  EXPECT_EQ(r.node1_code, 0) << r.node1_log;
 
-  expect_refused(n0.log(), *at0, "switch node 0");
-  expect_refused(n1.log(), *at1, "switch node 1");
+  expect_refused(r.node0_log, *at0, "switch node 0");
+  expect_refused(r.node1_log, *at1, "switch node 1");
   // The stranger with another version was told why (its Bye) after the node's own hello.
   EXPECT_NE(at0->wrong_version_reply.find("version"), std::string::npos);
   EXPECT_NE(at1->wrong_version_reply.find("version"), std::string::npos);
 
-  ASSERT_EQ(run_reference(dir / "reference", scene, csv, view), 0) << read_file(dir / "reference" / "reference.log");
-  std::string log;
-  EXPECT_EQ(frame_diff(dir / "reference", out, &log), 0) << log;
+  const Outcome ref = run_reference(dir / "reference", scene, csv, unculled(view));
+  ASSERT_EQ(ref.code, 0) << ref.log;
+  const Outcome diff = frame_diff(dir / "reference", out);
+  EXPECT_EQ(diff.code, 0) << diff.log;
   EXPECT_EQ(frame_count(out), path.size());
 }

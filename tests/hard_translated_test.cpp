@@ -26,8 +26,8 @@ void expect_translation_invariant(const std::string& name, const std::string& in
   const View view;
   const fs::path dir = fresh_dir("hard_translated_" + name);
   const std::string base_csv = write_path(dir / "path.csv", path);
-  ASSERT_EQ(run_reference(dir / "untranslated", inner_spec, base_csv, view), 0)
-      << read_file(dir / "untranslated" / "reference.log");
+  const Outcome untranslated = run_reference(dir / "untranslated", inner_spec, base_csv, unculled(view));
+  ASSERT_EQ(untranslated.code, 0) << untranslated.log;
   const double pixels = double(view.width) * view.height;
   for (double d : offsets) {
     const glm::dvec3 offset(d, 0.5 * d, -d);
@@ -38,20 +38,15 @@ void expect_translation_invariant(const std::string& name, const std::string& in
     const fs::path sub = dir / ("offset_" + std::to_string(int(std::log10(d))));
     fs::create_directories(sub);
     const std::string csv = write_path(sub / "path.csv", translated(path, offset));
-    const ClusterRun r = run_cluster(sub / "cluster", scene, csv, view);
-    ASSERT_EQ(r.rvg_code, 0) << r.logs();
-    EXPECT_EQ(r.node0_code, 0) << r.logs();
-    EXPECT_EQ(r.node1_code, 0) << r.logs();
-    ASSERT_EQ(run_reference(sub / "reference", scene, csv, view), 0) << read_file(sub / "reference" / "reference.log");
-    std::string log;
-    EXPECT_EQ(frame_diff(sub / "reference", sub / "cluster", &log), 0) << "cluster != reference\n" << log;
-    EXPECT_EQ(frame_diff(dir / "untranslated", sub / "cluster", &log, kBudgetFraction, kBudgetThreshold), 0)
-        << "translated cluster frames differ from the untranslated reference beyond the budget\n"
-        << log;
-    std::string strict;
-    frame_diff(dir / "untranslated", sub / "cluster", &strict);
+    if (!expect_cluster_equals_reference(sub, hard_cluster(scene, csv, view), unculled(view), path.size())) return;
+    const Outcome budget = frame_diff(dir / "untranslated", sub / "cluster",
+                                      {"--max-fraction", std::to_string(kBudgetFraction), "--threshold",
+                                       std::to_string(kBudgetThreshold)});
+    EXPECT_EQ(budget.code, 0) << "translated cluster frames differ from the untranslated reference beyond the budget\n"
+                              << budget.log;
+    const Outcome strict = frame_diff(dir / "untranslated", sub / "cluster");
     std::cout << "[ figures  ] " << scene << ": translated vs untranslated, exact comparison: "
-              << strict.substr(strict.rfind("frames=") == std::string::npos ? 0 : strict.rfind("frames=")) << "\n";
+              << diff_summary(strict.log) << "\n";
     size_t max_extra = 0;
     for (size_t f = 0; f < path.size(); ++f) {
       const size_t base = background_pixels(dir / "untranslated", f), moved = background_pixels(sub / "cluster", f);

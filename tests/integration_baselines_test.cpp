@@ -8,24 +8,26 @@ using namespace occtest;
 using namespace std::chrono_literals;
 
 namespace {
-int render(const fs::path& out, const std::string& cull, bool exact) {
-  fs::create_directories(out);
-  std::vector<std::string> a = {bin("render_client"), "--reference", "--scene", "city:6x6:3:10:1", "--path", "walk:40",
-                                "--width", "160", "--height", "120", "--cull", cull, "--out", out.string()};
-  if (exact) a.push_back("--exact");
-  Proc p(a, out / "log.txt");
-  return p.wait(120s);
+const std::vector<std::string> kView = {"--width", "160", "--height", "120"};
+
+// The single-process renderer with culling `cull` on the city walk (40 frames) into `out`.
+Outcome render(const fs::path& out, const std::string& cull, bool exact) {
+  std::vector<std::string> flags = kView;
+  flags.insert(flags.end(), {"--cull", cull});
+  if (exact) flags.push_back("--exact");
+  return run_reference(out, "city:6x6:3:10:1", "walk:40", flags, 120s);
 }
 }  // namespace
 
 TEST(Baselines, StopAndWaitAndChcFramesEqualTheUnculledReference) {
   fs::path dir = fresh_dir("baselines");
-  ASSERT_EQ(render(dir / "none", "none", true), 0) << read_file(dir / "none" / "log.txt");
+  const Outcome none = render(dir / "none", "none", true);
+  ASSERT_EQ(none.code, 0) << none.log;
   for (const char* cull : {"stop-and-wait", "chc"}) {
-    ASSERT_EQ(render(dir / cull, cull, false), 0) << read_file(dir / cull / "log.txt");
-    Proc diff({bin("frame_diff"), (dir / "none").string(), (dir / cull).string(), "--max-fraction", "0.0001"},
-              dir / (std::string(cull) + "_diff.log"));
-    EXPECT_EQ(diff.wait(60s), 0) << cull << ": " << diff.log();
+    const Outcome culled = render(dir / cull, cull, false);
+    ASSERT_EQ(culled.code, 0) << culled.log;
+    const Outcome diff = frame_diff(dir / "none", dir / cull);
+    EXPECT_EQ(diff.code, 0) << cull << ": " << diff.log;
     auto st = read_csv(dir / cull / "stats.csv");
     auto ex = read_csv(dir / "none" / "stats.csv");
     ASSERT_EQ(st["nodes_drawn"].size(), 40u);
@@ -37,7 +39,7 @@ TEST(Baselines, StopAndWaitAndChcFramesEqualTheUnculledReference) {
 
 TEST(Baselines, DepthReadbackOcclusionServerFramesEqualTheReference) {
   fs::path dir = fresh_dir("gigawalk");
-  ASSERT_EQ(render(dir / "ref", "frustum", false), 0);
+  ASSERT_EQ(render(dir / "ref", "frustum", false).code, 0);
   fs::path out = dir / "server";
   fs::create_directories(out);
   Proc server({bin("occlusion_server"), "--scene", "city:6x6:3:10:1", "--width", "160", "--height", "120",
@@ -50,8 +52,8 @@ TEST(Baselines, DepthReadbackOcclusionServerFramesEqualTheReference) {
            out / "client.log");
   ASSERT_EQ(rvg.wait(120s), 0) << rvg.log();
   EXPECT_EQ(server.wait(30s), 0) << server.log();
-  Proc diff({bin("frame_diff"), (dir / "ref").string(), out.string(), "--max-fraction", "0.0001"}, dir / "diff.log");
-  EXPECT_EQ(diff.wait(60s), 0) << diff.log();
+  const Outcome diff = frame_diff(dir / "ref", out);
+  EXPECT_EQ(diff.code, 0) << diff.log;
   auto st = read_csv(out / "stats.csv");
   ASSERT_EQ(st["frame"].size(), 40u);
   EXPECT_LT(sum(st["visible"]) / 40, 0.5 * 360);  // it culls

@@ -9,31 +9,9 @@ using namespace std::chrono_literals;
 
 namespace {
 
-struct Outcome {
-  int code;
-  std::string log;
-};
-
 Outcome run(std::vector<std::string> args, const std::string& name) {
   static fs::path dir = fresh_dir("cli");
-  Proc p(args, dir / (name + ".log"));
-  return {p.wait(60s), p.log()};
-}
-
-// Exactly one line starts with "error:" and it contains every fragment.
-void expect_one_error(const Outcome& o, std::initializer_list<std::string> fragments) {
-  EXPECT_GT(o.code, 0) << o.log;
-  EXPECT_LT(o.code, 128) << "crashed: " << o.log;
-  size_t errors = 0;
-  std::string line;
-  std::istringstream in(o.log);
-  for (std::string l; std::getline(in, l);)
-    if (l.rfind("error:", 0) == 0) {
-      ++errors;
-      line = l;
-    }
-  EXPECT_EQ(errors, 1u) << o.log;
-  for (const auto& f : fragments) EXPECT_NE(line.find(f), std::string::npos) << "missing '" << f << "' in: " << line;
+  return run_to_end(std::move(args), dir / (name + ".log"), 60s);
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 // reference renderer frame by frame (conservative culling must not change a pixel).
 #include <gtest/gtest.h>
 
-#include "integration_util.hpp"
+#include "cluster_run.hpp"
 
 using namespace occtest;
 using namespace std::chrono_literals;
@@ -10,85 +10,26 @@ using namespace std::chrono_literals;
 namespace {
 
 const std::vector<std::string> kView = {"--width", "192", "--height", "144"};
+const std::vector<std::string> kSmallView = {"--width", "64", "--height", "64"};
+const std::string kCity = "city:6x6:3:10:1";
 
-struct ClusterRun {
-  int rvg_code = -1, node0_code = -1, node1_code = -1;
-  std::string rvg_log, node0_log, node1_log;
-};
-
-// Starts node 0, node 1 and the render client like scripts/cluster.sh does.
-ClusterRun run_cluster(const fs::path& out, const std::string& scene, const std::string& path,
-                       std::vector<std::string> extra = {}, std::vector<std::string> rvg_extra = {},
-                       std::vector<std::string> node_extra = {},
-                       std::chrono::milliseconds timeout = 300s) {
-  fs::create_directories(out);
-  std::vector<std::string> common = {"--scene", scene, "--timeout-ms", "20000"};
-  common.insert(common.end(), kView.begin(), kView.end());
-  common.insert(common.end(), extra.begin(), extra.end());
-  auto args = [&](std::vector<std::string> a, const std::vector<std::string>& more = {}) {
-    a.insert(a.end(), common.begin(), common.end());
-    a.insert(a.end(), more.begin(), more.end());
-    return a;
-  };
-  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}, node_extra),
-          out / "node0.log");
-  int p0 = wait_port(out / "n0.port", n0);
-  Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (out / "n1.port").string()}, node_extra),
-          out / "node1.log");
-  int p1 = wait_port(out / "n1.port", n1);
-  ClusterRun r;
-  if (p0 && p1) {
-    Proc rvg(args({bin("render_client"), "--path", path, "--out", out.string(), "--connect",
-                   "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}, rvg_extra),
-             out / "render_client.log");
-    r.rvg_code = rvg.wait(timeout);
-    r.rvg_log = rvg.log();
-  }
-  r.node0_code = n0.wait(30s);
-  r.node1_code = n1.wait(30s);
-  r.node0_log = n0.log();
-  r.node1_log = n1.log();
-  return r;
-}
-
-int run_reference(const fs::path& out, const std::string& scene, const std::string& path) {
-  fs::create_directories(out);
-  std::vector<std::string> a = {bin("render_client"), "--reference", "--scene", scene, "--path", path, "--out", out.string()};
-  a.insert(a.end(), kView.begin(), kView.end());
-  Proc p(a, out / "reference.log");
-  return p.wait(300s);
-}
-
-// frame_diff exit code; its last line in *summary.
-int frame_diff(const fs::path& a, const fs::path& b, std::string* summary) {
-  Proc p({bin("frame_diff"), a.string(), b.string(), "--max-fraction", "0.0001"}, a / "diff.log");
-  int code = p.wait(120s);
-  std::string log = p.log();
-  size_t last = log.rfind("frames=");
-  *summary = last == std::string::npos ? log : log.substr(last);
-  return code;
+ClusterOptions cluster(const std::string& scene, const std::string& path) {
+  return ClusterOptions(scene, path, kView);
 }
 
 void expect_cluster_equals_reference(const std::string& name, const std::string& scene, const std::string& path,
                                      size_t frames, bool coherent) {
   fs::path dir = fresh_dir(name);
-  ClusterRun r = run_cluster(dir / "cluster", scene, path);
-  ASSERT_EQ(r.rvg_code, 0) << r.rvg_log << r.node0_log << r.node1_log;
-  EXPECT_EQ(r.node0_code, 0) << r.node0_log;
-  EXPECT_EQ(r.node1_code, 0) << r.node1_log;
-  ASSERT_EQ(run_reference(dir / "reference", scene, path), 0) << read_file(dir / "reference" / "reference.log");
-  std::string summary;
-  EXPECT_EQ(frame_diff(dir / "reference", dir / "cluster", &summary), 0) << summary;
-  EXPECT_NE(summary.find("frames=" + std::to_string(frames)), std::string::npos) << summary;
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, cluster(scene, path), kView, frames);
+  if (!r) return;
 
   // Every frame arrived and verified (the client exits non-zero on a desync), and culling culled.
   auto stats = read_csv(dir / "cluster" / "stats.csv");
   ASSERT_EQ(stats["frame"].size(), frames);
   size_t leaves = 0;
-  auto pos = r.rvg_log.find("leaves=");
+  auto pos = r->rvg_log.find("leaves=");
   ASSERT_NE(pos, std::string::npos);
-  leaves = std::stoul(r.rvg_log.substr(pos + 7));
+  leaves = std::stoul(r->rvg_log.substr(pos + 7));
   // From frame 2 on the occluders are the previous visible set (frame 0 has none).
   std::vector<double> warm(stats["visible"].begin() + 2, stats["visible"].end());
   EXPECT_LT(sum(warm) / warm.size(), 0.5 * leaves);
@@ -100,10 +41,26 @@ void expect_cluster_equals_reference(const std::string& name, const std::string&
   for (double q : stats["queries"]) EXPECT_GT(q, 0);
 }
 
+// Two switch nodes and no client, both refusing each other at the handshake (exit 1): their logs
+// (nothing when node 0 did not start).
+struct Refused {
+  std::string node0_log, node1_log;
+};
+std::optional<Refused> expect_handshake_refused(const fs::path& out, const ClusterOptions& o) {
+  Cluster c(out, o);
+  const int p0 = c.start_node0();
+  EXPECT_NE(p0, 0) << c.node0().log();
+  if (p0 == 0) return std::nullopt;
+  c.start_node1();
+  EXPECT_EQ(c.node1().wait(30s), 1);
+  EXPECT_EQ(c.node0().wait(30s), 1);  // never got a valid peer
+  return Refused{c.node0().log(), c.node1().log()};
+}
+
 }  // namespace
 
 TEST(Cluster, CityWalkEqualsReference) {
-  expect_cluster_equals_reference("city", "city:6x6:3:10:1", "walk:90", 90, true);
+  expect_cluster_equals_reference("city", kCity, "walk:90", 90, true);
 }
 
 TEST(Cluster, DuplexWalkEqualsReference) {
@@ -113,13 +70,15 @@ TEST(Cluster, DuplexWalkEqualsReference) {
 
 TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {
   fs::path dir = fresh_dir("fullsets");
-  // Adaptive queries and occluder fusion off: with them the set may keep assumed-visible nodes or
-  // depend on what was drawn before each query, and full sets turn front tracking off, so the two
-  // traversals (both conservative) would differ slightly.
-  const std::vector<std::string> exact_queries = {"--adaptive-queries", "off", "--occluder-fusion", "off"};
-  ClusterRun inc = run_cluster(dir / "inc", "city:6x6:3:10:1", "walk:90", {}, {"--no-images"}, exact_queries);
-  ClusterRun full =
-      run_cluster(dir / "full", "city:6x6:3:10:1", "walk:90", {"--full-sets"}, {"--no-images"}, exact_queries);
+  ClusterOptions o = cluster(kCity, "walk:90");
+  o.client = {"--no-images"};
+  // Adaptive queries, occluder fusion and the query budget off: with them the set may keep
+  // assumed-visible nodes or depend on what was drawn before each query or on measured timings,
+  // and full sets turn front tracking off, so the two traversals (both conservative) would differ.
+  o.node0 = o.node1 = {"--adaptive-queries", "off", "--occluder-fusion", "off", "--query-budget", "off"};
+  ClusterRun inc = run_cluster(dir / "inc", o);
+  o.all = {"--full-sets"};
+  ClusterRun full = run_cluster(dir / "full", o);
   ASSERT_EQ(inc.rvg_code, 0) << inc.rvg_log;
   ASSERT_EQ(full.rvg_code, 0) << full.rvg_log;
   auto a = read_csv(dir / "inc" / "stats.csv"), b = read_csv(dir / "full" / "stats.csv");
@@ -128,65 +87,30 @@ TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {
 }
 
 TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage) {
-  fs::path dir = fresh_dir("kill");
-  fs::path out = dir / "cluster";
-  fs::create_directories(out);
-  std::vector<std::string> common = {"--scene", "city:6x6:3:10:1", "--timeout-ms", "20000"};
-  common.insert(common.end(), kView.begin(), kView.end());
-  auto args = [&](std::vector<std::string> a) {
-    a.insert(a.end(), common.begin(), common.end());
-    return a;
-  };
-  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}), out / "node0.log");
-  int p0 = wait_port(out / "n0.port", n0);
-  Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (out / "n1.port").string()}),
-          out / "node1.log");
-  int p1 = wait_port(out / "n1.port", n1);
-  ASSERT_TRUE(p0 && p1);
-  Proc rvg(args({bin("render_client"), "--path", "walk:100000", "--out", out.string(), "--connect",
-                 "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}),
-           out / "render_client.log");
+  Cluster c(fresh_dir("kill") / "cluster", cluster(kCity, "walk:100000"));
+  ASSERT_TRUE(c.start()) << c.logs();
   // Kill node 1 once frames are flowing.
-  for (int i = 0; i < 500 && read_csv(out / "stats.csv")["frame"].size() < 20; ++i) std::this_thread::sleep_for(20ms);
-  ASSERT_GE(read_csv(out / "stats.csv")["frame"].size(), 20u) << rvg.log();
-  n1.kill_now();
-  const auto t0 = std::chrono::steady_clock::now();
-  int code = rvg.wait(30s);
-  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::string log = rvg.log();
-  EXPECT_EQ(code, 1) << log;
-  EXPECT_LT(waited_s, 20.0);  // ended by the disconnect, not by the 20 s timeout
-  EXPECT_NE(log.find("error: render_client: frame "), std::string::npos) << log;
-  EXPECT_NE(log.find("switch node 1"), std::string::npos) << log;
+  ASSERT_GE(wait_frames(c.stats(), 20, 10s), 20u) << c.client().log();
+  c.node1().kill_now();
+  expect_client_stops_naming_node1(c.client(), 20.0);  // ended by the disconnect, not the 20 s timeout
   // Node 0 ends too, not hanging: with an error if it noticed node 1's death first, cleanly if
   // the render client's goodbye (which says it failed) came first.
-  const int n0_code = n0.wait(30s);
-  EXPECT_TRUE(n0_code == 0 || n0_code == 1) << n0.log();
-  EXPECT_NE(n0.log().find(n0_code == 1 ? "switch node 1" : "render client failed"), std::string::npos) << n0.log();
+  const int n0_code = c.node0().wait(30s);
+  EXPECT_TRUE(n0_code == 0 || n0_code == 1) << c.node0().log();
+  EXPECT_NE(c.node0().log().find(n0_code == 1 ? "switch node 1" : "render client failed"), std::string::npos)
+      << c.node0().log();
   // Every frame file is complete and has its stats row: nothing partial was written.
-  size_t pngs = 0;
-  for (auto& e : fs::directory_iterator(out)) {
-    std::string name = e.path().filename().string();
-    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
-    pngs += name.rfind("frame_", 0) == 0;
-  }
-  EXPECT_EQ(pngs, read_csv(out / "stats.csv")["frame"].size());
+  expect_no_partial_frames(c.out());
 }
 
 TEST(ClusterFaults, SceneFingerprintMismatchIsRefusedAtHandshakeNamingBoth) {
-  fs::path out = fresh_dir("fingerprint");
-  Proc n0({bin("switch_node"), "--id", "0", "--scene", "city:4x4:2:5:1", "--timeout-ms", "3000", "--port-file",
-           (out / "n0.port").string(), "--width", "64", "--height", "64"},
-          out / "node0.log");
-  int p0 = wait_port(out / "n0.port", n0);
-  ASSERT_NE(p0, 0) << n0.log();
-  Proc n1({bin("switch_node"), "--id", "1", "--scene", "city:5x4:2:5:1", "--timeout-ms", "3000", "--peer",
-           "127.0.0.1:" + std::to_string(p0), "--width", "64", "--height", "64"},
-          out / "node1.log");
-  EXPECT_EQ(n1.wait(30s), 1);
-  EXPECT_EQ(n0.wait(30s), 1);  // never got a valid peer
-  std::string l1 = n1.log(), l0 = n0.log();
+  ClusterOptions o("", "", kSmallView);  // the scene differs: each node names its own
+  o.timeout_ms = 3000;
+  o.node0 = {"--scene", "city:4x4:2:5:1"};
+  o.node1 = {"--scene", "city:5x4:2:5:1"};
+  const auto r = expect_handshake_refused(fresh_dir("fingerprint"), o);
+  ASSERT_TRUE(r);
+  const std::string &l1 = r->node1_log, &l0 = r->node0_log;
   auto fingerprint_of = [](const std::string& log) {
     auto p = log.find("fingerprint ");
     return p == std::string::npos ? std::string("?") : log.substr(p + 12, 16);
@@ -201,7 +125,10 @@ TEST(ClusterFaults, SceneFingerprintMismatchIsRefusedAtHandshakeNamingBoth) {
 
 TEST(Cluster, LatestCameraModeRunsToTheLastCameraWithVerifiedFrames) {
   fs::path dir = fresh_dir("latest");
-  ClusterRun r = run_cluster(dir, "city:6x6:3:10:1", "walk:40", {"--camera-mode", "latest"}, {"--no-images"});
+  ClusterOptions o = cluster(kCity, "walk:40");
+  o.all = {"--camera-mode", "latest"};
+  o.client = {"--no-images"};
+  ClusterRun r = run_cluster(dir, o);
   ASSERT_EQ(r.rvg_code, 0) << r.rvg_log;
   EXPECT_EQ(r.node0_code, 0) << r.node0_log;
   EXPECT_EQ(r.node1_code, 0) << r.node1_log;
@@ -219,16 +146,16 @@ TEST(Cluster, LatestCameraModeRunsToTheLastCameraWithVerifiedFrames) {
 // stays close to the full-detail reference.
 TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   fs::path dir = fresh_dir("lod");
-  const std::string scene = "city:6x6:3:10:1", path = "walk:60";
-  const std::vector<std::string> cache = {"--lod-cache", (dir / "cache").string()};
-  auto with = [&](std::vector<std::string> a) {
-    a.insert(a.end(), cache.begin(), cache.end());
-    return a;
-  };
-  ClusterRun exact = run_cluster(dir / "tau0", scene, path, with({}), {"--no-images"});
+  const std::string path = "walk:60";
+  ClusterOptions o = cluster(kCity, path);
+  o.all = {"--lod-cache", (dir / "cache").string()};
+  o.client = {"--no-images"};
+  ClusterRun exact = run_cluster(dir / "tau0", o);
   ASSERT_EQ(exact.rvg_code, 0) << exact.rvg_log;
-  ClusterRun r = run_cluster(dir / "tau3", scene, path, with({"--pixel-error", "3"}));
-  ASSERT_EQ(r.rvg_code, 0) << r.rvg_log << r.node0_log << r.node1_log;
+  o.all.insert(o.all.end(), {"--pixel-error", "3"});
+  o.client = {};
+  ClusterRun r = run_cluster(dir / "tau3", o);
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
   EXPECT_EQ(r.node0_code, 0) << r.node0_log;
   EXPECT_EQ(r.node1_code, 0) << r.node1_log;
   // Node 0 built the cache, node 1 and the render client loaded it; all agree on the fingerprint.
@@ -247,12 +174,10 @@ TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   EXPECT_LT(sum(b["triangles"]), 0.8 * sum(a["triangles"]));
   EXPECT_NE(r.node0_log.find("front tracking skipped"), std::string::npos);
   // Close to full detail: few differing pixels (LOD is not exact, so not zero).
-  ASSERT_EQ(run_reference(dir / "reference", scene, path), 0);
-  Proc diff({bin("frame_diff"), (dir / "reference").string(), (dir / "tau3").string(), "--threshold", "16",
-             "--max-fraction", "0.05", "--psnr"},
-            dir / "diff.log");
-  EXPECT_EQ(diff.wait(120s), 0) << diff.log();
-  EXPECT_NE(diff.log().find("psnr_db="), std::string::npos) << diff.log();
+  ASSERT_EQ(run_reference(dir / "reference", kCity, path, kView).code, 0);
+  const Outcome diff = frame_diff(dir / "reference", dir / "tau3", {"--threshold", "16", "--max-fraction", "0.05", "--psnr"});
+  EXPECT_EQ(diff.code, 0) << diff.log;
+  EXPECT_NE(diff.log.find("psnr_db="), std::string::npos) << diff.log;
 }
 
 TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
@@ -262,8 +187,11 @@ TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
                                                           {"--pixel-error", "5", "--front-tracking", "off"}}) {
     extra.insert(extra.end(), cache.begin(), cache.end());
     const fs::path out = dir / extra[3];
-    ClusterRun r = run_cluster(out, "city:6x6:3:10:1", "walk:40", extra, {"--no-images"});
-    ASSERT_EQ(r.rvg_code, 0) << r.rvg_log << r.node0_log << r.node1_log;
+    ClusterOptions o = cluster(kCity, "walk:40");
+    o.all = extra;
+    o.client = {"--no-images"};
+    ClusterRun r = run_cluster(out, o);
+    ASSERT_EQ(r.rvg_code, 0) << r.logs();
     EXPECT_EQ(r.node0_code, 0) << r.node0_log;
     EXPECT_EQ(r.node1_code, 0) << r.node1_log;
     EXPECT_EQ(read_csv(out / "stats.csv")["frame"].size(), 40u);
@@ -272,19 +200,12 @@ TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
 
 TEST(ClusterLod, MismatchedPixelErrorIsRefusedAtHandshake) {
   fs::path out = fresh_dir("lodmismatch");
-  const std::vector<std::string> common = {"--scene", "city:4x4:2:5:1", "--timeout-ms", "3000", "--width", "64",
-                                           "--height", "64", "--lod-cache", (out / "cache").string()};
-  std::vector<std::string> a0 = {bin("switch_node"), "--id", "0", "--pixel-error", "1", "--port-file",
-                                 (out / "n0.port").string()};
-  a0.insert(a0.end(), common.begin(), common.end());
-  Proc n0(a0, out / "node0.log");
-  int p0 = wait_port(out / "n0.port", n0);
-  ASSERT_NE(p0, 0) << n0.log();
-  std::vector<std::string> a1 = {bin("switch_node"), "--id", "1", "--pixel-error", "2", "--peer",
-                                 "127.0.0.1:" + std::to_string(p0)};
-  a1.insert(a1.end(), common.begin(), common.end());
-  Proc n1(a1, out / "node1.log");
-  EXPECT_EQ(n1.wait(30s), 1);
-  EXPECT_EQ(n0.wait(30s), 1);
-  EXPECT_NE(n1.log().find("config hash"), std::string::npos) << n1.log();
+  ClusterOptions o("city:4x4:2:5:1", "", kSmallView);
+  o.timeout_ms = 3000;
+  o.all = {"--lod-cache", (out / "cache").string()};
+  o.node0 = {"--pixel-error", "1"};
+  o.node1 = {"--pixel-error", "2"};
+  const auto r = expect_handshake_refused(out, o);
+  ASSERT_TRUE(r);
+  EXPECT_NE(r->node1_log.find("config hash"), std::string::npos) << r->node1_log;
 }

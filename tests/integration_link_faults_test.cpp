@@ -6,7 +6,7 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
-#include "integration_util.hpp"
+#include "cluster_run.hpp"
 
 using namespace occtest;
 using namespace std::chrono_literals;
@@ -34,51 +34,22 @@ std::string control(int port, const std::string& command) {
   return reply;
 }
 
-std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& more) {
-  a.insert(a.end(), more.begin(), more.end());
-  return a;
-}
-
-// Node 0 and node 1 direct, the render client reaching node 1 through a relay with a control port.
+// Node 0 and node 1 direct, the render client reaching node 1 through a relay with a control port;
+// `command` on the control port once frames flow.
 void stop_link_mid_run(const std::string& name, const std::string& command) {
-  fs::path out = fresh_dir(name);
-  std::vector<std::string> common = with({"--scene", kScene, "--timeout-ms", "3000"}, kView);
-  Proc n0(with({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}, common), out / "node0.log");
-  int p0 = wait_port(out / "n0.port", n0);
-  Proc n1(with({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (out / "n1.port").string()}, common),
-          out / "node1.log");
-  int p1 = wait_port(out / "n1.port", n1);
-  ASSERT_TRUE(p0 && p1);
-  Proc relay({bin("link_relay"), "--target", "127.0.0.1:" + std::to_string(p1), "--port-file",
-              (out / "relay.port").string(), "--control-port-file", (out / "control.port").string()},
-             out / "relay.log");
-  int pr = wait_port(out / "relay.port", relay), pc = wait_port(out / "control.port", relay);
-  ASSERT_TRUE(pr && pc) << relay.log();
-  Proc rvg(with({bin("render_client"), "--path", "walk:100000", "--out", out.string(),
-                 "--connect", "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(pr)},
-                common),
-           out / "render_client.log");
-  for (int i = 0; i < 500 && read_csv(out / "stats.csv")["frame"].size() < 10; ++i) std::this_thread::sleep_for(20ms);
-  ASSERT_GE(read_csv(out / "stats.csv")["frame"].size(), 10u) << rvg.log();
-  EXPECT_EQ(control(pc, command).rfind("ok", 0), 0u);
-  const auto t0 = std::chrono::steady_clock::now();
-  EXPECT_EQ(rvg.wait(30s), 1) << rvg.log();
-  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  EXPECT_LT(waited_s, 15.0);  // the 3 s receive timeout (or the cut) ended it, not the test
-  const std::string log = rvg.log();
-  EXPECT_NE(log.find("error: render_client: frame "), std::string::npos) << log;
-  EXPECT_NE(log.find("switch node 1"), std::string::npos) << log;
+  ClusterOptions o(kScene, "walk:100000", kView);
+  o.timeout_ms = 3000;
+  o.relay_node1 = true;
+  Cluster c(fresh_dir(name), o);
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 10, 10s), 10u) << c.client().log();
+  EXPECT_EQ(control(c.control_port(), command).rfind("ok", 0), 0u);
+  // The 3 s receive timeout (or the cut) ended it, not the test.
+  const std::string log = expect_client_stops_naming_node1(c.client(), 15.0);
   // A clean goodbye is never the cause of an error: node 0 ends with node 1's failure, not "done".
   EXPECT_EQ(log.find("said bye: done"), std::string::npos) << log;
-  size_t pngs = 0;
-  for (auto& e : fs::directory_iterator(out)) {
-    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos);
-    pngs += e.path().filename().string().rfind("frame_", 0) == 0;
-  }
-  EXPECT_EQ(pngs, read_csv(out / "stats.csv")["frame"].size());
-  n0.wait(30s);
-  n1.wait(30s);
+  expect_no_partial_frames(c.out());
+  c.finish();
 }
 
 }  // namespace
@@ -90,13 +61,10 @@ TEST(LinkFaults, SlowJitteryLinksNeverChangeAFrame) {
                 (out / "cluster").string()},
                out / "cluster.log");
   ASSERT_EQ(cluster.wait(240s), 0) << cluster.log();
-  Proc ref(with({bin("render_client"), "--reference", "--scene", kScene, "--path", "walk:30", "--out",
-                 (out / "ref").string()}, kView),
-           out / "ref.log");
-  ASSERT_EQ(ref.wait(120s), 0) << ref.log();
-  Proc diff({bin("frame_diff"), (out / "ref").string(), (out / "cluster").string(), "--max-fraction", "0.0001"},
-            out / "diff.log");
-  EXPECT_EQ(diff.wait(60s), 0) << diff.log();
+  const Outcome ref = run_reference(out / "ref", kScene, "walk:30", kView, 120s);
+  ASSERT_EQ(ref.code, 0) << ref.log;
+  const Outcome diff = frame_diff(out / "ref", out / "cluster");
+  EXPECT_EQ(diff.code, 0) << diff.log;
   // The relays really were in the path: each logged its connection with bytes both ways.
   EXPECT_NE(read_file(out / "cluster" / "relay_rvg1.log").find("closed"), std::string::npos);
 }

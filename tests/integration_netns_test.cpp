@@ -31,30 +31,35 @@ std::vector<std::string> cluster_args(const fs::path& out, const std::string& fr
           "--path", "walk", "--frames", frames, "--width", "96", "--height", "64", "--no-images", "--link", "1:50",
           "--out", out.string()};
 }
+
+// Every test needs root and ip netns; the namespaces that exist before it must be all that exist
+// after it.
+class NetNs : public testing::Test {
+ protected:
+  void SetUp() override {
+    if (::geteuid() != 0) GTEST_SKIP() << "needs root for network namespaces";
+    if (std::system("ip netns list >/dev/null 2>&1") != 0) GTEST_SKIP() << "ip netns unavailable";
+    before_ = namespaces();
+  }
+  std::set<std::string> before_;
+};
 }  // namespace
 
-TEST(NetNs, ClusterRunsAcrossNamespacesAndLeavesNothingBehind) {
-  if (::geteuid() != 0) GTEST_SKIP() << "needs root for network namespaces";
-  if (std::system("ip netns list >/dev/null 2>&1") != 0) GTEST_SKIP() << "ip netns unavailable";
-  const auto before = namespaces();
+TEST_F(NetNs, ClusterRunsAcrossNamespacesAndLeavesNothingBehind) {
   fs::path out = fresh_dir("netns");
   Proc run(cluster_args(out, "16"), out / "cluster.log");
   ASSERT_EQ(run.wait(240s), 0) << run.log();
   EXPECT_NE(run.log().find("summary: frames=16"), std::string::npos) << run.log();
   EXPECT_NE(read_file(out / "node0.log").find("listening on 0.0.0.0"), std::string::npos);
-  EXPECT_EQ(namespaces(), before);
+  EXPECT_EQ(namespaces(), before_);
 }
 
-TEST(NetNs, InterruptedClusterStillRemovesItsNamespaces) {
-  if (::geteuid() != 0) GTEST_SKIP() << "needs root for network namespaces";
-  if (std::system("ip netns list >/dev/null 2>&1") != 0) GTEST_SKIP() << "ip netns unavailable";
-  const auto before = namespaces();
+TEST_F(NetNs, InterruptedClusterStillRemovesItsNamespaces) {
   fs::path out = fresh_dir("netns_int");
   Proc run(cluster_args(out, "100000"), out / "cluster.log");
-  for (int i = 0; i < 1500 && read_csv(out / "stats.csv")["frame"].size() < 5; ++i) std::this_thread::sleep_for(20ms);
-  ASSERT_GE(read_csv(out / "stats.csv")["frame"].size(), 5u) << run.log();
-  EXPECT_GT(namespaces().size(), before.size());  // they exist while it runs
+  ASSERT_GE(wait_frames(out / "stats.csv", 5, 30s), 5u) << run.log();
+  EXPECT_GT(namespaces().size(), before_.size());  // they exist while it runs
   run.signal(SIGINT);
   EXPECT_EQ(run.wait(60s), 130) << run.log();
-  EXPECT_EQ(namespaces(), before);
+  EXPECT_EQ(namespaces(), before_);
 }

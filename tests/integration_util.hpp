@@ -1,11 +1,14 @@
 // Helpers for integration tests that start the real binaries: processes with logs, bounded
-// waits, port files, reading logs and stats.csv.
+// waits, port files, reading logs and stats.csv, the "one clear error line" check, the reference
+// renderer and frame_diff. The three-process cluster is in cluster_run.hpp.
 #pragma once
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -125,6 +128,100 @@ inline double sum(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;
   return s;
+}
+
+// Waits until stats.csv has at least `frames` rows (for at most `timeout`, and no longer than
+// `writer` runs when given); returns how many rows it has.
+inline size_t wait_frames(const fs::path& stats, size_t frames, std::chrono::milliseconds timeout,
+                          Proc* writer = nullptr) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  size_t n = read_csv(stats)["frame"].size();
+  while (n < frames && std::chrono::steady_clock::now() < end && (!writer || writer->running())) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    n = read_csv(stats)["frame"].size();
+  }
+  return n;
+}
+
+// How a process ended: its exit code (-1: still running at the timeout, then killed) and its log.
+struct Outcome {
+  int code = -1;
+  std::string log;
+};
+
+inline Outcome run_to_end(std::vector<std::string> argv, const fs::path& log, std::chrono::milliseconds timeout) {
+  Proc p(std::move(argv), log);
+  const int code = p.wait(timeout);
+  return {code, p.log()};
+}
+
+struct OneError {
+  int code = 0;            // the exit code it must have (0: any failure, 1..127)
+  bool whole_log = false;  // and the error line is all the process printed
+};
+
+// Bad input gets one clear error: the process failed without crashing (exit 1..127), exactly one
+// line of its log starts with "error:", and that line contains every fragment.
+inline void expect_one_error(const Outcome& o, std::initializer_list<std::string> fragments, OneError how = {}) {
+  EXPECT_GT(o.code, 0) << o.log;
+  EXPECT_LT(o.code, 128) << "crashed: " << o.log;
+  if (how.code != 0) {
+    EXPECT_EQ(o.code, how.code) << o.log;
+  }
+  size_t errors = 0;
+  std::string line;
+  std::istringstream in(o.log);
+  for (std::string l; std::getline(in, l);)
+    if (l.rfind("error:", 0) == 0) {
+      ++errors;
+      line = l;
+    }
+  EXPECT_EQ(errors, 1u) << o.log;
+  for (const auto& f : fragments) EXPECT_NE(line.find(f), std::string::npos) << "missing '" << f << "' in: " << line;
+  if (how.whole_log) {
+    EXPECT_EQ(o.log.rfind("error: ", 0), 0u) << o.log;
+    EXPECT_EQ(std::count(o.log.begin(), o.log.end(), '\n'), 1) << o.log;
+  }
+}
+
+// The reference renderer (render_client --reference, one process) drawing `path` into `out`, with
+// more flags (viewport, --cull ...); its log is out/reference.log.
+inline Outcome run_reference(const fs::path& out, const std::string& scene, const std::string& path,
+                             const std::vector<std::string>& flags,
+                             std::chrono::milliseconds timeout = std::chrono::seconds(300)) {
+  fs::create_directories(out);
+  std::vector<std::string> a = {bin("render_client"), "--reference", "--scene", scene, "--path", path, "--out",
+                                out.string()};
+  a.insert(a.end(), flags.begin(), flags.end());
+  return run_to_end(a, out / "reference.log", timeout);
+}
+
+// frame_diff A B FLAGS: exit 0 when every frame is within the budget the flags set (by default
+// --max-fraction 0.0001, as in the cluster tests); its log is kept beside A.
+inline Outcome frame_diff(const fs::path& a, const fs::path& b,
+                          const std::vector<std::string>& flags = {"--max-fraction", "0.0001"}) {
+  static int n = 0;
+  std::vector<std::string> args = {bin("frame_diff"), a.string(), b.string()};
+  args.insert(args.end(), flags.begin(), flags.end());
+  const fs::path log = a.parent_path() / ("diff_" + a.filename().string() + "_" + b.filename().string() + "_" +
+                                          std::to_string(n++) + ".log");
+  return run_to_end(args, log, std::chrono::seconds(120));
+}
+
+// frame_diff's last summary ("frames=N differing_pixels=..."), or its whole log if it has none.
+inline std::string diff_summary(const std::string& log) {
+  const size_t last = log.rfind("frames=");
+  return last == std::string::npos ? log : log.substr(last);
+}
+
+// The frame_NNNNN.png files in a directory.
+inline size_t frame_count(const fs::path& dir) {
+  size_t n = 0;
+  for (auto& e : fs::directory_iterator(dir)) {
+    const std::string f = e.path().filename().string();
+    n += f.rfind("frame_", 0) == 0 && f.size() > 4 && f.substr(f.size() - 4) == ".png";
+  }
+  return n;
 }
 
 }  // namespace occtest

@@ -8,6 +8,7 @@
 #include "common/front.hpp"
 #include "common/scene_io.hpp"
 #include "protocol/cluster/switch_step.hpp"
+#include "scene_fixtures.hpp"
 
 using namespace occ;
 
@@ -22,13 +23,7 @@ struct World {
 const World& world() {
   static World* w = [] {
     auto* w = new World;
-    CityParams p;
-    p.blocks_x = 4;
-    p.blocks_z = 3;
-    p.buildings_per_block = 2;
-    p.floors_max = 8;
-    p.detail = 1;
-    w->scene = generate_city(p);
+    w->scene = generate_city(occtest::city_params(4, 3, 2, 8, 1));
     BuildParams bp;
     bp.arity = 4;
     bp.cluster_triangles = 128;

@@ -9,6 +9,7 @@
 
 #include "common/lod.hpp"
 #include "common/scene_io.hpp"
+#include "scene_fixtures.hpp"
 
 using namespace occ;
 namespace fs = std::filesystem;
@@ -22,14 +23,7 @@ struct Built {
 };
 
 Built small_city(int blocks = 3, uint32_t seed = 1) {
-  CityParams p;
-  p.blocks_x = blocks;
-  p.blocks_z = blocks;
-  p.buildings_per_block = 2;
-  p.floors_max = 6;
-  p.detail = 2;
-  p.seed = seed;
-  Built b{generate_city(p), {}, {}};
+  Built b{generate_city(occtest::city_params(blocks, blocks, 2, 6, 2, seed)), {}, {}};
   BuildParams bp;
   bp.cluster_triangles = 256;  // several clusters per building: leaves with more triangles
   b.h = Hierarchy::build(b.scene, bp);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <thread>
 #include <utility>  // before asio: Boost 1.74 awaitable.hpp lacks it under C++20
@@ -107,11 +108,26 @@ uint16_t recently_free_port() {
   return l->port();
 }
 
+// Most tests here start with a listener on a free port of 127.0.0.1 and a log for the
+// connections they make.
+class WithListener : public testing::Test {
+ protected:
+  void SetUp() override {
+    auto l = net::Listener::open(0);
+    ASSERT_TRUE(l) << l.error();
+    listener.emplace(std::move(*l));
+  }
+  LogCapture log;
+  std::optional<net::Listener> listener;
+};
+class Loopback : public WithListener {};
+class Handshake : public WithListener {};
+class Connection : public WithListener {};
+class Listener : public WithListener {};
+
 }  // namespace
 
-TEST(Loopback, HelloThenTenThousandDiffsAndEndOfFramesArriveIntact) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Loopback, HelloThenTenThousandDiffsAndEndOfFramesArriveIntact) {
   constexpr uint32_t kIdLimit = 50000, kFrames = 100, kChangesPerFrame = 10000;
 
   std::string receiver_error;
@@ -190,10 +206,7 @@ TEST(Loopback, HelloThenTenThousandDiffsAndEndOfFramesArriveIntact) {
   EXPECT_EQ(receiver_stats.errors, 0u);
 }
 
-TEST(Loopback, StrangersAreRejectedWhileTheListenerWaitsForItsPeer) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Loopback, StrangersAreRejectedWhileTheListenerWaitsForItsPeer) {
   const auto mine = make_hello(wire::Role::switch_node, 0);
   Result<net::Peer> accepted = Error{"not run"};
   std::thread server([&] {
@@ -248,10 +261,7 @@ TEST(Loopback, StrangersAreRejectedWhileTheListenerWaitsForItsPeer) {
   EXPECT_EQ(fingerprint_lines, 2u);
 }
 
-TEST(Loopback, ListenerGivesUpAfterTheOverallTimeoutNamingTheLastRejection) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Loopback, ListenerGivesUpAfterTheOverallTimeoutNamingTheLastRejection) {
   Result<net::Peer> accepted = Error{"not run"};
   const auto t0 = Clock::now();
   std::thread server([&] {
@@ -269,10 +279,7 @@ TEST(Loopback, ListenerGivesUpAfterTheOverallTimeoutNamingTheLastRejection) {
   EXPECT_TRUE(contains(accepted.error(), "unknown message type 65535")) << accepted.error();
 }
 
-TEST(Loopback, PeerThatDisconnectsMidMessageEndsWithAnError) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Loopback, PeerThatDisconnectsMidMessageEndsWithAnError) {
   std::thread peer([&] {
     RawPeer raw(listener->port());
     raw.send(wire::encode(make_hello(wire::Role::switch_node)));
@@ -299,10 +306,7 @@ TEST(Loopback, PeerThatDisconnectsMidMessageEndsWithAnError) {
   EXPECT_TRUE(contains(conn->send(wire::Bye{"x"}).value_or(""), "connection ended"));
 }
 
-TEST(Loopback, PeerThatClosesWithoutByeEndsWithAnError) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Loopback, PeerThatClosesWithoutByeEndsWithAnError) {
   std::thread peer([&] {
     RawPeer raw(listener->port());
     raw.send(wire::encode(wire::Camera{}));
@@ -317,9 +321,7 @@ TEST(Loopback, PeerThatClosesWithoutByeEndsWithAnError) {
   EXPECT_EQ(r.reason, "peer closed the connection without bye");
 }
 
-TEST(Handshake, WrongSceneFingerprintFailsOnBothSidesNamingBothValues) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Handshake, WrongSceneFingerprintFailsOnBothSidesNamingBothValues) {
   LogCapture server_log, client_log;
   Result<wire::Hello> server_result = Error{"not run"};
   std::thread server([&] {
@@ -352,10 +354,7 @@ TEST(Handshake, WrongSceneFingerprintFailsOnBothSidesNamingBothValues) {
   EXPECT_FALSE(conn->is_open());
 }
 
-TEST(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   std::vector<wire::Message> peer_saw;
   std::thread peer([&] {
     RawPeer raw(listener->port());
@@ -377,10 +376,7 @@ TEST(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 
-TEST(Handshake, UnexpectedRoleIsRefusedAndThePeerIsToldWhy) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Handshake, UnexpectedRoleIsRefusedAndThePeerIsToldWhy) {
   Result<wire::Hello> server_result = Error{"not run"};
   std::thread server([&] {
     auto conn = listener->accept(5s, log.options());
@@ -401,10 +397,7 @@ TEST(Handshake, UnexpectedRoleIsRefusedAndThePeerIsToldWhy) {
   EXPECT_EQ(r.reason, "peer said bye: unexpected role render_client (expected switch_node)");
 }
 
-TEST(Handshake, SilentPeerTimesOut) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Handshake, SilentPeerTimesOut) {
   RawPeer silent(listener->port());
   auto conn = listener->accept(5s, log.options());
   ASSERT_TRUE(conn) << conn.error();
@@ -417,11 +410,8 @@ TEST(Handshake, SilentPeerTimesOut) {
   EXPECT_TRUE(contains(result.error(), "no hello within 300 ms")) << result.error();
 }
 
-TEST(Handshake, ListenerThatNeverAnswersTimesOutOnTheConnectingSide) {
+TEST_F(Handshake, ListenerThatNeverAnswersTimesOutOnTheConnectingSide) {
   // The kernel completes the TCP handshake from the backlog, but nobody ever reads or writes.
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
   auto conn = net::Connection::connect("127.0.0.1", listener->port(), 2s, log.options());
   ASSERT_TRUE(conn) << conn.error();
   const auto t0 = Clock::now();
@@ -463,10 +453,7 @@ TEST(Connect, GivesUpAfterTheRetryTimeout) {
       << conn.error();
 }
 
-TEST(Connection, OversizedLengthIsRejectedBeforeAnyPayloadIsRead) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Connection, OversizedLengthIsRejectedBeforeAnyPayloadIsRead) {
   RawPeer raw(listener->port());
   raw.send({3, 0, 0xff, 0xff, 0xff, 0x7f});  // node_diff, 2 GiB
   auto conn = listener->accept(5s, log.options());
@@ -477,10 +464,7 @@ TEST(Connection, OversizedLengthIsRejectedBeforeAnyPayloadIsRead) {
   EXPECT_EQ(bye_reason(raw.read_all()), "protocol error: " + r.reason);
 }
 
-TEST(Connection, SendFailsWithinTheTimeoutWhenThePeerStopsReading) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
-  LogCapture log;
+TEST_F(Connection, SendFailsWithinTheTimeoutWhenThePeerStopsReading) {
   RawPeer raw(listener->port());  // never reads
   auto options = log.options();
   options.max_send_queue_bytes = 256 << 10;
@@ -500,9 +484,7 @@ TEST(Connection, SendFailsWithinTheTimeoutWhenThePeerStopsReading) {
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 
-TEST(Connection, InvalidMessagesAreRefusedLocally) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Connection, InvalidMessagesAreRefusedLocally) {
   net::ConnectionOptions options;
   options.close_linger = 200ms;  // nobody accepts: the close waits out the linger
   auto conn = net::Connection::connect("127.0.0.1", listener->port(), 2s, options);
@@ -514,9 +496,7 @@ TEST(Connection, InvalidMessagesAreRefusedLocally) {
   EXPECT_EQ(conn->stats().sent.messages, 0u);
 }
 
-TEST(Connection, ConcurrentSendersInterleaveWholeMessages) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Connection, ConcurrentSendersInterleaveWholeMessages) {
   auto client = net::Connection::connect("127.0.0.1", listener->port(), 2s);
   ASSERT_TRUE(client) << client.error();
   auto server = listener->accept(2s);
@@ -549,9 +529,7 @@ TEST(Connection, ConcurrentSendersInterleaveWholeMessages) {
   EXPECT_EQ(server->stats().received.messages, static_cast<uint64_t>(kThreads * kPerThread));
 }
 
-TEST(Connection, SlowReceiverPausesTheStreamWithoutLosingMessages) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Connection, SlowReceiverPausesTheStreamWithoutLosingMessages) {
   net::ConnectionOptions small;
   small.max_receive_queue_bytes = 64 << 10;
   auto client = net::Connection::connect("127.0.0.1", listener->port(), 2s);
@@ -572,9 +550,7 @@ TEST(Connection, SlowReceiverPausesTheStreamWithoutLosingMessages) {
   sender.join();
 }
 
-TEST(Listener, BindsLoopbackByDefaultAndPublishesItsPortInAFile) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Listener, BindsLoopbackByDefaultAndPublishesItsPortInAFile) {
   EXPECT_EQ(listener->address(), "127.0.0.1");
   EXPECT_NE(listener->port(), 0);
 
@@ -604,9 +580,7 @@ TEST(Listener, BindsLoopbackByDefaultAndPublishesItsPortInAFile) {
   EXPECT_FALSE(net::Listener::open(0, "not-an-address"));
 }
 
-TEST(Listener, AcceptTimesOutWhenNobodyConnects) {
-  auto listener = net::Listener::open(0);
-  ASSERT_TRUE(listener) << listener.error();
+TEST_F(Listener, AcceptTimesOutWhenNobodyConnects) {
   const auto t0 = Clock::now();
   auto conn = listener->accept(200ms);
   EXPECT_GE(elapsed_ms(t0), 190);

@@ -16,14 +16,8 @@ using namespace std::chrono_literals;
 
 namespace {
 
-struct Outcome {
-  int code;
-  std::string log;
-};
-
 Outcome run(std::vector<std::string> args, const fs::path& dir, const std::string& name) {
-  Proc p(args, dir / (name + ".log"));
-  return {p.wait(120s), p.log()};
+  return run_to_end(std::move(args), dir / (name + ".log"), 120s);
 }
 
 // Hue in degrees of a saturated, not too dark pixel, else -1.
@@ -96,19 +90,7 @@ TEST(Overview, BadFlagsGiveOneError) {
   fs::path dir = fresh_dir("overview_bad");
   auto one_error = [&](std::vector<std::string> args, const std::string& name, const std::string& fragment) {
     args.insert(args.begin(), bin("cull_overview"));
-    Outcome o = run(args, dir, name);
-    EXPECT_GT(o.code, 0) << o.log;
-    EXPECT_LT(o.code, 128) << "crashed: " << o.log;
-    size_t errors = 0;
-    std::string err;
-    std::istringstream in(o.log);
-    for (std::string l; std::getline(in, l);)
-      if (l.rfind("error:", 0) == 0) {
-        ++errors;
-        err = l;
-      }
-    EXPECT_EQ(errors, 1u) << o.log;
-    EXPECT_NE(err.find(fragment), std::string::npos) << "missing '" << fragment << "' in: " << err;
+    expect_one_error(run(args, dir, name), {fragment});
   };
   const std::string out = (dir / "x.png").string();
   one_error({"--scene", kScene, "--path", "walk:20", "--frame", "20", "--out", out}, "frame", "--frame '20'");

@@ -13,7 +13,9 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <functional>
 #include <mutex>
+#include <optional>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -251,13 +253,24 @@ Bytes echo_through(Sock& s, const Bytes& data, uint64_t seed) {
   return back;
 }
 
-TEST(Relay, DelayAddsToTheRoundTrip) {
+// A relay in front of a loopback echo server (or the target port given); each test tunes the
+// options.
+class Relay : public testing::Test {
+ protected:
+  void start(const std::function<void(relay::RelayOptions&)>& tune, uint16_t target_port = 0) {
+    relay::RelayOptions o = options(target_port ? target_port : echo.port(), log);
+    tune(o);
+    auto started = relay::Relay::start(o);
+    ASSERT_TRUE(started) << started.error();
+    r.emplace(std::move(*started));
+  }
   EchoServer echo;
   LogLines log;
-  auto o = options(echo.port(), log);
-  o.up.delay_ms = o.down.delay_ms = 20;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+  std::optional<relay::Relay> r;
+};
+
+TEST_F(Relay, DelayAddsToTheRoundTrip) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) { o.up.delay_ms = o.down.delay_ms = 20; }));
   Sock c(r->port());
   ASSERT_TRUE(c.connected());
   std::vector<double> rtt;
@@ -275,13 +288,8 @@ TEST(Relay, DelayAddsToTheRoundTrip) {
   EXPECT_LT(rtt.back(), 100.0);
 }
 
-TEST(Relay, RateCapsThroughput) {
-  EchoServer echo;
-  LogLines log;
-  auto o = options(echo.port(), log);
-  o.up.rate_mbit = o.down.rate_mbit = 40;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+TEST_F(Relay, RateCapsThroughput) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) { o.up.rate_mbit = o.down.rate_mbit = 40; }));
   Sock c(r->port());
   ASSERT_TRUE(c.connected());
   const Bytes data = random_bytes(2'000'000, 2);
@@ -294,15 +302,12 @@ TEST(Relay, RateCapsThroughput) {
   EXPECT_LT(s, 0.4 * 3);
 }
 
-TEST(Relay, JitterNeverCorruptsOrReorders) {
-  EchoServer echo;
-  LogLines log;
-  auto o = options(echo.port(), log);
-  o.up = o.down = {2, 2, 0};  // releases spread over 0..4 ms
-  o.max_queued_bytes = 1u << 20;
-  o.seed = 7;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+TEST_F(Relay, JitterNeverCorruptsOrReorders) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) {
+    o.up = o.down = {2, 2, 0};  // releases spread over 0..4 ms
+    o.max_queued_bytes = 1u << 20;
+    o.seed = 7;
+  }));
   constexpr size_t kBytes = 20'000'000;
   const auto t0 = Clock::now();
   std::vector<std::thread> clients;
@@ -326,14 +331,11 @@ TEST(Relay, JitterNeverCorruptsOrReorders) {
   EXPECT_TRUE(log.contains("conn 2 closed (eof) up 20000000 B down 20000000 B"));
 }
 
-TEST(Relay, StallHoldsEverythingUntilResume) {
-  EchoServer echo;
-  LogLines log;
-  auto o = options(echo.port(), log);
-  o.control = true;
-  o.max_queued_bytes = 1u << 20;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+TEST_F(Relay, StallHoldsEverythingUntilResume) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) {
+    o.control = true;
+    o.max_queued_bytes = 1u << 20;
+  }));
   Sock ctl(r->control_port()), c(r->port());
   ASSERT_TRUE(ctl.connected() && c.connected());
   ASSERT_EQ(echo_through(c, {42}, 0), Bytes{42});
@@ -366,13 +368,8 @@ TEST(Relay, StallHoldsEverythingUntilResume) {
   EXPECT_EQ(ctl.line(), "error: unknown command 'bogus' (stall|resume|cut|stats)");
 }
 
-TEST(Relay, CutClosesBothSidesAndKeepsListening) {
-  EchoServer echo;
-  LogLines log;
-  auto o = options(echo.port(), log);
-  o.control = true;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+TEST_F(Relay, CutClosesBothSidesAndKeepsListening) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) { o.control = true; }));
   Sock ctl(r->control_port()), c(r->port());
   ASSERT_EQ(echo_through(c, {1, 2, 3}, 0), (Bytes{1, 2, 3}));
 
@@ -392,26 +389,18 @@ TEST(Relay, CutClosesBothSidesAndKeepsListening) {
   EXPECT_EQ(echo_through(again, {4}, 0), Bytes{4});
 }
 
-TEST(Relay, WaitsForATargetThatStartsLater) {
+TEST_F(Relay, WaitsForATargetThatStartsLater) {
   const uint16_t port = unused_port();
-  LogLines log;
-  auto o = options(port, log);
-  o.connect_timeout = 5000ms;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) { o.connect_timeout = 5000ms; }, port));
   Sock c(r->port());
   ASSERT_TRUE(c.send_all("hello"));
   std::this_thread::sleep_for(200ms);
-  EchoServer echo(port);
+  EchoServer late(port);
   EXPECT_EQ(c.recv_exact(5), Bytes({'h', 'e', 'l', 'l', 'o'}));
 }
 
-TEST(Relay, UnreachableTargetClosesTheClient) {
-  LogLines log;
-  auto o = options(unused_port(), log);
-  o.connect_timeout = 300ms;
-  auto r = relay::Relay::start(o);
-  ASSERT_TRUE(r) << r.error();
+TEST_F(Relay, UnreachableTargetClosesTheClient) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) { o.connect_timeout = 300ms; }, unused_port()));
   Sock c(r->port());
   const auto t0 = Clock::now();
   EXPECT_TRUE(c.sees_close());
@@ -424,17 +413,9 @@ TEST(Relay, UnreachableTargetClosesTheClient) {
 // ---------------------------------------------------------------------------------------------
 // The link_relay binary
 
-struct Exit {
-  int code;
-  std::string log;
-};
-
-Exit run_relay(std::vector<std::string> args, const std::string& name) {
+occtest::Outcome run_relay(std::vector<std::string> args, const std::string& name) {
   args.insert(args.begin(), occtest::bin("link_relay"));
-  const auto log = occtest::fresh_dir("relay_cli") / (name + ".log");
-  occtest::Proc p(args, log);
-  const int code = p.wait(10s);
-  return {code, p.log()};
+  return occtest::run_to_end(args, occtest::fresh_dir("relay_cli") / (name + ".log"), 10s);
 }
 
 TEST(LinkRelayCli, BadFlagsGiveOneErrorLineNamingTheFlag) {
@@ -452,13 +433,10 @@ TEST(LinkRelayCli, BadFlagsGiveOneErrorLineNamingTheFlag) {
   };
   int i = 0;
   for (const auto& [args, flag] : cases) {
-    const Exit run = run_relay(args, "bad" + std::to_string(i++));
-    EXPECT_EQ(run.code, 2) << flag << ": " << run.log;
-    EXPECT_EQ(run.log.rfind("error: ", 0), 0u) << run.log;
-    EXPECT_NE(run.log.find(flag), std::string::npos) << run.log;
-    EXPECT_EQ(std::count(run.log.begin(), run.log.end(), '\n'), 1) << run.log;
+    SCOPED_TRACE(flag);
+    occtest::expect_one_error(run_relay(args, "bad" + std::to_string(i++)), {flag}, {.code = 2, .whole_log = true});
   }
-  const Exit help = run_relay({"--help"}, "help");
+  const occtest::Outcome help = run_relay({"--help"}, "help");
   EXPECT_EQ(help.code, 0);
   for (const char* flag : {"--listen", "--port-file", "--target", "--delay-ms", "--jitter-ms", "--rate-mbit",
                            "--up-delay-ms", "--down-rate-mbit", "--control-port-file", "--seed", "--timeout-ms"})

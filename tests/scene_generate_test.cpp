@@ -8,20 +8,13 @@
 #include "common/city.hpp"
 #include "common/error.hpp"
 #include "common/scene_io.hpp"
+#include "scene_fixtures.hpp"
 
 using namespace occ;
 
 namespace {
 
-CityParams small_city(int detail = 1) {
-  CityParams p;
-  p.blocks_x = 3;
-  p.blocks_z = 2;
-  p.buildings_per_block = 3;
-  p.floors_max = 6;
-  p.detail = detail;
-  return p;
-}
+CityParams small_city(int detail = 1) { return occtest::city_params(3, 2, 3, 6, detail); }
 
 // The message of the InputError thrown by load_scene(spec), or "" if none.
 std::string spec_error(const std::string& spec) {
@@ -148,13 +141,7 @@ TEST(Specs, CityFields) {
   const Scene b = load_scene("city:3x4:2:5:1");
   EXPECT_EQ(b.objects.size(), 3u * 4u * (1 + 4));
   EXPECT_LE(b.bounds().max.y, 5 * city::kFloorHeight);
-  CityParams p;
-  p.blocks_x = 3;
-  p.blocks_z = 4;
-  p.buildings_per_block = 2;
-  p.floors_max = 5;
-  p.detail = 1;
-  EXPECT_EQ(b.content_hash(), generate_city(p).content_hash());
+  EXPECT_EQ(b.content_hash(), generate_city(occtest::city_params(3, 4, 2, 5, 1)).content_hash());
 }
 
 TEST(Specs, BadSpecsSayWhatIsWrong) {

@@ -1,0 +1,182 @@
+// The occlusion switch's three real processes on 127.0.0.1, like scripts/cluster.sh: switch node 0,
+// switch node 1 (its peer) and the render client connected to both, each with a port file and a
+// log in one directory (node0.log, node1.log, render_client.log). What differs between the tests
+// is in ClusterOptions: flags for all or for one process, timeouts, and a link_relay (with a
+// control port) between the render client and node 1. run_cluster() runs it to the end; a test
+// that acts while it runs (kills a node, cuts the link, sends strangers to a port) uses Cluster
+// step by step.
+#pragma once
+#include <optional>
+
+#include "integration_util.hpp"
+
+namespace occtest {
+
+struct ClusterOptions {
+  ClusterOptions(std::string scene_, std::string path_, std::vector<std::string> view_)
+      : scene(std::move(scene_)), path(std::move(path_)), view(std::move(view_)) {}
+  std::string scene;                               // --scene of all three ("": the per-process flags name it)
+  std::string path;                                // the render client's --path
+  std::vector<std::string> view;                   // --width W --height H of all three
+  int timeout_ms = 20000;                          // --timeout-ms of all three
+  std::vector<std::string> all;                    // more flags for all three
+  std::vector<std::string> node0, node1, client;   // more flags for one of them
+  bool relay_node1 = false;                        // the client reaches node 1 through link_relay
+  std::chrono::milliseconds client_wait = std::chrono::seconds(300);  // finish(): the client's end
+  std::chrono::milliseconds node_wait = std::chrono::seconds(30);     // then each node's
+};
+
+struct ClusterRun {
+  int rvg_code = -1, node0_code = -1, node1_code = -1;
+  std::string rvg_log, node0_log, node1_log;
+  std::string logs() const {
+    return "--- render_client\n" + rvg_log + "--- node 0\n" + node0_log + "--- node 1\n" + node1_log;
+  }
+};
+
+class Cluster {
+ public:
+  Cluster(fs::path out, ClusterOptions o) : out_(std::move(out)), o_(std::move(o)) { fs::create_directories(out_); }
+
+  // Each start returns the port its process wrote (0 if it ended first or never wrote it).
+  int start_node0() {
+    n0_.emplace(args({bin("switch_node"), "--id", "0", "--port-file", file("n0.port")}, o_.node0), out_ / "node0.log");
+    return p0_ = wait_port(out_ / "n0.port", *n0_);
+  }
+  int start_node1() {
+    n1_.emplace(args({bin("switch_node"), "--id", "1", "--peer", local(p0_), "--port-file", file("n1.port")}, o_.node1),
+                out_ / "node1.log");
+    return p1_ = wait_port(out_ / "n1.port", *n1_);
+  }
+  // link_relay in front of node 1; control_port() takes "stall", "cut", ... (see relay_test).
+  int start_relay() {
+    relay_.emplace(std::vector<std::string>{bin("link_relay"), "--target", local(p1_), "--port-file", file("relay.port"),
+                                            "--control-port-file", file("control.port")},
+                   out_ / "relay.log");
+    pr_ = wait_port(out_ / "relay.port", *relay_);
+    pc_ = wait_port(out_ / "control.port", *relay_);
+    return pr_ && pc_ ? pr_ : 0;
+  }
+  void start_client() {
+    client_.emplace(args({bin("render_client"), "--path", o_.path, "--out", out_.string(), "--connect", local(p0_),
+                          "--connect", local(o_.relay_node1 ? pr_ : p1_)},
+                         o_.client),
+                    out_ / "render_client.log");
+  }
+  // Node 0, node 1, the relay if asked for, then the client once every port is known: whether
+  // the client was started.
+  bool start() {
+    start_node0();
+    start_node1();
+    if (!p0_ || !p1_ || (o_.relay_node1 && !start_relay())) return false;
+    start_client();
+    return true;
+  }
+  // Waits for the client (client_wait), then for each node (node_wait): exit codes and logs.
+  ClusterRun finish() {
+    ClusterRun r;
+    if (client_) {
+      r.rvg_code = client_->wait(o_.client_wait);
+      r.rvg_log = client_->log();
+    }
+    if (n0_) {
+      r.node0_code = n0_->wait(o_.node_wait);
+      r.node0_log = n0_->log();
+    }
+    if (n1_) {
+      r.node1_code = n1_->wait(o_.node_wait);
+      r.node1_log = n1_->log();
+    }
+    return r;
+  }
+
+  // The logs of the processes started so far, for failure messages.
+  std::string logs() const {
+    const std::pair<const char*, const std::optional<Proc>*> procs[] = {
+        {"node 0", &n0_}, {"node 1", &n1_}, {"link_relay", &relay_}, {"render_client", &client_}};
+    std::string s;
+    for (const auto& [name, p] : procs)
+      if (*p) s += std::string("--- ") + name + "\n" + (*p)->log();
+    return s;
+  }
+
+  Proc& node0() { return *n0_; }
+  Proc& node1() { return *n1_; }
+  Proc& client() { return *client_; }
+  Proc& relay() { return *relay_; }
+  int control_port() const { return pc_; }
+  const fs::path& out() const { return out_; }
+  fs::path stats() const { return out_ / "stats.csv"; }
+
+ private:
+  static std::string local(int port) { return "127.0.0.1:" + std::to_string(port); }
+  std::string file(const std::string& name) const { return (out_ / name).string(); }
+  // A process's own flags, then the scene, timeout, view and flags of all three, then its extra flags.
+  std::vector<std::string> args(std::vector<std::string> a, const std::vector<std::string>& more) const {
+    if (!o_.scene.empty()) a.insert(a.end(), {"--scene", o_.scene});
+    a.insert(a.end(), {"--timeout-ms", std::to_string(o_.timeout_ms)});
+    for (const auto* v : {&o_.view, &o_.all, &more}) a.insert(a.end(), v->begin(), v->end());
+    return a;
+  }
+
+  fs::path out_;
+  ClusterOptions o_;
+  int p0_ = 0, p1_ = 0, pr_ = 0, pc_ = 0;
+  std::optional<Proc> n0_, n1_, relay_, client_;
+};
+
+// The whole run: start, then finish (the client is not started when a node wrote no port).
+inline ClusterRun run_cluster(const fs::path& out, ClusterOptions o) {
+  Cluster c(out, std::move(o));
+  c.start();
+  return c.finish();
+}
+
+// The render client of a running cluster stops on a fault of node 1 or its link: exit 1 within
+// `within_s` seconds (its own receive timeout or the disconnect, not the test's 30 s), with an
+// error naming the frame and switch node 1. Returns its log.
+inline std::string expect_client_stops_naming_node1(Proc& client, double within_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int code = client.wait(std::chrono::seconds(30));
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string log = client.log();
+  EXPECT_EQ(code, 1) << log;
+  EXPECT_LT(waited_s, within_s);
+  EXPECT_NE(log.find("error: render_client: frame "), std::string::npos) << log;
+  EXPECT_NE(log.find("switch node 1"), std::string::npos) << log;
+  return log;
+}
+
+// Every frame file in `out` is complete (no .tmp left) and has its row in stats.csv.
+inline void expect_no_partial_frames(const fs::path& out) {
+  size_t frames = 0;
+  for (auto& e : fs::directory_iterator(out)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    frames += name.rfind("frame_", 0) == 0;
+  }
+  EXPECT_EQ(frames, read_csv(out / "stats.csv")["frame"].size());
+}
+
+// The main check of the cluster and hard-case tests: the cluster renders exactly what the
+// reference renderer (with `reference_flags`) renders, every one of `frames` frames (frame_diff
+// --max-fraction 0.0001). Runs in dir/cluster and dir/reference; returns the run for more checks,
+// or nothing when the client or the reference failed (then there is nothing to compare).
+inline std::optional<ClusterRun> expect_cluster_equals_reference(const fs::path& dir, const ClusterOptions& o,
+                                                                 const std::vector<std::string>& reference_flags,
+                                                                 size_t frames) {
+  ClusterRun r = run_cluster(dir / "cluster", o);
+  EXPECT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(r.node0_code, 0) << r.logs();
+  EXPECT_EQ(r.node1_code, 0) << r.logs();
+  const Outcome ref = run_reference(dir / "reference", o.scene, o.path, reference_flags);
+  EXPECT_EQ(ref.code, 0) << ref.log;
+  if (r.rvg_code != 0 || ref.code != 0) return std::nullopt;
+  EXPECT_EQ(frame_count(dir / "cluster"), frames);
+  const Outcome diff = frame_diff(dir / "reference", dir / "cluster");
+  EXPECT_EQ(diff.code, 0) << dir.filename() << ": cluster != reference\n" << diff.log;
+  EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
+  return r;
+}
+
+}  // namespace occtest
