@@ -46,6 +46,21 @@ Camera above(const Aabb& b) {
                          b.diagonal() * 4);
 }
 
+// The city seen from above, an oracle and a budget with the given prices (ms per query and per
+// triangle).
+struct PricedCity {
+  City c;
+  Renderables r{c.h, nullptr};
+  Camera cam = above(c.h.node(0).box);
+  LodSelector sel{r, cam, 512, 0.0};
+  PointQueries q;
+  QueryBudget budget{c.h};
+  PricedCity(double ms_per_query, double ms_per_triangle) { budget.set_costs(ms_per_query, ms_per_triangle); }
+  std::vector<uint32_t> cull(CullStats* st = nullptr, bool with_budget = true) {
+    return hardware_cull_lod(c.h, cam, q, sel, {.budget = with_budget ? &budget : nullptr, .stats = st});
+  }
+};
+
 }  // namespace
 
 TEST(QueryBudget, ChildrenHaveLargerIdsThanTheirParents) {  // end_traversal folds upward by id
@@ -54,20 +69,14 @@ TEST(QueryBudget, ChildrenHaveLargerIdsThanTheirParents) {  // end_traversal fol
 }
 
 TEST(QueryBudget, WhereNothingIsOccludedSubtreesAreAcceptedWholeAndNothingVisibleIsLost) {
-  const City c;
-  const Renderables r(c.h, nullptr);
-  const Camera cam = above(c.h.node(0).box);
-  const LodSelector sel(r, cam, 512, 0.0);
-  PointQueries q;
-  q.all_visible = true;
-  QueryBudget budget(c.h);
-  budget.set_costs(0.05, 1e-5);  // a query costs what 5,000 triangles cost
-  const auto truth = hardware_cull_lod(c.h, cam, q, sel);
+  PricedCity s(0.05, 1e-5);  // a query costs what 5,000 triangles cost
+  s.q.all_visible = true;
+  const auto truth = s.cull(nullptr, false);
   ASSERT_GT(truth.size(), 20u);
   uint32_t first_queries = 0, later_queries = 0, wholes = 0;
   for (int f = 0; f < 12; ++f) {
     CullStats st;
-    const auto got = hardware_cull_lod(c.h, cam, q, sel, {.budget = &budget, .stats = &st});
+    const auto got = s.cull(&st);
     EXPECT_EQ(got, truth) << "frame " << f << ": accepting whole must give every visible leaf, no more here";
     if (f == 0) first_queries = st.queries;
     if (f >= 2) later_queries += st.queries;
@@ -78,42 +87,30 @@ TEST(QueryBudget, WhereNothingIsOccludedSubtreesAreAcceptedWholeAndNothingVisibl
 }
 
 TEST(QueryBudget, WhereQueriesCullTheyKeepBeingIssuedAndResultsStayExact) {
-  const City c;
-  const Renderables r(c.h, nullptr);
-  const Camera cam = above(c.h.node(0).box);
-  const LodSelector sel(r, cam, 512, 0.0);
-  PointQueries q;
-  q.points = {c.h.node(0).box.center()};  // almost everything occluded
-  QueryBudget budget(c.h);
-  budget.set_costs(0.05, 1e-2);  // a query costs what 5 triangles cost: culling pays
-  const auto truth = hardware_cull_lod(c.h, cam, q, sel);
+  PricedCity s(0.05, 1e-2);  // a query costs what 5 triangles cost: culling pays
+  s.q.points = {s.c.h.node(0).box.center()};  // almost everything occluded
+  const auto truth = s.cull(nullptr, false);
   for (int f = 0; f < 8; ++f) {
     CullStats st;
-    EXPECT_EQ(hardware_cull_lod(c.h, cam, q, sel, {.budget = &budget, .stats = &st}), truth) << "frame " << f;
+    EXPECT_EQ(s.cull(&st), truth) << "frame " << f;
     EXPECT_EQ(st.whole, 0u) << "frame " << f;
   }
-  EXPECT_GT(budget.subtree_saved_triangles(0), 0u);
-  EXPECT_GT(budget.subtree_queries(0), 0u);
+  EXPECT_GT(s.budget.subtree_saved_triangles(0), 0u);
+  EXPECT_GT(s.budget.subtree_queries(0), 0u);
 }
 
 TEST(QueryBudget, AcceptedSubtreesAreTestedAgainAfterTheirWait) {
-  const City c;
-  const Renderables r(c.h, nullptr);
-  const Camera cam = above(c.h.node(0).box);
-  const LodSelector sel(r, cam, 512, 0.0);
-  PointQueries q;
-  q.all_visible = true;
-  QueryBudget budget(c.h);
-  budget.set_costs(0.05, 1e-2);
-  hardware_cull_lod(c.h, cam, q, sel, {.budget = &budget});  // figures: nothing occluded
+  PricedCity s(0.05, 1e-2);
+  s.q.all_visible = true;
+  s.cull();  // figures: nothing occluded
   // Now most of the scene becomes occluded: within the longest wait the budget must test again
   // and stop accepting subtrees whole (conservative meanwhile: a superset of the truth).
-  q.all_visible = false;
-  q.points = {c.h.node(0).box.center()};
-  const auto truth = hardware_cull_lod(c.h, cam, q, sel);
+  s.q.all_visible = false;
+  s.q.points = {s.c.h.node(0).box.center()};
+  const auto truth = s.cull(nullptr, false);
   size_t last = 0;
   for (int f = 0; f < 3 * QueryBudget::kMaxWait; ++f) {
-    const auto got = hardware_cull_lod(c.h, cam, q, sel, {.budget = &budget});
+    const auto got = s.cull();
     EXPECT_TRUE(std::includes(got.begin(), got.end(), truth.begin(), truth.end())) << "frame " << f;
     last = got.size();
   }

@@ -72,6 +72,18 @@ struct PointQueries : OcclusionQueries {
   void end_batch() override { boxes.clear(); }
 };
 
+std::vector<glm::dvec3> random_points(std::mt19937& rng, const Aabb& b, int n);
+
+// A random view of the world: `n` visible points (the oracle) and a camera.
+struct RandomView {
+  PointQueries q;
+  Camera cam;
+  RandomView(std::mt19937& rng, const Aabb& world, int n) {
+    q.points = random_points(rng, world, n);
+    cam = random_camera(rng, world);
+  }
+};
+
 std::vector<glm::dvec3> random_points(std::mt19937& rng, const Aabb& b, int n) {
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<glm::dvec3> pts;
@@ -179,9 +191,9 @@ TEST(FrontCull, TauZeroLodTraversalEqualsHardwareCull) {
   Renderables r(w.h, &w.lod);
   std::mt19937 rng(5);
   for (int k = 0; k < 50; ++k) {
-    PointQueries q;
-    q.points = random_points(rng, w.h.node(0).box, 1 + k % 20);
-    const Camera cam = random_camera(rng, w.h.node(0).box);
+    RandomView view(rng, w.h.node(0).box, 1 + k % 20);
+    PointQueries& q = view.q;
+    const Camera& cam = view.cam;
     LodSelector sel(r, cam, 480, 0.0);
     auto plain = hardware_cull(w.h, cam, q, nullptr);
     auto lod = hardware_cull_lod(w.h, cam, q, sel, {.visible_pixel_lod = true});
@@ -248,9 +260,9 @@ TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
   Renderables r(w.h, &w.lod);
   std::mt19937 rng(12);
   for (int k = 0; k < 30; ++k) {
-    PointQueries q;
-    q.points = random_points(rng, w.h.node(0).box, 1 + k % 25);
-    const Camera cam = random_camera(rng, w.h.node(0).box);
+    RandomView view(rng, w.h.node(0).box, 1 + k % 25);
+    PointQueries& q = view.q;
+    const Camera& cam = view.cam;
     const LodSelector sel(r, cam, 480, k % 3 == 0 ? 2.0 : 0.0);
     CullStats lv, nf;
     const auto by_level = hardware_cull_lod(w.h, cam, q, sel, {.stats = &lv});

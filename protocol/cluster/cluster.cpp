@@ -1,6 +1,7 @@
 #include "protocol/cluster/cluster.hpp"
 
 #include <iostream>
+#include <tuple>
 
 #include "common/cli.hpp"
 #include "common/error.hpp"
@@ -87,14 +88,17 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
 }
 
 void add_hc_options(Cli& cli, HcChoices& c) {
-  cli.on_off("adaptive-queries", &c.adaptive_queries,
-             "assume nodes whose queries keep coming back visible visible for a while (no query)");
   cli.choice<HcOrder>("hc-order", &c.order, {{"levels", HcOrder::levels}, {"near-first", HcOrder::near_first}},
-                      "HC query batches: a hierarchy level each, or nearest boxes first in growing batches");
-  cli.on_off("occluder-fusion", &c.occluder_fusion,
-             "HC draws (depth only) what each batch found visible before the next batch's queries");
-  cli.on_off("query-budget", &c.query_budget,
-             "accept a subtree without queries where its queries cost more (measured) than they saved");
+                      "HC query batches: a hierarchy level each, or nearest boxes first in shells");
+  const std::tuple<const char*, bool*, const char*> switches[] = {
+      {"adaptive-queries", &c.adaptive_queries,
+       "assume nodes whose queries keep coming back visible visible for a while (no query)"},
+      {"occluder-fusion", &c.occluder_fusion,
+       "HC draws (depth only) what each batch found visible before the next batch's queries"},
+      {"query-budget", &c.query_budget,
+       "accept a subtree without queries where its queries cost more (measured) than they saved"},
+  };
+  for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {
