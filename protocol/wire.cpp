@@ -86,7 +86,7 @@ class Reader {
 constexpr uint32_t kHelloFixedBytes = 46;
 constexpr uint32_t kCameraBytes = 100;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
-constexpr uint32_t kEndOfFrameBytes = 52;
+constexpr uint32_t kEndOfFrameBytes = 64;
 constexpr uint32_t kByeFixedBytes = 2;
 
 struct Bounds {
@@ -265,6 +265,9 @@ void put(Writer& w, const EndOfFrame& m) {
   w.u32(m.hc_us);
   w.u32(m.or_us);
   w.u64(m.triangles);
+  w.u32(m.hc_cpu_us);
+  w.u32(m.or_cpu_us);
+  w.u32(m.or_tail_cpu_us);
 }
 
 void put(Writer& w, const Bye& m) { w.str(m.reason); }
@@ -341,6 +344,9 @@ Result<Message> get_end_of_frame(Reader& r) {
   m.hc_us = r.u32();
   m.or_us = r.u32();
   m.triangles = r.u64();
+  m.hc_cpu_us = r.u32();
+  m.or_cpu_us = r.u32();
+  m.or_tail_cpu_us = r.u32();
   return Message{m};
 }
 

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "common/camera_buffer.hpp"
+#include "common/cpu_time.hpp"
 #include "common/culling.hpp"
 #include "common/front.hpp"
 #include "common/error.hpp"
@@ -188,6 +189,8 @@ class SwitchNode {
       }
       last_camera = cam->number;
       const Clock::time_point or_start = Clock::now();
+      const uint64_t or_cpu0 = process_cpu_us();
+      tail_cpu0_ = 0;
       renderer_->begin_frame(cam->camera, false);
       std::vector<uint8_t> drawn(renderables_->count(), 0);
       std::vector<uint32_t> ids = sorted(visible);
@@ -195,6 +198,10 @@ class SwitchNode {
       renderer_->draw_renderables(*renderables_, ids, SceneRenderer::Mode::DepthOnly);
       Clock::duration waited{0};  // for the other node's stream: not OR work
       if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
+      ctx_->gl().Finish();  // the OR's rasterisation belongs to the OR, not to HC's first query
+      const uint64_t or_cpu1 = process_cpu_us();
+      or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
+      or_tail_cpu_us_ = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0));
       const uint32_t or_us =
           micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
 
@@ -206,6 +213,7 @@ class SwitchNode {
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
       const Clock::time_point hc_start = Clock::now();
+      hc_cpu0_ = process_cpu_us();
       hc_frame(frame, cam->camera, visible, or_us, hc_start);
     }
   }
@@ -245,6 +253,7 @@ class SwitchNode {
         expected_front = coarsen_set(visible, from_wire(*c));
       } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
         start_frame();
+        if (!d->added.empty()) tail_cpu0_ = process_cpu_us();  // the last such chunk starts the OR tail
         if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
         std::vector<uint32_t> fresh;
         for (uint32_t id : d->added)
@@ -255,6 +264,7 @@ class SwitchNode {
         renderer_->draw_renderables(*renderables_, fresh, SceneRenderer::Mode::DepthOnly);
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
+        if (!tail_cpu0_) tail_cpu0_ = process_cpu_us();
         if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
         if (auto err = stream.on_end_of_frame(visible, *e)) throw NodeFailure("desync: " + *err);
         if (e->front_hash != expected_front)
@@ -316,6 +326,9 @@ class SwitchNode {
     eof.queries = stats.queries;
     eof.or_us = or_us;
     eof.hc_us = micros_since(hc_start);
+    eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0_);
+    eof.or_cpu_us = or_cpu_us_;
+    eof.or_tail_cpu_us = or_tail_cpu_us_;
     for (uint32_t id : leaves) eof.triangles += renderables_->triangles(id);
     send_both(eof);
     visible = std::move(cur);
@@ -358,6 +371,8 @@ class SwitchNode {
   CameraBuffer cameras_;
   std::string rvg_end_;  // why the render client's connection ended (written before cameras_done_)
   std::atomic<bool> rvg_bye_{false}, cameras_done_{false};
+  uint64_t tail_cpu0_ = 0, hc_cpu0_ = 0;  // process CPU time (us) at the OR tail's / HC's start
+  uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0;
   uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
 };
