@@ -22,6 +22,7 @@ struct ClientOptions {
   bool reference = false;
   std::string cull = "frustum";
   bool exact = false;  // item-buffer pass per frame: exactly visible nodes
+  std::string save_path;  // write the camera path as CSV (for other renderers: bench.sh's OSG rows)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame

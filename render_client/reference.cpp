@@ -25,6 +25,7 @@ int run_reference(const ClientOptions& o) {
   const Hierarchy& h = ls.hierarchy;
   const Viewport vp{o.width, o.height};
   const std::vector<Camera> path = load_camera_path(o.path, ls.scene.bounds(), vp);
+  if (!o.save_path.empty()) save_camera_path(o.save_path, path);
   auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
   std::cerr << "render_client: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
   SceneRenderer renderer(*ctx, ls.scene, h);
