@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
                "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
     cli.option("save-path", &o.save_path, "FILE", "reference renderer: also write the camera path as CSV");
+    cli.option("save-scene", &o.save_scene, "FILE.gltf",
+               "reference renderer: also write the scene as glTF (FILE.gltf + FILE.bin, geometry only)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
     cli.choice("camera-mode", &o.config.camera_mode, {"lockstep", "latest"},
                "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");

@@ -17,6 +17,7 @@
 #include "render_client/baselines.hpp"
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
+#include "render_client/scene_export.hpp"
 
 namespace occ {
 
@@ -26,6 +27,7 @@ int run_reference(const ClientOptions& o) {
   const Viewport vp{o.width, o.height};
   const std::vector<Camera> path = load_camera_path(o.path, ls.scene.bounds(), vp);
   if (!o.save_path.empty()) save_camera_path(o.save_path, path);
+  if (!o.save_scene.empty()) save_gltf(ls.scene, o.save_scene);
   auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
   std::cerr << "render_client: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
   SceneRenderer renderer(*ctx, ls.scene, h);

@@ -10,8 +10,9 @@
 #   6 switch    the occlusion switch: 2 switch nodes + render client: 3 processes
 #   (+ switch with --full-sets, for what incremental transmission saves)
 #   7 OpenSceneGraph: no culling, frustum culling, OcclusionQueryNode, when the OSG peer of
-#     ../shared/peers/osg is built (OSG_PEER=/path/to/osg_peer, default /tmp/osgpeer-build/osg_peer)
-#     and the scene is a glTF file; skipped with a message otherwise.
+#     ../shared/peers/osg is built (OSG_PEER=/path/to/osg_peer, default /tmp/osgpeer-build/osg_peer);
+#     skipped with a message otherwise. A generated scene (city, layout) reaches it as the glTF
+#     file render_client --save-scene writes (the same geometry and placement).
 # Every method's frames are compared with its own renderer's brute force (wrong pixels, total and
 # worst frame; the two multi-process methods get a second run with images for that, so PNG writing
 # never counts as frame time). Each process's CPU time per frame and stage comes from the process
@@ -44,9 +45,25 @@ log() { echo "bench: $*" >&2; }
 wrong() { "$BIN/frame_diff" "$2" "${3:-$1}" >"$1/wrong.txt"; }
 drop_frames() { [ "$keep_frames" = 1 ] || rm -f "$1"/frame_*.png; }
 
+osg_peer=${OSG_PEER:-/tmp/osgpeer-build/osg_peer}
+osg_run=$here/../shared/peers/osg/run.sh
+osg_scene="" osg_skip=""
+if [ ! -x "$osg_peer" ]; then
+  osg_skip="no OSG peer at $osg_peer (build it as ../shared/peers/osg/README.md says, or set OSG_PEER)"
+elif [ ! -x "$osg_run" ]; then
+  osg_skip="$osg_run not found"
+else
+  case "$scene" in *.gltf|*.glb) osg_scene=$scene ;; *) osg_scene=$out/osg_scene/scene.gltf ;; esac
+fi
+rm -rf "$out"/osg_*
+
 for cull in none frustum stop-and-wait chc; do
   log "$cull"
   extra=(); [ "$cull" = none ] && extra=(--exact --save-path "$out/none/path.csv")
+  if [ "$cull" = none ] && [ "$osg_scene" = "$out/osg_scene/scene.gltf" ]; then
+    mkdir -p "$out/osg_scene"
+    extra+=(--save-scene "$osg_scene")
+  fi
   mkdir -p "$out/$cull"
   # render_ms and cpu_ms stop before the PNG is written: one run gives times and frames.
   "$BIN/render_client" --reference --scene "$scene" --path "$path" "${view[@]}" --cull "$cull" \
@@ -87,16 +104,8 @@ log "switch --full-sets"
 
 # OpenSceneGraph on the same cameras (the path as CSV) and viewport, each mode against OSG's own
 # brute force (its shading differs from ours).
-osg_peer=${OSG_PEER:-/tmp/osgpeer-build/osg_peer}
-osg_run=$here/../shared/peers/osg/run.sh
-rm -rf "$out"/osg_*
-case "$scene" in *.gltf|*.glb) osg_scene=$scene ;; *) osg_scene="" ;; esac
-if [ ! -x "$osg_peer" ]; then
-  log "OpenSceneGraph rows skipped: no OSG peer at $osg_peer (build it as ../shared/peers/osg/README.md says, or set OSG_PEER)"
-elif [ ! -x "$osg_run" ]; then
-  log "OpenSceneGraph rows skipped: $osg_run not found"
-elif [ -z "$osg_scene" ]; then
-  log "OpenSceneGraph rows skipped: the OSG peer loads glTF files only, and '$scene' is generated"
+if [ -n "$osg_skip" ]; then
+  log "OpenSceneGraph rows skipped: $osg_skip"
 else
   for mode in none frustum oqn; do
     log "OpenSceneGraph $mode"
@@ -110,6 +119,7 @@ else
   done
   for mode in frustum oqn; do wrong "$out/osg_$mode" "$out/osg_none"; done
   for mode in none frustum oqn; do drop_frames "$out/osg_$mode"; done
+  rm -rf "$out/osg_scene"
 fi
 for cull in frustum stop-and-wait chc none; do drop_frames "$out/$cull"; done
 
