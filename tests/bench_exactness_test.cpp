@@ -68,3 +68,29 @@ TEST(Exactness, ChcAndStopAndWaitFramesEqualBruteForceOnAGeneratedCity) {
     EXPECT_LE(none["exact_visible"][f], none["nodes_drawn"][f]);
   }
 }
+
+// bench.sh hands generated scenes to the OpenSceneGraph peer as the glTF file --save-scene
+// writes: it must be the same scene, so rendering it gives the same frames as the spec.
+TEST(Exactness, ASavedSceneRendersExactlyLikeItsSpec) {
+  fs::path dir = fresh_dir("save_scene");
+  const std::string spec = "city:3x3:2:6:2";
+  {
+    fs::create_directories(dir / "spec");
+    Proc p({bin("render_client"), "--reference", "--scene", spec, "--path", "walk:12", "--width", "160", "--height",
+            "120", "--cull", "none", "--save-scene", (dir / "city.gltf").string(), "--save-path",
+            (dir / "path.csv").string(), "--out", (dir / "spec").string()},
+           dir / "spec.log");
+    ASSERT_EQ(p.wait(120s), 0) << read_file(dir / "spec.log");
+  }
+  ASSERT_TRUE(fs::exists(dir / "city.bin"));
+  fs::create_directories(dir / "gltf");
+  Proc p({bin("render_client"), "--reference", "--scene", (dir / "city.gltf").string(), "--path",
+          (dir / "path.csv").string(), "--width", "160", "--height", "120", "--cull", "none", "--out",
+          (dir / "gltf").string()},
+         dir / "gltf.log");
+  ASSERT_EQ(p.wait(120s), 0) << read_file(dir / "gltf.log");
+  expect_identical(dir / "spec", dir / "gltf", "saved scene");
+  auto a = read_csv(dir / "spec" / "stats.csv"), b = read_csv(dir / "gltf" / "stats.csv");
+  ASSERT_EQ(a["triangles_drawn"].size(), 12u);
+  EXPECT_EQ(a["triangles_drawn"], b["triangles_drawn"]);
+}
