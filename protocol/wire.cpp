@@ -86,7 +86,7 @@ class Reader {
 constexpr uint32_t kHelloFixedBytes = 46;
 constexpr uint32_t kCameraBytes = 100;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
-constexpr uint32_t kEndOfFrameBytes = 64;
+constexpr uint32_t kEndOfFrameBytes = 68;
 constexpr uint32_t kByeFixedBytes = 2;
 
 struct Bounds {
@@ -268,6 +268,7 @@ void put(Writer& w, const EndOfFrame& m) {
   w.u32(m.hc_cpu_us);
   w.u32(m.or_cpu_us);
   w.u32(m.or_tail_cpu_us);
+  w.u32(m.or_tail_us);
 }
 
 void put(Writer& w, const Bye& m) { w.str(m.reason); }
@@ -347,6 +348,7 @@ Result<Message> get_end_of_frame(Reader& r) {
   m.hc_cpu_us = r.u32();
   m.or_cpu_us = r.u32();
   m.or_tail_cpu_us = r.u32();
+  m.or_tail_us = r.u32();
   return Message{m};
 }
 

@@ -45,7 +45,7 @@
 //    12  u32  added ids [added_count]
 //     .  u32  removed ids [removed_count]     no id twice in one message (in either list)
 //
-// EndOfFrame (64) — closes frame `frame` of a diff stream
+// EndOfFrame (68) — closes frame `frame` of a diff stream
 //     0  u32  frame
 //     4  u32  total_added       ids added in all of this frame's NodeDiff chunks
 //     8  u32  total_removed     ids removed in all of this frame's NodeDiff chunks
@@ -60,9 +60,11 @@
 //    52  u32  hc_cpu_us           CPU time of the sender's whole process during HC (all threads:
 //                                 llvmpipe's included; microseconds),
 //    56  u32  or_cpu_us           CPU time of the sender's process during this frame's OR,
-//    60  u32  or_tail_cpu_us      ... of which after the first message of the other node's
-//                                 stream for the previous frame arrived (the OR work on the
-//                                 critical path from one HC to the next; 0 = not measured)
+//    60  u32  or_tail_cpu_us      ... of which after the last diff chunk with additions of the
+//                                 other node's stream for the previous frame arrived (or its
+//                                 EndOfFrame, if none): the OR work on the critical path from one
+//                                 HC to the next (0 = not measured),
+//    64  u32  or_tail_us          the same stretch in wall-clock time (microseconds)
 //
 // Bye (2 + reason_bytes; 2..1026) — the sender closes after it. Reason kByeDone ("done") means it
 // finished cleanly; any other reason says why it failed or gave up.
@@ -148,6 +150,7 @@ struct EndOfFrame {
   uint32_t hc_cpu_us = 0;
   uint32_t or_cpu_us = 0;
   uint32_t or_tail_cpu_us = 0;
+  uint32_t or_tail_us = 0;
   bool operator==(const EndOfFrame&) const = default;
 };
 

@@ -111,7 +111,7 @@ class Client {
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
-                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms"});
+                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms"});
     VisibleSet visible(renderables_->count());
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
@@ -196,7 +196,8 @@ class Client {
                      eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
                      ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown), eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
-                     (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0});
+                     (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
+                     eof.or_tail_us / 1000.0});
       cpu_prev_shown_ = cpu_shown;
       frame_done_.push_back(shown);
       visible_sum_ += visible.size();

@@ -2,6 +2,8 @@
 """Aggregates a scripts/bench.sh run into OUT/bench.csv, OUT/bench.md and OUT/per_frame.dat (plots).
 
 usage: bench_report.py OUT SCENE PATH WIDTH HEIGHT [--model-delay-ms D] [--model-gbit G] [--lookahead L]
+       bench_report.py --check-model DIR [--model-delay-ms D] ...  (one cluster run's stats.csv: the
+       model against the frame interval it measured, e.g. a run with --netns --link D:RATE)
 
 Reads OUT/<method>/stats.csv for every method and OUT/<method>/wrong.txt (the summary line of
 frame_diff against the method's own brute force: "frames=N differing_pixels=P max_frame_fraction=F").
@@ -66,18 +68,21 @@ def change(new, old, unit):
     return f"{abs(pct):.0f} % {'more' if pct > 0 else 'fewer'} {unit}"
 
 
-def switch_model_ms(rows, delay_ms, gbit, lookahead):
-    """Mean over frames of the three-machine frame time (see the module doc); None without CPU columns."""
-    need = ("hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_frame_cpu_ms")
-    if not rows or any(c not in rows[0] for c in need):
+CPU_STAGES = ("hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_frame_cpu_ms")
+WALL_STAGES = ("hc_ms", "or_ms", "or_tail_ms", "rvg_ms")  # what this machine gave each stage
+
+
+def switch_model_ms(rows, delay_ms, gbit, lookahead, stages=CPU_STAGES):
+    """Mean over frames of the three-machine frame time (see the module doc); None without the columns."""
+    if not rows or any(c not in rows[0] for c in stages):
         return None
+    hc, orr, tail, rvg = stages
     times = []
     for i, r in enumerate(rows):
         transfer_ms = r.get("bytes_received", 0) * 8 / (gbit * 1e9) * 1e3
-        terms = [(r["hc_cpu_ms"] + r["or_cpu_ms"]) / 2, r["rvg_frame_cpu_ms"],
-                 (delay_ms + r["or_cpu_ms"] - r["or_tail_cpu_ms"]) / (lookahead - 1)]
+        terms = [(r[hc] + r[orr]) / 2, r[rvg], (delay_ms + r[orr] - r[tail]) / (lookahead - 1)]
         if i + 1 < len(rows):
-            terms.append(r["hc_cpu_ms"] + delay_ms + transfer_ms + rows[i + 1]["or_tail_cpu_ms"])
+            terms.append(r[hc] + delay_ms + transfer_ms + rows[i + 1][tail])
         times.append(max(terms))
     return statistics.mean(times)
 
@@ -272,7 +277,35 @@ def write_per_frame(out, results):
             f.write(f"{i} {fps} {inc[i]['added'] + inc[i]['removed']:.0f} {full[i]['added'] + full[i]['removed']:.0f}\n")
 
 
+def check_model(run_dir, delay_ms, gbit, lookahead):
+    """The model next to what one cluster run measured (frames 0-1 left out: they send the whole set)."""
+    rows = read_rows(f"{run_dir}/stats.csv")[2:]
+    model = switch_model_ms(rows, delay_ms, gbit, lookahead)
+    if model is None:
+        raise SystemExit(f"error: {run_dir}/stats.csv has no CPU columns (a run of an older build?)")
+    wall = switch_model_ms(rows, delay_ms, gbit, lookahead, WALL_STAGES)
+    measured = statistics.mean(r["frame_interval_ms"] for r in rows)
+    median = statistics.median(r["frame_interval_ms"] for r in rows)
+    print(f"{run_dir}: {len(rows)} frames, measured {measured:.2f} ms/frame (median {median:.2f}); model "
+          f"({delay_ms:g} ms links) from CPU times {model:.2f} ms/frame (x{model / measured:.2f})"
+          + ("" if wall is None else f", from this machine's wall-clock stage times {wall:.2f} (x{wall / measured:.2f})")
+          + "; CPU per frame HC "
+          f"{mean_of(rows, 'hc_cpu_ms'):.2f}, OR {mean_of(rows, 'or_cpu_ms'):.2f} (tail {mean_of(rows, 'or_tail_cpu_ms'):.2f}), "
+          f"RVG {mean_of(rows, 'rvg_frame_cpu_ms'):.2f}; wall HC {mean_of(rows, 'hc_ms'):.2f}, OR {mean_of(rows, 'or_ms'):.2f}")
+
+
 def main(argv=None):
+    if argv is None:
+        import sys
+        argv = sys.argv[1:]
+    if argv and argv[0] == "--check-model":
+        c = argparse.ArgumentParser(description="the three-machine model against one cluster run")
+        c.add_argument("--check-model", dest="run_dir", required=True)
+        c.add_argument("--model-delay-ms", type=float, default=0.0)
+        c.add_argument("--model-gbit", type=float, default=1.0)
+        c.add_argument("--lookahead", type=int, default=3)
+        a = c.parse_args(argv)
+        return check_model(a.run_dir, a.model_delay_ms, a.model_gbit, a.lookahead)
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("out")
     p.add_argument("scene")

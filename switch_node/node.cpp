@@ -191,6 +191,7 @@ class SwitchNode {
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
+      tail_t0_ = or_start;
       renderer_->begin_frame(cam->camera, false);
       std::vector<uint8_t> drawn(renderables_->count(), 0);
       std::vector<uint32_t> ids = sorted(visible);
@@ -202,6 +203,7 @@ class SwitchNode {
       const uint64_t or_cpu1 = process_cpu_us();
       or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
       or_tail_cpu_us_ = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0));
+      or_tail_us_ = micros_since(tail_t0_);
       const uint32_t or_us =
           micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
 
@@ -253,7 +255,7 @@ class SwitchNode {
         expected_front = coarsen_set(visible, from_wire(*c));
       } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
         start_frame();
-        if (!d->added.empty()) tail_cpu0_ = process_cpu_us();  // the last such chunk starts the OR tail
+        if (!d->added.empty()) mark_tail();  // the last chunk with additions starts the OR tail
         if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
         std::vector<uint32_t> fresh;
         for (uint32_t id : d->added)
@@ -264,7 +266,7 @@ class SwitchNode {
         renderer_->draw_renderables(*renderables_, fresh, SceneRenderer::Mode::DepthOnly);
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
-        if (!tail_cpu0_) tail_cpu0_ = process_cpu_us();
+        if (!tail_cpu0_) mark_tail();
         if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
         if (auto err = stream.on_end_of_frame(visible, *e)) throw NodeFailure("desync: " + *err);
         if (e->front_hash != expected_front)
@@ -329,6 +331,7 @@ class SwitchNode {
     eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0_);
     eof.or_cpu_us = or_cpu_us_;
     eof.or_tail_cpu_us = or_tail_cpu_us_;
+    eof.or_tail_us = or_tail_us_;
     for (uint32_t id : leaves) eof.triangles += renderables_->triangles(id);
     send_both(eof);
     visible = std::move(cur);
@@ -337,6 +340,11 @@ class SwitchNode {
     assumed_visible_ += stats.skipped;
     pixel_stops_ += stats.pixel_stops;
     hlods_ += stats.hlods;
+  }
+
+  void mark_tail() {
+    tail_cpu0_ = process_cpu_us();
+    tail_t0_ = Clock::now();
   }
 
   static std::string hex(uint64_t v) {
@@ -372,7 +380,8 @@ class SwitchNode {
   std::string rvg_end_;  // why the render client's connection ended (written before cameras_done_)
   std::atomic<bool> rvg_bye_{false}, cameras_done_{false};
   uint64_t tail_cpu0_ = 0, hc_cpu0_ = 0;  // process CPU time (us) at the OR tail's / HC's start
-  uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0;
+  uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0, or_tail_us_ = 0;
+  Clock::time_point tail_t0_;
   uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
 };

@@ -49,7 +49,7 @@ TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
   EXPECT_EQ(encode(named).size(), 6u + 46u + 3u);
   EXPECT_EQ(encode(Camera{}).size(), 6u + 100u);
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
-  EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 64u);
+  EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
   EXPECT_EQ(encode(Bye{"bye"}).size(), 6u + 2u + 3u);
 }
 
@@ -81,8 +81,9 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   eof.hc_cpu_us = 0x11121314;
   eof.or_cpu_us = 0x21222324;
   eof.or_tail_cpu_us = 0x31323334;
+  eof.or_tail_us = 0x41424344;
   const auto e = encode(eof);
-  EXPECT_EQ(e[2], 64);  // payload length
+  EXPECT_EQ(e[2], 68);  // payload length
   EXPECT_EQ(e[6 + 44], 0x08);
   EXPECT_EQ(e[6 + 51], 0x01);
   EXPECT_EQ(e[6 + 52], 0x14);  // hc_cpu_us
@@ -90,6 +91,8 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   EXPECT_EQ(e[6 + 56], 0x24);  // or_cpu_us
   EXPECT_EQ(e[6 + 60], 0x34);  // or_tail_cpu_us
   EXPECT_EQ(e[6 + 63], 0x31);
+  EXPECT_EQ(e[6 + 64], 0x44);  // or_tail_us
+  EXPECT_EQ(e[6 + 67], 0x41);
 }
 
 TEST(Wire, EveryTruncationOfEveryMessageIsRejected) {
