@@ -53,7 +53,8 @@ if [ ! -x "$osg_peer" ]; then
 elif [ ! -x "$osg_run" ]; then
   osg_skip="$osg_run not found"
 else
-  case "$scene" in *.gltf|*.glb) osg_scene=$scene ;; *) osg_scene=$out/osg_scene/scene.gltf ;; esac
+  osg_scene=$out/osg_scene/scene.gltf  # what render_client --save-scene writes
+  case "$scene" in *.gltf|*.glb) [ -f "$scene" ] && osg_scene=$scene ;; esac
 fi
 rm -rf "$out"/osg_*
 
@@ -110,15 +111,21 @@ else
   for mode in none frustum oqn; do
     log "OpenSceneGraph $mode"
     mkdir -p "$out/osg_$mode"
-    OSG_PEER_BIN=$osg_peer "$osg_run" "$osg_scene" "$out/none/path.csv" "$mode" "${view[@]}" --verbose \
-      --out "$out/osg_$mode" >"$out/osg_$mode/log.txt" 2>&1
+    if ! OSG_PEER_BIN=$osg_peer "$osg_run" "$osg_scene" "$out/none/path.csv" "$mode" "${view[@]}" --verbose \
+        --out "$out/osg_$mode" >"$out/osg_$mode/log.txt" 2>&1; then
+      log "OpenSceneGraph $mode failed, its rows are left out: $(tail -n 1 "$out/osg_$mode/log.txt")"
+      rm -rf "$out"/osg_none "$out"/osg_frustum "$out"/osg_oqn
+      break
+    fi
     # "frame N ms=X drawn=D" per frame (timed up to glFinish, the PNG readback is not).
     awk 'BEGIN { print "frame,render_ms,objects_drawn" }
          $1 == "frame" { sub("ms=", "", $3); sub("drawn=", "", $4); print $2 "," $3 "," $4 }' \
       "$out/osg_$mode/log.txt" >"$out/osg_$mode/stats.csv"
   done
-  for mode in frustum oqn; do wrong "$out/osg_$mode" "$out/osg_none"; done
-  for mode in none frustum oqn; do drop_frames "$out/osg_$mode"; done
+  if [ -d "$out/osg_oqn" ]; then
+    for mode in frustum oqn; do wrong "$out/osg_$mode" "$out/osg_none"; done
+    for mode in none frustum oqn; do drop_frames "$out/osg_$mode"; done
+  fi
   rm -rf "$out/osg_scene"
 fi
 for cull in frustum stop-and-wait chc none; do drop_frames "$out/$cull"; done
