@@ -121,7 +121,7 @@ class Reader {
 constexpr uint32_t kHelloFixedBytes = 46;
 constexpr uint32_t kCameraBytes = 100;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
-constexpr uint32_t kEndOfFrameBytes = 52;
+constexpr uint32_t kEndOfFrameBytes = 68;
 constexpr uint32_t kByeFixedBytes = 2;
 
 // ---- field lists: the fixed-width fields of a message in wire order (the tables in wire.hpp).
@@ -139,7 +139,7 @@ constexpr void camera_fields(auto& io, auto& m) {
 }
 constexpr void end_of_frame_fields(auto& io, auto& m) {
   io(m.frame, m.total_added, m.total_removed, m.visible_count, m.set_hash, m.front_hash,
-     m.queries, m.hc_us, m.or_us, m.triangles);
+     m.queries, m.hc_us, m.or_us, m.triangles, m.hc_cpu_us, m.or_cpu_us, m.or_tail_cpu_us, m.or_tail_us);
 }
 
 // The lists add up to the sizes above.

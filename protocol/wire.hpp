@@ -45,7 +45,7 @@
 //    12  u32  added ids [added_count]
 //     .  u32  removed ids [removed_count]     no id twice in one message (in either list)
 //
-// EndOfFrame (52) — closes frame `frame` of a diff stream
+// EndOfFrame (68) — closes frame `frame` of a diff stream
 //     0  u32  frame
 //     4  u32  total_added       ids added in all of this frame's NodeDiff chunks
 //     8  u32  total_removed     ids removed in all of this frame's NodeDiff chunks
@@ -53,9 +53,18 @@
 //    16  u64  set_hash          set_hash(V_f), see visible_set.hpp
 //    24  u64  front_hash        front_hash(V') of front tracking (common/front.hpp); 0 when unused
 //    32  u32  queries           sender's per-frame statistics: occlusion queries issued,
-//    36  u32  hc_us               HC time (microseconds),
-//    40  u32  or_us               time spent on the OR for this frame (microseconds),
-//    44  u64  triangles           triangles drawn at the chosen LOD (0 = unknown)
+//    36  u32  hc_us               HC time (microseconds, wall clock),
+//    40  u32  or_us               time spent on the OR for this frame (microseconds, wall clock,
+//                                 waits for the other node's stream excluded),
+//    44  u64  triangles           triangles drawn at the chosen LOD (0 = unknown),
+//    52  u32  hc_cpu_us           CPU time of the sender's whole process during HC (all threads:
+//                                 llvmpipe's included; microseconds),
+//    56  u32  or_cpu_us           CPU time of the sender's process during this frame's OR,
+//    60  u32  or_tail_cpu_us      ... of which after the last diff chunk with additions of the
+//                                 other node's stream for the previous frame arrived (or its
+//                                 EndOfFrame, if none): the OR work on the critical path from one
+//                                 HC to the next (0 = not measured),
+//    64  u32  or_tail_us          the same stretch in wall-clock time (microseconds)
 //
 // Bye (2 + reason_bytes; 2..1026) — the sender closes after it. Reason kByeDone ("done") means it
 // finished cleanly; any other reason says why it failed or gave up.
@@ -76,7 +85,7 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 1;
+constexpr uint16_t kProtocolVersion = 2;  // 2: EndOfFrame carries CPU times
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
@@ -138,6 +147,10 @@ struct EndOfFrame {
   uint32_t hc_us = 0;
   uint32_t or_us = 0;
   uint64_t triangles = 0;
+  uint32_t hc_cpu_us = 0;
+  uint32_t or_cpu_us = 0;
+  uint32_t or_tail_cpu_us = 0;
+  uint32_t or_tail_us = 0;
   bool operator==(const EndOfFrame&) const = default;
 };
 

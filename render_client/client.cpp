@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "common/camera_path.hpp"
+#include "common/cpu_time.hpp"
 #include "common/progress.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
@@ -105,7 +106,8 @@ class Client {
     const uint32_t n = uint32_t(path_.size());
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
-                     "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms"});
+                     "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
+                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms"});
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes): a single server sends plain diffs.
     const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), nodes_[1] && o_.config.tracks_fronts());
@@ -116,10 +118,10 @@ class Client {
     else
       send_camera(next_camera++);
     start_ = Clock::now();
+    cpu_start_ = process_cpu_us();
     for (uint32_t frame = 0;; ++frame) {
       frame_ = frame;
       const int k = nodes_[1] ? int(hc_node_of_frame(frame)) : 0;  // one server: it does every frame
-      const uint64_t bytes_before = received_bytes();
       // 1. The camera HC used for this frame comes first.
       net::Received r = receive_from(k, frame);
       auto* wcam = std::get_if<wire::Camera>(&r.message);
@@ -134,6 +136,7 @@ class Client {
       if (auto err = viewport_mismatch(*wcam, {o_.width, o_.height}))
         throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) + " sent " + *err);
       const Camera cam = from_wire(*wcam);
+      uint64_t bytes = r.wire_bytes;  // this frame's messages only (the io thread may read ahead)
       // Front tracking (switch_step.hpp): coarsen V_{f-1} for camera f exactly as both switch
       // nodes do; the diff is relative to the result, whose hash EndOfFrame.front_hash carries.
       const uint64_t expected_front = step.coarsen(visible, cam);
@@ -142,6 +145,7 @@ class Client {
       wire::EndOfFrame eof;
       for (;;) {
         net::Received m = receive_from(k, frame);
+        bytes += m.wire_bytes;
         if (o_.config.full_sets && !cleared) visible.clear();
         cleared = true;
         if (auto* d = std::get_if<wire::NodeDiff>(&m.message)) {
@@ -166,18 +170,23 @@ class Client {
       if (next_camera < n) send_camera(next_camera++);
       // 3. Render V_f with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
+      const uint64_t cpu_r0 = process_cpu_us();
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
       g_.renderer->begin_frame(cam, true);
       DrawStats st = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::Shaded);
       g_.ctx->gl().Finish();
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
+      const uint64_t cpu_shown = process_cpu_us();
       if (out.writes_images()) out.write_frame(frame, g_.ctx->read_rgba());
       const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
-      const uint64_t bytes = received_bytes() - bytes_before;
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
                      double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
                      eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
-                     ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown)});
+                     ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown), eof.hc_cpu_us / 1000.0,
+                     eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
+                     (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
+                     eof.or_tail_us / 1000.0});
+      cpu_prev_shown_ = cpu_shown;
       frame_done_.push_back(shown);
       visible_sum_ += visible.size();
       bytes_sum_ += bytes;
@@ -190,13 +199,6 @@ class Client {
       if (wcam->frame + 1 == n) break;
     }
     progress_done();
-  }
-
-  uint64_t received_bytes() const {
-    uint64_t b = 0;
-    for (auto& c : nodes_)
-      if (c) b += c->stats().received.bytes;
-    return b;
   }
 
   void summary() const {
@@ -231,6 +233,7 @@ class Client {
   std::map<uint32_t, Clock::time_point> sent_at_;
   uint32_t frame_ = 0;  // the frame being received (for messages)
   Clock::time_point start_;
+  uint64_t cpu_start_ = 0, cpu_prev_shown_ = 0;  // process CPU time (us)
   std::vector<Clock::time_point> frame_done_;
   std::vector<double> latency_;
   size_t leaf_count_ = 0;

@@ -21,6 +21,9 @@ int main(int argc, char** argv) {
     cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
                "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
+    cli.option("save-path", &o.save_path, "FILE", "reference renderer: also write the camera path as CSV");
+    cli.option("save-scene", &o.save_scene, "FILE.gltf",
+               "reference renderer: also write the scene as glTF (FILE.gltf + FILE.bin, geometry only)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
     occ::add_cluster_options(cli, o.config);
     cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");

@@ -23,6 +23,8 @@ struct ClientOptions {
   bool reference = false;
   std::string cull = "frustum";
   bool exact = false;  // item-buffer pass per frame: exactly visible nodes
+  std::string save_path;   // write the camera path as CSV (for other renderers: bench.sh's OSG rows)
+  std::string save_scene;  // write the loaded scene as glTF (ditto, generated scenes included)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame

@@ -13,32 +13,22 @@
 # Each configuration runs twice: once without images (the frame times) and once with images
 # (the error), so PNG writing does not count as frame time. The LOD cache goes to OUT/lod-cache.
 set -uo pipefail
-here=$(cd "$(dirname "$0")/.." && pwd)
-BIN=${OCC_BIN:-$here/build/bin}
+source "$(dirname "$0")/lib.sh"
 scene="" path="walk" frames=150 width=640 height=480 out="out/accuracy"
 taus="0 0.5 1 2 5 10 20"
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene) scene=$2; shift 2 ;;
-    --path) path=$2; shift 2 ;;
-    --frames) frames=$2; shift 2 ;;
-    --width) width=$2; shift 2 ;;
-    --height) height=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
-    --taus) taus=$2; shift 2 ;;
-    -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    --*) [ $# -ge 2 ] || { echo "error: $1 needs a value" >&2; exit 2; }
-         extra+=("$1" "$2"); shift 2 ;;
-    *) echo "error: unexpected argument '$1' (see --help)" >&2; exit 2 ;;
+    --scene|--path|--frames|--width|--height|--out|--taus) occ_set "$@"; shift 2 ;;
+    -h|--help) occ_usage; exit 0 ;;
+    --*) occ_need_value "$@"; extra+=("$1" "$2"); shift 2 ;;
+    *) occ_unexpected "$1" ;;
   esac
 done
-[ -n "$scene" ] || { echo "error: --scene is required" >&2; exit 2; }
-case "$path" in walk|orbit|fly) path="$path:$frames" ;; esac
-command -v gnuplot >/dev/null || { echo "error: gnuplot not installed (run scripts/setup.sh)" >&2; exit 2; }
-for b in switch_node render_client frame_diff; do
-  [ -x "$BIN/$b" ] || { echo "error: $BIN/$b not built (run scripts/build.sh)" >&2; exit 2; }
-done
+[ -n "$scene" ] || occ_die "--scene is required"
+path=$(occ_frames_path "$path" "$frames")
+command -v gnuplot >/dev/null || occ_die "gnuplot not installed (run scripts/setup.sh)"
+occ_require_bins switch_node render_client frame_diff
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}

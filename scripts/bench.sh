@@ -1,68 +1,136 @@
 #!/usr/bin/env bash
 # Benchmarks every way occswitch can render the same path, one after another, on the same
 # scene, path and viewport (paper section 5, Tables 1-3, Figures 3-6):
-#   1 none      reference renderer, no culling (also counts the exactly visible nodes: item buffer)
+#   1 none      reference renderer, no culling: brute force (also counts the exactly visible
+#               nodes with an item buffer)
 #   2 frustum   hierarchical frustum culling
 #   3 stop-and-wait  single process, one occlusion query at a time, waiting for each
 #   4 chc       single process, coherent hierarchical culling (previous visibility, no waiting)
 #   5 gigawalk  depth-readback occlusion server (software HZB) + render client: 2 processes
 #   6 switch    the occlusion switch: 2 switch nodes + render client: 3 processes
 #   (+ switch with --full-sets, for what incremental transmission saves)
+#   7 OpenSceneGraph: no culling, frustum culling, OcclusionQueryNode, when the OSG peer of
+#     ../shared/peers/osg is built (OSG_PEER=/path/to/osg_peer, default /tmp/osgpeer-build/osg_peer);
+#     skipped with a message otherwise. A generated scene (city, layout) reaches it as the glTF
+#     file render_client --save-scene writes (the same geometry and placement).
+# Every method's frames are compared with its own renderer's brute force (wrong pixels, total and
+# worst frame; the two multi-process methods get a second run with images for that, so PNG writing
+# never counts as frame time). Each process's CPU time per frame and stage comes from the process
+# CPU clock; the report models the frame time with one machine per process from it
+# (scripts/bench_report.py; --model-delay-ms: one-way link delay for the model, default 0).
 # Writes OUT/bench.csv, OUT/bench.md, OUT/fps_along_path.png, OUT/nodes_sent.png and each run's
-# stats.csv and logs in OUT/<method>/. Prints figures; asserts nothing about speed.
+# stats.csv, logs and wrong.txt in OUT/<method>/; frames are deleted after the comparison unless
+# --keep-frames. Prints figures; asserts nothing about speed.
 #
-#   scripts/bench.sh --scene S [--path P] [--width W --height H] [--out DIR]
+#   scripts/bench.sh --scene S [--path P] [--width W --height H] [--out DIR] [--model-delay-ms D]
+#                    [--keep-frames]
 set -euo pipefail
-here=$(cd "$(dirname "$0")/.." && pwd)
-BIN=${OCC_BIN:-$here/build/bin}
-scene="" path="walk:200" width=640 height=480 out="out/bench"
+source "$(dirname "$0")/lib.sh"
+scene="" path="walk:200" width=640 height=480 out="out/bench" model_delay_ms=0 keep_frames=0
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene) scene=$2; shift 2 ;;
-    --path) path=$2; shift 2 ;;
-    --width) width=$2; shift 2 ;;
-    --height) height=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "error: unexpected argument '$1' (see scripts/bench.sh --help)" >&2; exit 2 ;;
+    --scene|--path|--width|--height|--out|--model-delay-ms) occ_set "$@"; shift 2 ;;
+    --keep-frames) keep_frames=1; shift ;;
+    -h|--help) occ_usage; exit 0 ;;
+    *) occ_unexpected "$1" ;;
   esac
 done
-[ -n "$scene" ] || { echo "error: --scene is required" >&2; exit 2; }
-for b in render_client switch_node occlusion_server; do
-  [ -x "$BIN/$b" ] || { echo "error: $BIN/$b not built (run scripts/build.sh)" >&2; exit 2; }
-done
+[ -n "$scene" ] || occ_die "--scene is required"
+occ_require_bins render_client switch_node occlusion_server frame_diff
 mkdir -p "$out"
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 view=(--width "$width" --height "$height")
 log() { echo "bench: $*" >&2; }
+# wrong DIR BRUTE_FORCE_FRAMES [FRAMES]: frame_diff (per frame, then its summary line) into DIR/wrong.txt
+wrong() { "$BIN/frame_diff" "$2" "${3:-$1}" >"$1/wrong.txt"; }
+drop_frames() { [ "$keep_frames" = 1 ] || rm -f "$1"/frame_*.png; }
+
+osg_peer=${OSG_PEER:-/tmp/osgpeer-build/osg_peer}
+osg_run=$here/../shared/peers/osg/run.sh
+osg_scene="" osg_skip=""
+if [ ! -x "$osg_peer" ]; then
+  osg_skip="no OSG peer at $osg_peer (build it as ../shared/peers/osg/README.md says, or set OSG_PEER)"
+elif [ ! -x "$osg_run" ]; then
+  osg_skip="$osg_run not found"
+else
+  osg_scene=$out/osg_scene/scene.gltf  # what render_client --save-scene writes
+  case "$scene" in *.gltf|*.glb) [ -f "$scene" ] && osg_scene=$scene ;; esac
+fi
+rm -rf "$out"/osg_*
 
 for cull in none frustum stop-and-wait chc; do
   log "$cull"
-  extra=(); [ "$cull" = none ] && extra=(--exact)
+  extra=(); [ "$cull" = none ] && extra=(--exact --save-path "$out/none/path.csv")
+  if [ "$cull" = none ] && [ "$osg_scene" = "$out/osg_scene/scene.gltf" ]; then
+    mkdir -p "$out/osg_scene"
+    extra+=(--save-scene "$osg_scene")
+  fi
   mkdir -p "$out/$cull"
-  "$BIN/render_client" --reference --scene "$scene" --path "$path" "${view[@]}" --cull "$cull" --no-images \
+  # render_ms and cpu_ms stop before the PNG is written: one run gives times and frames.
+  "$BIN/render_client" --reference --scene "$scene" --path "$path" "${view[@]}" --cull "$cull" \
     "${extra[@]}" --out "$out/$cull" >"$out/$cull/log.txt" 2>&1
+  [ "$cull" = none ] || wrong "$out/$cull" "$out/none"
 done
 
+# gigawalk DIR [--no-images]: the occlusion server and a render client with one --connect.
+gigawalk() {
+  local dir=$1 server
+  shift
+  mkdir -p "$dir"
+  rm -f "$dir/server.port"
+  "$BIN/occlusion_server" --scene "$scene" "${view[@]}" --port-file "$dir/server.port" >"$dir/server.log" 2>&1 &
+  server=$!
+  for _ in $(seq 1 600); do [ -s "$dir/server.port" ] && break; sleep 0.1; done
+  "$BIN/render_client" --scene "$scene" --path "$path" "${view[@]}" "$@" --out "$dir" \
+    --connect "127.0.0.1:$(cat "$dir/server.port")" >"$dir/log.txt" 2>&1
+  wait $server
+}
 log "gigawalk (occlusion_server + render_client)"
-mkdir -p "$out/gigawalk"
-rm -f "$out/gigawalk/server.port"
-"$BIN/occlusion_server" --scene "$scene" "${view[@]}" --port-file "$out/gigawalk/server.port" \
-  >"$out/gigawalk/server.log" 2>&1 &
-server=$!
-for _ in $(seq 1 600); do [ -s "$out/gigawalk/server.port" ] && break; sleep 0.1; done
-"$BIN/render_client" --scene "$scene" --path "$path" "${view[@]}" --no-images --out "$out/gigawalk" \
-  --connect "127.0.0.1:$(cat "$out/gigawalk/server.port")" >"$out/gigawalk/log.txt" 2>&1
-wait $server
+gigawalk "$out/gigawalk" --no-images
+log "gigawalk, frames for the comparison"
+gigawalk "$out/gigawalk_frames"
+wrong "$out/gigawalk" "$out/none" "$out/gigawalk_frames"
+drop_frames "$out/gigawalk_frames"
 
 log "switch (3 processes)"
 "$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --no-images --out "$out/switch" >/dev/null
 cp "$out/switch/render_client.log" "$out/switch/log.txt"
+log "switch, frames for the comparison"
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --out "$out/switch_frames" >/dev/null
+wrong "$out/switch" "$out/none" "$out/switch_frames"
+drop_frames "$out/switch_frames"
 log "switch --full-sets"
 "$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --no-images --full-sets \
   --out "$out/switch_full" >/dev/null
 
-python3 "$here/scripts/bench_report.py" "$out" "$scene" "$path" "$width" "$height"
+# OpenSceneGraph on the same cameras (the path as CSV) and viewport, each mode against OSG's own
+# brute force (its shading differs from ours).
+if [ -n "$osg_skip" ]; then
+  log "OpenSceneGraph rows skipped: $osg_skip"
+else
+  for mode in none frustum oqn; do
+    log "OpenSceneGraph $mode"
+    mkdir -p "$out/osg_$mode"
+    if ! OSG_PEER_BIN=$osg_peer "$osg_run" "$osg_scene" "$out/none/path.csv" "$mode" "${view[@]}" --verbose \
+        --out "$out/osg_$mode" >"$out/osg_$mode/log.txt" 2>&1; then
+      log "OpenSceneGraph $mode failed, its rows are left out: $(tail -n 1 "$out/osg_$mode/log.txt")"
+      rm -rf "$out"/osg_none "$out"/osg_frustum "$out"/osg_oqn
+      break
+    fi
+    # "frame N ms=X drawn=D" per frame (timed up to glFinish, the PNG readback is not).
+    awk 'BEGIN { print "frame,render_ms,objects_drawn" }
+         $1 == "frame" { sub("ms=", "", $3); sub("drawn=", "", $4); print $2 "," $3 "," $4 }' \
+      "$out/osg_$mode/log.txt" >"$out/osg_$mode/stats.csv"
+  done
+  if [ -d "$out/osg_oqn" ]; then
+    for mode in frustum oqn; do wrong "$out/osg_$mode" "$out/osg_none"; done
+    for mode in none frustum oqn; do drop_frames "$out/osg_$mode"; done
+  fi
+  rm -rf "$out/osg_scene"
+fi
+for cull in frustum stop-and-wait chc none; do drop_frames "$out/$cull"; done
+
+python3 "$here/scripts/bench_report.py" "$out" "$scene" "$path" "$width" "$height" --model-delay-ms "$model_delay_ms"
 if command -v gnuplot >/dev/null; then
   gnuplot -e "out='$out'" "$here/scripts/bench_plots.gp" && log "plots: $out/fps_along_path.png $out/nodes_sent.png"
 fi

@@ -20,42 +20,34 @@
 # link_relay on the connecting side. Namespaces, veths and qdiscs are removed at exit, also on
 # Ctrl-C or failure.
 set -uo pipefail
-here=$(cd "$(dirname "$0")/.." && pwd)
-BIN=${OCC_BIN:-$here/build/bin}
+source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
 scene="" path="walk" frames=60 out="out/cluster" link="" netns=0
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene) scene=$2; shift 2 ;;
-    --path) path=$2; shift 2 ;;
-    --frames) frames=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
-    --link) link=$2; shift 2 ;;
+    --scene|--path|--frames|--out|--link) occ_set "$@"; shift 2 ;;
     --netns) netns=1; shift ;;
     --no-images) rvg_only+=("$1"); shift ;;
-    --lookahead) rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget) node_only+=("$1" "$2"); shift 2 ;;
+    --lookahead) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
-    -h|--help) sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    --*) [ $# -ge 2 ] || { echo "error: $1 needs a value" >&2; exit 2; }
-         common+=("$1" "$2"); shift 2 ;;
-    *) echo "error: unexpected argument '$1' (see scripts/cluster.sh --help)" >&2; exit 2 ;;
+    -h|--help) occ_usage; exit 0 ;;
+    --*) occ_need_value "$@"; common+=("$1" "$2"); shift 2 ;;
+    *) occ_unexpected "$1" ;;
   esac
 done
-[ -n "$scene" ] || { echo "error: --scene is required (e.g. --scene city)" >&2; exit 2; }
-case "$path" in walk|orbit|fly) path="$path:$frames" ;; esac
+[ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
+path=$(occ_frames_path "$path" "$frames")
 relay_args=()
 if [ -n "$link" ]; then
   IFS=: read -r l_delay l_rate l_jitter <<<"$link"
   [[ "$l_delay" =~ ^[0-9.]+$ && "$l_rate" =~ ^[0-9.]+$ && "${l_jitter:-0}" =~ ^[0-9.]+$ ]] ||
-    { echo "error: --link '$link': expected DELAY_MS:RATE_MBIT[:JITTER_MS] (numbers)" >&2; exit 2; }
+    occ_die "--link '$link': expected DELAY_MS:RATE_MBIT[:JITTER_MS] (numbers)"
   relay_args=(--delay-ms "$l_delay" --rate-mbit "$l_rate" --jitter-ms "${l_jitter:-0}")
 fi
-for b in switch_node render_client $([ -n "$link" ] && echo link_relay); do
-  [ -x "$BIN/$b" ] || { echo "error: $BIN/$b not built (run scripts/build.sh)" >&2; exit 2; }
-done
+occ_require_bins switch_node render_client $([ -n "$link" ] && echo link_relay)
 mkdir -p "$out"
 rm -f "$out"/*.port "$out"/frame_*.png
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
@@ -67,8 +59,8 @@ trap 'echo "cluster: interrupted, stopping all processes" >&2; cleanup; exit 130
 # Where each process runs and how the others reach it.
 in_a=() in_b=() in_c=() listen=127.0.0.1:0 addr_a_from_c=127.0.0.1 addr_b_from_c=127.0.0.1 addr_a_from_b=127.0.0.1
 if [ $netns = 1 ]; then
-  [ "$(id -u)" = 0 ] || { echo "error: --netns needs root (network namespaces and veth pairs)" >&2; exit 2; }
-  command -v ip >/dev/null || { echo "error: --netns needs iproute2's ip" >&2; exit 2; }
+  [ "$(id -u)" = 0 ] || occ_die "--netns needs root (network namespaces and veth pairs)"
+  command -v ip >/dev/null || occ_die "--netns needs iproute2's ip"
   tag="occ$$"
   ns_a=${tag}a ns_b=${tag}b ns_c=${tag}c
   teardown() {

@@ -13,28 +13,19 @@
 # direction; delays are one-way, per link. --netns (root): the three processes run in three
 # network namespaces joined by veth pairs, rates as tc tbf qdiscs (see scripts/cluster.sh).
 set -euo pipefail
-here=$(cd "$(dirname "$0")/.." && pwd)
-scene="" path="walk:150" delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay=5
+source "$(dirname "$0")/lib.sh"
+scene="" path="walk:150" delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay_ms=5
 mode=latest width=320 height=240 out="out/netlab" netns=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene) scene=$2; shift 2 ;;
-    --path) path=$2; shift 2 ;;
-    --delays) delays=$2; shift 2 ;;
-    --rates) rates=$2; shift 2 ;;
-    --chunks) chunks=$2; shift 2 ;;
-    --chunk-delay-ms) chunk_delay=$2; shift 2 ;;
-    --mode) mode=$2; shift 2 ;;
-    --width) width=$2; shift 2 ;;
-    --height) height=$2; shift 2 ;;
-    --out) out=$2; shift 2 ;;
+    --scene|--path|--delays|--rates|--chunks|--chunk-delay-ms|--mode|--width|--height|--out) occ_set "$@"; shift 2 ;;
     --netns) netns=(--netns); shift ;;
-    -h|--help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "error: unexpected argument '$1' (see scripts/netlab.sh --help)" >&2; exit 2 ;;
+    -h|--help) occ_usage; exit 0 ;;
+    *) occ_unexpected "$1" ;;
   esac
 done
-[ -n "$scene" ] || { echo "error: --scene is required" >&2; exit 2; }
-case "$mode" in latest|lockstep) ;; *) echo "error: --mode '$mode': expected latest or lockstep" >&2; exit 2 ;; esac
+[ -n "$scene" ] || occ_die "--scene is required"
+case "$mode" in latest|lockstep) ;; *) occ_die "--mode '$mode': expected latest or lockstep" ;; esac
 mkdir -p "$out"
 csv="$out/net.csv"
 echo "delay_ms,rate_mbit,chunk_ids,fps,latency_ms_mean,latency_ms_p95,bytes_per_frame,frames" >"$csv"
@@ -55,10 +46,10 @@ run() {  # delay rate chunk
 }
 
 for d in $delays; do for r in $rates; do run "$d" "$r" 100; done; done
-for b in $chunks; do run "$chunk_delay" 1000 "$b"; done
+for b in $chunks; do run "$chunk_delay_ms" 1000 "$b"; done
 column -s, -t "$csv"
 
 if command -v gnuplot >/dev/null; then
-  gnuplot -e "csv='$csv'; out='$out'; chunk_delay=$chunk_delay; rates='$rates'" "$here/scripts/netlab_plots.gp"
+  gnuplot -e "csv='$csv'; out='$out'; chunk_delay=$chunk_delay_ms; rates='$rates'" "$here/scripts/netlab_plots.gp"
   echo "netlab: plots in $out/net_fps.png, $out/net_latency.png, $out/net_chunks.png" >&2
 fi

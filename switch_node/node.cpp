@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "common/camera_buffer.hpp"
+#include "common/cpu_time.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
@@ -138,6 +139,9 @@ class SwitchNode {
       }
       last_camera = cam->number;
       const Clock::time_point or_start = Clock::now();
+      const uint64_t or_cpu0 = process_cpu_us();
+      tail_cpu0_ = 0;
+      tail_t0_ = or_start;
       g_.renderer->begin_frame(cam->camera, false);
       std::vector<uint8_t>& drawn = drawn_;  // what this frame's depth buffer holds
       drawn.assign(g_.renderables->count(), 0);
@@ -147,6 +151,11 @@ class SwitchNode {
       or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
       Clock::duration waited{0};  // for the other node's stream: not OR work
       if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
+      g_.ctx->gl().Finish();  // the OR's rasterisation belongs to the OR, not to HC's first query
+      const uint64_t or_cpu1 = process_cpu_us();
+      or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
+      or_tail_cpu_us_ = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0));
+      or_tail_us_ = micros_since(tail_t0_);
       const uint32_t or_us =
           micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
 
@@ -158,6 +167,7 @@ class SwitchNode {
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
       const Clock::time_point hc_start = Clock::now();
+      hc_cpu0_ = process_cpu_us();
       hc_frame(frame, cam->camera, visible, or_us, hc_start);
     }
   }
@@ -199,6 +209,7 @@ class SwitchNode {
         expected_front = step_->coarsen(visible, from_wire(*c));
       } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
         start_frame();
+        if (!d->added.empty()) mark_tail();  // the last chunk with additions starts the OR tail
         if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
         std::vector<uint32_t> fresh;
         for (uint32_t id : d->added)
@@ -209,6 +220,7 @@ class SwitchNode {
         or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
+        if (!tail_cpu0_) mark_tail();
         if (e->frame != frame) throw NodeFailure("expected the end of frame " + std::to_string(frame) + ", got " + std::to_string(e->frame));
         if (auto err = stream.on_end_of_frame(visible, *e)) throw NodeFailure("desync: " + *err);
         if (e->front_hash != expected_front)
@@ -242,6 +254,10 @@ class SwitchNode {
     querier_->end();
     hc.eof.or_us = or_us;
     hc.eof.hc_us = micros_since(hc_start);
+    hc.eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0_);
+    hc.eof.or_cpu_us = or_cpu_us_;
+    hc.eof.or_tail_cpu_us = or_tail_cpu_us_;
+    hc.eof.or_tail_us = or_tail_us_;
     out.send(hc.eof);
     if (budget_) update_costs(hc.eof);
     ++frames_;
@@ -264,6 +280,11 @@ class SwitchNode {
       ms_per_triangle_ = ms_per_triangle_ == 0 ? t : (1 - a) * ms_per_triangle_ + a * t;
     }
     budget_->set_costs(ms_per_query_, ms_per_triangle_);
+  }
+
+  void mark_tail() {
+    tail_cpu0_ = process_cpu_us();
+    tail_t0_ = Clock::now();
   }
 
   void print_summary() const {
@@ -294,6 +315,9 @@ class SwitchNode {
   bool peer_ended_cleanly_ = false;  // a send to the other node failed after its clean goodbye
   uint64_t or_triangles_ = 0;  // drawn by the current OR
   double ms_per_query_ = 0, ms_per_triangle_ = 0;
+  uint64_t tail_cpu0_ = 0, hc_cpu0_ = 0;  // process CPU time (us) at the OR tail's / HC's start
+  uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0, or_tail_us_ = 0;
+  Clock::time_point tail_t0_;
   uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
 };

@@ -359,7 +359,7 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   std::thread peer([&] {
     RawPeer raw(listener->port());
     auto hello = wire::encode(make_hello(wire::Role::switch_node));
-    hello[6 + 4] = 2;  // version field
+    hello[6 + 4] = 1;  // version field: the version before this build's
     raw.send(hello);
     peer_saw = raw.read_all();
   });
@@ -369,10 +369,10 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   peer.join();
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(),
-                       "hello: unsupported protocol version 2 (this build speaks 1)"))
+                       "hello: unsupported protocol version 1 (this build speaks 2)"))
       << result.error();
   EXPECT_EQ(bye_reason(peer_saw),
-            "protocol error: hello: unsupported protocol version 2 (this build speaks 1)");
+            "protocol error: hello: unsupported protocol version 1 (this build speaks 2)");
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 

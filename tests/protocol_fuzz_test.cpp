@@ -33,7 +33,7 @@ void check_frame(const std::vector<uint8_t>& bytes, Tally& tally) {
 // A frame header with a known type and a length inside that type's bounds, followed by random
 // payload bytes, so the input gets past the header checks into the payload decoders.
 std::vector<uint8_t> random_plausible_frame(std::mt19937_64& rng) {
-  static const uint32_t sizes[][2] = {{46, 110}, {100, 100}, {12, 200}, {52, 52}, {2, 120}};
+  static const uint32_t sizes[][2] = {{46, 110}, {100, 100}, {12, 200}, {68, 68}, {2, 120}};
   const uint16_t type = static_cast<uint16_t>(1 + rng() % kTypeCount);
   const auto [lo, hi] = sizes[type - 1];
   const uint32_t len = lo + static_cast<uint32_t>(rng() % (hi - lo + 1));
@@ -42,7 +42,7 @@ std::vector<uint8_t> random_plausible_frame(std::mt19937_64& rng) {
   for (uint32_t i = 0; i < len; ++i) b.push_back(static_cast<uint8_t>(rng()));
   // Random bytes rarely pass magic/version or UTF-8 checks: make half of them plausible.
   if (type == 1 && rng() % 2) {
-    const uint8_t prefix[] = {'O', 'C', 'S', 'W', 1, 0, static_cast<uint8_t>(rng() % 3)};
+    const uint8_t prefix[] = {'O', 'C', 'S', 'W', static_cast<uint8_t>(kProtocolVersion), 0, static_cast<uint8_t>(rng() % 3)};
     std::copy(std::begin(prefix), std::end(prefix), b.begin() + 6);
     const uint16_t name = static_cast<uint16_t>(len - 46);
     b[6 + 44] = name & 0xff;

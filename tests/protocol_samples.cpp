@@ -40,7 +40,7 @@ std::vector<Message> sample_messages() {
   NodeDiff empty{9, {}, {}};
 
   EndOfFrame eof{12, 300, 200, 4000, 0x1111222233334444ULL, 0x5555666677778888ULL,
-                 1234, 5678, 910, 123456789012ULL};
+                 1234, 5678, 910, 123456789012ULL, 0xa1a2a3a4u, 0xb1b2b3b4u, 0xc1c2c3c4u, 0xd1d2d3d4u};
 
   return {Message{hello},      Message{Hello{}}, Message{cam},           Message{Camera{}},
           Message{diff},       Message{only_removed}, Message{empty},   Message{eof},

@@ -49,7 +49,7 @@ TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
   EXPECT_EQ(encode(named).size(), 6u + 46u + 3u);
   EXPECT_EQ(encode(Camera{}).size(), 6u + 100u);
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
-  EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 52u);
+  EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
   EXPECT_EQ(encode(Bye{"bye"}).size(), 6u + 2u + 3u);
 }
 
@@ -75,6 +75,24 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   EXPECT_EQ(d[6 + 4], 1);  // added_count
   EXPECT_EQ(d[6 + 12], 0xdd);
   EXPECT_EQ(d[6 + 15], 0xaa);
+
+  EndOfFrame eof;
+  eof.triangles = 0x0102030405060708ULL;
+  eof.hc_cpu_us = 0x11121314;
+  eof.or_cpu_us = 0x21222324;
+  eof.or_tail_cpu_us = 0x31323334;
+  eof.or_tail_us = 0x41424344;
+  const auto e = encode(eof);
+  EXPECT_EQ(e[2], 68);  // payload length
+  EXPECT_EQ(e[6 + 44], 0x08);
+  EXPECT_EQ(e[6 + 51], 0x01);
+  EXPECT_EQ(e[6 + 52], 0x14);  // hc_cpu_us
+  EXPECT_EQ(e[6 + 55], 0x11);
+  EXPECT_EQ(e[6 + 56], 0x24);  // or_cpu_us
+  EXPECT_EQ(e[6 + 60], 0x34);  // or_tail_cpu_us
+  EXPECT_EQ(e[6 + 63], 0x31);
+  EXPECT_EQ(e[6 + 64], 0x44);  // or_tail_us
+  EXPECT_EQ(e[6 + 67], 0x41);
 }
 
 TEST(Wire, EveryTruncationOfEveryMessageIsRejected) {
@@ -144,9 +162,9 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   put_u32(bad_magic, 6, 0x12345678);
   EXPECT_EQ(decode_error(bad_magic), "hello: bad magic 0x12345678 (expected 0x5753434f \"OCSW\")");
   auto bad_version = bytes;
-  put_u16(bad_version, 10, 2);
+  put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 2 (this build speaks 1)");
+            "hello: unsupported protocol version 1 (this build speaks 2)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {

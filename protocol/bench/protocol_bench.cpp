@@ -153,14 +153,16 @@ int main(int argc, char** argv) {
   }
 
   // Paper 3.5: per-frame bytes 8n + nh/b + 3(72 + h), h = 50 (TCP/IP/Ethernet headers), b = 100.
-  // Ours, one frame: diff chunks + EndOfFrame to OR and to RVG, and three cameras.
+  // Ours, one frame: diff chunks + EndOfFrame to OR and to RVG, and four cameras (the render
+  // client's to both nodes, the HC node's to the render client and to the other node). The n ids
+  // are taken as one list (added and removed chunks are split separately: a few more headers).
   const double h = 50, b = 100;
   const auto frame_bytes = [&](double n) {
     const double chunks = std::ceil(n / b);
     const double diff = chunks * (wire::kHeaderBytes + 12) + 4 * n;
     const double eof = static_cast<double>(wire::encode(wire::EndOfFrame{}).size());
     const double camera = static_cast<double>(wire::encode(wire::Camera{}).size());
-    return std::pair{2 * (diff + eof) + 3 * camera, 2 * (chunks + 1) * h + 3 * h};
+    return std::pair{2 * (diff + eof) + 4 * camera, 2 * (chunks + 1) * h + 4 * h};
   };
   std::cout << "\nbytes per frame (b = 100, h = 50): paper 8n + nh/b + 3(72 + h) vs this encoding\n"
             << "      n      paper       ours  ours + h per message\n";

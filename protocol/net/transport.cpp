@@ -82,8 +82,13 @@ struct Connection::Impl {
   mutable std::mutex m;
   std::condition_variable cv_in;   // inbox or end changed
   std::condition_variable cv_out;  // send queue space, end or finished changed
-  std::deque<std::pair<wire::Message, size_t>> inbox;  // message, memory estimate (bytes)
-  size_t inbox_bytes = 0;                              // sum of the estimates
+  struct Inbound {
+    wire::Message message;
+    size_t wire_bytes;  // header + payload as received
+    size_t cost;        // memory estimate (bytes)
+  };
+  std::deque<Inbound> inbox;
+  size_t inbox_bytes = 0;  // sum of the estimates
   std::deque<std::vector<uint8_t>> outbox;  // queued, not yet handed to the socket
   size_t outbox_bytes = 0;                  // queued + in flight
   bool writing = false;                     // a start_write is posted or a write is in flight
@@ -152,8 +157,9 @@ struct Connection::Impl {
     Received r;
     if (!inbox.empty()) {
       r.status = Received::Status::message;
-      r.message = std::move(inbox.front().first);
-      inbox_bytes -= inbox.front().second;
+      r.message = std::move(inbox.front().message);
+      r.wire_bytes = inbox.front().wire_bytes;
+      inbox_bytes -= inbox.front().cost;
       inbox.pop_front();
       if (read_paused && inbox_bytes <= opts.max_receive_queue_bytes / 2) {
         read_paused = false;
@@ -278,7 +284,7 @@ struct Connection::Impl {
       return;
     }
     const size_t cost = bytes + sizeof(wire::Message);  // bounds memory for tiny messages too
-    inbox.emplace_back(std::move(msg), cost);
+    inbox.push_back({std::move(msg), bytes, cost});
     inbox_bytes += cost;
     cv_in.notify_one();
     if (inbox_bytes > opts.max_receive_queue_bytes) {

@@ -57,6 +57,9 @@ struct Received {
   enum class Status { message, timeout, closed, error };
   Status status = Status::timeout;
   wire::Message message;  // valid when status == message
+  // Bytes of this message on the wire (header + payload), so a reader can attribute traffic to
+  // what it belongs to: stats().received counts when the io thread decodes, which may be ahead.
+  size_t wire_bytes = 0;
   std::string reason;     // closed / error: why, without the peer address (see peer())
   bool ok() const { return status == Status::message; }
 };

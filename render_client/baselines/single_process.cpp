@@ -18,11 +18,20 @@ void push_children(const Hierarchy& h, const Camera& cam, uint32_t id, FrontToBa
     pq.emplace(h.node(c).box.distance2(cam.eye), c);
 }
 
-void draw_leaf(const Hierarchy& h, uint32_t id, SceneRenderer& r, BaselineStats& st) {
+// Culling pass: the leaf goes into the depth buffer now, so it occludes what the traversal meets
+// later; its colour comes from the shaded pass.
+void draw_leaf(uint32_t id, SceneRenderer& r, BaselineStats& st) {
   uint32_t ids[1] = {id};
-  DrawStats d = r.draw_nodes(ids, SceneRenderer::Mode::Shaded);
-  st.triangles += d.triangles;
-  ++st.nodes_drawn;
+  r.draw_nodes(ids, SceneRenderer::Mode::DepthOnly);
+  st.drawn.push_back(id);
+}
+
+// The frame: the accepted leaves, shaded, in item order after a depth clear, exactly as the
+// brute-force reference draws them (so z-ties resolve the same way).
+void shaded_pass(const Hierarchy& h, const Camera& cam, SceneRenderer& r, BaselineStats& st) {
+  r.begin_frame(cam, false);  // depth only: the colour buffer still holds the cleared background
+  st.nodes_drawn = st.drawn.size();
+  st.triangles = r.draw_items(items_of_nodes(h, st.drawn), SceneRenderer::Mode::Shaded).triangles;
 }
 
 }  // namespace
@@ -46,11 +55,12 @@ BaselineStats render_stop_and_wait(const Hierarchy& h, const Camera& cam, SceneR
       if (!vis) continue;
     }
     if (n.leaf())
-      draw_leaf(h, id, r, st);
+      draw_leaf(id, r, st);
     else
       push_children(h, cam, id, pq);
   }
   q.end();
+  shaded_pass(h, cam, r, st);
   return st;
 }
 
@@ -65,7 +75,7 @@ BaselineStats ChcRenderer::render(const Camera& cam, SceneRenderer& r, BoxQuerie
   std::deque<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle), oldest first
   auto traverse = [&](uint32_t id) {
     if (h_.node(id).leaf())
-      draw_leaf(h_, id, r, st);
+      draw_leaf(id, r, st);
     else
       push_children(h_, cam, id, pq);
   };
@@ -102,6 +112,7 @@ BaselineStats ChcRenderer::render(const Camera& cam, SceneRenderer& r, BoxQuerie
   q.reset();
   q.end();
   visible_.swap(now);
+  shaded_pass(h_, cam, r, st);
   return st;
 }
 

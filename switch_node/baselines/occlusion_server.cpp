@@ -10,6 +10,7 @@
 
 #include "common/camera_buffer.hpp"
 #include "common/cli.hpp"
+#include "common/cpu_time.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
@@ -90,11 +91,13 @@ int serve(const ServerOptions& o) {
       }
       // Occluders: the previous visible set, depth only, then readback and the pyramid.
       const Clock::time_point or_start = Clock::now();
+      const uint64_t or_cpu0 = process_cpu_us();
       g.renderer->begin_frame(cam->camera, false);
       std::vector<uint32_t> prev(visible.ids().begin(), visible.ids().end());
       g.renderer->draw_items(items_of_nodes(h, prev), SceneRenderer::Mode::DepthOnly);
       pyramid.build(g.ctx->read_depth(), o.width, o.height);
       const uint32_t or_us = micros_since(or_start);
+      const uint64_t hc_cpu0 = process_cpu_us();
       // Culling on the CPU, streamed like HC.
       out.send(to_wire(cam->number, cam->camera, {o.width, o.height}));
       const Clock::time_point hc_start = Clock::now();
@@ -102,6 +105,8 @@ int serve(const ServerOptions& o) {
       HcFrame hc = step.hc(frame, visible, cam->camera, queries, {}, out);  // queries: boxes tested
       hc.eof.or_us = or_us;
       hc.eof.hc_us = micros_since(hc_start);
+      hc.eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0);
+      hc.eof.or_cpu_us = uint32_t(hc_cpu0 - or_cpu0);  // render, readback and pyramid
       out.send(hc.eof);
     }
   } catch (const std::exception& e) {

@@ -1,0 +1,16 @@
+// CPU time of the whole process (every thread: llvmpipe's rasteriser threads, the transport's
+// I/O thread), for per-stage costs that do not depend on how many processes share the cores.
+#pragma once
+#include <cstdint>
+#include <ctime>
+
+namespace occ {
+
+// Microseconds of CPU time this process has used since it started (CLOCK_PROCESS_CPUTIME_ID).
+inline uint64_t process_cpu_us() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return uint64_t(ts.tv_sec) * 1000000u + uint64_t(ts.tv_nsec) / 1000u;
+}
+
+}  // namespace occ

@@ -1,0 +1,44 @@
+# Sourced by the scripts (bench.sh, cluster.sh, netlab.sh, accuracy_sweep.sh): what their
+# argument handling and start-up share. Defines `here` (the checkout) and `BIN` (the binaries'
+# folder, OCC_BIN overrides it); usage errors exit 2 with one line naming the flag.
+#
+#   case "$1" in
+#     --scene|--path|--out) occ_set "$@"; shift 2 ;;   # sets $scene, $path, $out
+#     -h|--help) occ_usage; exit 0 ;;
+#     *) occ_unexpected "$1" ;;
+#   esac
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+BIN=${OCC_BIN:-$here/build/bin}
+OCC_SCRIPT="scripts/$(basename "$0")"
+
+# The script's header comment (line 2 up to the first line that is not a comment), as help.
+occ_usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
+
+occ_die() {
+  echo "error: $*" >&2
+  exit 2
+}
+
+occ_unexpected() { occ_die "unexpected argument '$1' (see $OCC_SCRIPT --help)"; }
+
+# occ_need_value "$@": the flag in $1 must be followed by a value.
+occ_need_value() { [ $# -ge 2 ] || occ_die "$1 needs a value (see $OCC_SCRIPT --help)"; }
+
+# occ_set "$@": --some-flag VALUE sets the variable some_flag to VALUE (the caller shifts 2).
+occ_set() {
+  occ_need_value "$@"
+  local name=${1#--}
+  printf -v "${name//-/_}" '%s' "$2"
+}
+
+# occ_require_bins NAME...: each binary must be built in $BIN.
+occ_require_bins() {
+  local b
+  for b; do [ -x "$BIN/$b" ] || occ_die "$BIN/$b not built (run scripts/build.sh)"; done
+}
+
+# occ_frames_path PATH FRAMES: walk|orbit|fly get FRAMES frames (walk:FRAMES), other paths stay.
+occ_frames_path() {
+  case "$1" in walk|orbit|fly) echo "$1:$2" ;; *) echo "$1" ;; esac
+}

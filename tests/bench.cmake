@@ -1,0 +1,9 @@
+# Issue 13: exactness of every benchmarked method, per-frame byte attribution, the bench report.
+occ_test(exactness_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/bench_exactness_test.cpp)
+add_dependencies(exactness_test render_client frame_diff)
+occ_test(frame_bytes_test integration LIBS occ_cluster occ_net Boost::system SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/bench_frame_bytes_test.cpp)
+add_dependencies(frame_bytes_test render_client)
+# The bench report's arithmetic (signs, ratios, the three-machine model) on hand-made CSV files.
+find_package(Python3 COMPONENTS Interpreter REQUIRED)
+add_test(NAME BenchReport.Arithmetic COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/bench_report_test.py)
+set_tests_properties(BenchReport.Arithmetic PROPERTIES LABELS unit)
