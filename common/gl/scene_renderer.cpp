@@ -18,7 +18,8 @@ namespace occ {
 namespace {
 
 // Material variant bits (a shader variant per combination the scene uses).
-constexpr unsigned kTextured = 1, kMask = 2, kBlend = 4, kUnlit = 8;
+constexpr unsigned kTextured = 1, kMask = 2, kBlend = 4, kUnlit = 8, kVertexColor = 16;
+constexpr unsigned kVariants = 32;
 // Face culling of an object's triangles.
 constexpr uint8_t kCullNone = 0, kCullBackCcw = 1, kCullBackCw = 2;
 constexpr uint64_t kBlendKey = uint64_t(1) << 63;
@@ -27,13 +28,16 @@ constexpr uint64_t kBlendKey = uint64_t(1) << 63;
 // texture) of MASK materials; BLEND items never reach them.
 unsigned mode_bits(SceneRenderer::Mode mode, unsigned bits) {
   if (mode == SceneRenderer::Mode::Shaded) return bits;
-  return (bits & kMask) ? (bits & (kMask | kTextured)) : 0;
+  return (bits & kMask) ? (bits & (kMask | kTextured | kVertexColor)) : 0;
 }
 
 // One source for every variant, specialised by #defines. The per-draw data are instanced
 // attributes (divisor 1): on llvmpipe this took 10-15% less CPU per frame than an SSBO of
 // per-object records indexed per vertex (measured, 27k draws, 8M triangles). Lighting is per
-// vertex (Gouraud, like fixed-function GL): on llvmpipe the fragment stage dominates.
+// fragment. Per vertex (Gouraud, like fixed-function GL) took 15-20 % less CPU per frame on the
+// duplex at 1024^2 and the saw at 512^2 (llvmpipe), but Gouraud shading depends on the
+// tessellation: a LOD no longer looks like the full detail it stands for (the city at tau 3 px:
+// up to 17 % of a frame's pixels off by more than 16 levels, against < 5 % per fragment).
 const char* const kVertexBody = R"(
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
@@ -48,14 +52,20 @@ invariant out vec2 v_uv;
 #endif
 uniform mat4 u_projection;
 invariant gl_Position;
-#if defined(SHADED) || defined(MASK)
-invariant out vec4 v_color;  // rgb: lit base colour (Shaded), a: alpha
+#if (defined(SHADED) || defined(MASK)) && defined(VERTEX_COLOR)
+invariant out vec4 v_color;  // rgb: base colour (Shaded), a: alpha
+#elif defined(SHADED) || defined(MASK)
+flat out vec4 v_color;       // the object's colour: nothing to interpolate
 #endif
 #ifdef MASK
 flat out float v_cutoff;
 #endif
 #ifdef IDS
 flat out uint v_id;
+#endif
+#ifdef LIT
+out vec3 v_position;
+out vec3 v_normal;
 #endif
 void main() {
   vec4 p = in_model_view * vec4(in_position, 1.0);
@@ -65,13 +75,10 @@ void main() {
 #endif
 #ifdef SHADED
   vec3 base = vec3(in_normal_color[0].w, in_normal_color[1].w, in_normal_color[2].w) * in_vertex_color.rgb;
-#ifdef UNLIT
   v_color = vec4(base, alpha);
-#else
-  // Headlight: the light sits at the eye (view-space origin); two-sided.
-  vec3 n = mat3(in_normal_color[0].xyz, in_normal_color[1].xyz, in_normal_color[2].xyz) * in_normal;
-  float lambert = min(abs(dot(n, p.xyz)) * inversesqrt(max(dot(n, n) * dot(p.xyz, p.xyz), 1e-36)), 1.0);
-  v_color = vec4(base * (0.2 + 0.8 * lambert), alpha);
+#ifdef LIT
+  v_position = p.xyz;
+  v_normal = mat3(in_normal_color[0].xyz, in_normal_color[1].xyz, in_normal_color[2].xyz) * in_normal;
 #endif
 #elif defined(MASK)
   v_color = vec4(0.0, 0.0, 0.0, alpha);
@@ -93,8 +100,10 @@ const char* const kFragmentBody = R"(
 layout(binding = 0) uniform sampler2D u_base_color;
 in vec2 v_uv;
 #endif
-#if defined(SHADED) || defined(MASK)
+#if (defined(SHADED) || defined(MASK)) && defined(VERTEX_COLOR)
 in vec4 v_color;
+#elif defined(SHADED) || defined(MASK)
+flat in vec4 v_color;
 #endif
 #ifdef MASK
 flat in float v_cutoff;
@@ -105,9 +114,19 @@ flat in uint v_id;
 #if defined(SHADED) || defined(IDS)
 out vec4 out_color;
 #endif
+#ifdef LIT
+in vec3 v_position;
+in vec3 v_normal;
+#endif
 void main() {
 #if defined(SHADED) || defined(MASK)
   vec4 c = v_color;
+#ifdef LIT
+  // Headlight: the light sits at the eye (view-space origin); two-sided.
+  float lambert = min(abs(dot(v_normal, v_position)) *
+                      inversesqrt(max(dot(v_normal, v_normal) * dot(v_position, v_position), 1e-36)), 1.0);
+  c.rgb *= 0.2 + 0.8 * lambert;
+#endif
 #ifdef TEXTURED
   c *= texture(u_base_color, v_uv);
 #endif
@@ -134,8 +153,13 @@ std::string defines(SceneRenderer::Mode mode, unsigned bits) {
   if (bits & kMask) d += "#define MASK\n";
   if (bits & kBlend) d += "#define BLEND\n";
   if (bits & kUnlit) d += "#define UNLIT\n";
+  if (bits & kVertexColor) d += "#define VERTEX_COLOR\n";
+  if (mode == SceneRenderer::Mode::Shaded && !(bits & kUnlit)) d += "#define LIT\n";
   return d;
 }
+
+// Leaf LOD draws: no texture coordinates, no vertex colours.
+unsigned lod_bits(unsigned bits) { return bits & ~(kTextured | kVertexColor); }
 
 std::string variant_name(unsigned bits) {
   std::string n;
@@ -144,6 +168,7 @@ std::string variant_name(unsigned bits) {
   if (bits & kMask) add("masked");
   if (bits & kBlend) add("blended");
   if (bits & kUnlit) add("unlit");
+  if (bits & kVertexColor) add("vertex-coloured");
   return n.empty() ? "plain" : n;
 }
 
@@ -195,6 +220,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
       if (mat->alpha_mode == AlphaMode::Blend) look.bits |= kBlend;
       if (mat->unlit) look.bits |= kUnlit;
       const Mesh& mesh = scene.meshes[obj.mesh];
+      if (!mesh.colors.empty()) look.bits |= kVertexColor;
       if (mat->base_color_texture >= 0 && !mesh.uvs.empty()) {
         if (size_t(mat->base_color_texture) >= scene.textures.size() ||
             scene.textures[size_t(mat->base_color_texture)].image >= scene.images.size())
@@ -272,7 +298,9 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
         glm::dmat4 t(1.0);
         t[3] = glm::dvec4(m->origin, 1.0);
         transforms_.push_back(t);
-        looks_.push_back(ObjectLook{});  // opaque, lit, double-sided, white x vertex colours
+        ObjectLook hlod_look;  // opaque, lit, double-sided, white x vertex colours
+        hlod_look.bits = kVertexColor;
+        looks_.push_back(hlod_look);
         object_box.push_back(hierarchy.node(id).box);
         hlod_draws_.push_back(d);
       }
@@ -292,7 +320,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
 
   // The variants the scene uses: full detail with its materials; LODs untextured; HLODs plain.
   std::vector<uint8_t> used[3];
-  for (auto& u : used) u.assign(16, 0);
+  for (auto& u : used) u.assign(kVariants, 0);
   auto use = [&](unsigned bits) {
     used[0][bits] = 1;
     if (!(bits & kBlend)) {
@@ -303,15 +331,16 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
   for (uint32_t o = 0; o < scene.objects.size(); ++o)
     if (drawn[o]) {
       use(looks_[o].bits);
-      if (!lod_draws_.empty()) use(looks_[o].bits & ~kTextured);
+      if (!lod_draws_.empty()) use(lod_bits(looks_[o].bits));
       has_blended_ |= (looks_[o].bits & kBlend) != 0;
     }
-  if (!hlod_draws_.empty() || hierarchy.items().empty()) use(0);
+  if (!hlod_draws_.empty()) use(kVertexColor);
+  if (hierarchy.items().empty()) use(0);
   static const char* const kModeName[3] = {"shaded", "depth", "ids"};
   for (int m = 0; m < 3; ++m) {
     variants_ += std::string(m ? "; " : "") + kModeName[m] + ":";
     bool first = true;
-    for (unsigned bits = 0; bits < 16; ++bits)
+    for (unsigned bits = 0; bits < kVariants; ++bits)
       if (used[m][bits]) {
         compile(Mode(m), bits);
         variants_ += std::string(first ? " " : ", ") + variant_name(bits);
@@ -490,10 +519,9 @@ void SceneRenderer::check_nodes(std::span<const uint32_t> node_ids) const {
 }
 
 // Batch key: variant bits (of this mode), texture + 1, culling; kBlendKey marks BLEND draws.
-uint64_t SceneRenderer::batch_key(uint32_t object, Mode mode, bool untextured) const {
+uint64_t SceneRenderer::batch_key(uint32_t object, Mode mode, bool lod) const {
   const ObjectLook& look = looks_[object];
-  unsigned bits = look.bits;
-  if (untextured) bits &= ~kTextured;
+  unsigned bits = lod ? lod_bits(look.bits) : look.bits;
   if (bits & kBlend) return kBlendKey;
   bits = mode_bits(mode, bits);
   const uint64_t texture = (bits & kTextured) ? uint64_t(look.texture) + 1 : 0;
@@ -504,13 +532,12 @@ void SceneRenderer::add_item(uint32_t item, uint32_t id_plus_one, Mode mode, Dra
   add_draw(item_draws_[item], id_plus_one, mode, false, stats);
 }
 
-void SceneRenderer::add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool untextured, DrawStats& stats) {
-  const uint64_t key = batch_key(d.object, mode, untextured);
+void SceneRenderer::add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool lod, DrawStats& stats) {
+  const uint64_t key = batch_key(d.object, mode, lod);
   if (key == kBlendKey) {
     if (mode != Mode::Shaded) return;  // never an occluder, not in the item buffer
-    // The key is set when they are drawn; until then bit 0 says whether the draw may use the
-    // object's texture (LOD draws may not: they have no texture coordinates).
-    blended_.push_back({untextured ? 0u : 1u, d, id_plus_one});
+    // The key is set when they are drawn; until then it says whether the draw is a LOD's.
+    blended_.push_back({lod ? 1u : 0u, d, id_plus_one});
     return;
   }
   pending_.push_back({key, d, id_plus_one});
@@ -540,7 +567,7 @@ DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const 
         add_draw(d, i + 1, mode, true, stats);
       }
     } else if (!n.leaf() && !hlod_draws_.empty() && hlod_of_node_[node] != kNoNode) {
-      add_draw(hlod_draws_[hlod_of_node_[node]], node + 1, mode, true, stats);
+      add_draw(hlod_draws_[hlod_of_node_[node]], node + 1, mode, false, stats);  // its look: vertex colours
     } else {
       for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) add_item(i, i + 1, mode, stats);
     }
@@ -617,9 +644,8 @@ DrawStats SceneRenderer::draw_blended() {
   for (const auto& [dist, i] : blend_order_) {
     Pending p = blended_[i];
     const ObjectLook& look = looks_[p.draw.object];
-    const bool textured = (p.key & 1) != 0 && (look.bits & kTextured) != 0;
-    const unsigned bits = (look.bits & (kBlend | kUnlit)) | (textured ? kTextured : 0);
-    p.key = uint64_t(bits) << 40 | (textured ? uint64_t(look.texture) + 1 : 0) << 8 | look.cull;
+    const unsigned bits = mode_bits(Mode::Shaded, p.key ? lod_bits(look.bits) : look.bits);
+    p.key = uint64_t(bits) << 40 | ((bits & kTextured) ? uint64_t(look.texture) + 1 : 0) << 8 | look.cull;
     sorted_.push_back(p);
     stats.items += 1;
     stats.triangles += p.draw.index_count / 3;
@@ -673,7 +699,7 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
     size_t e = b + 1;
     while (e < draws.size() && draws[e].key == draws[b].key) ++e;
     const uint64_t key = draws[b].key;
-    const unsigned bits = unsigned(key >> 40) & 15u;
+    const unsigned bits = unsigned(key >> 40) & (kVariants - 1);
     const int64_t texture = int64_t((key >> 8) & 0xffffffffu) - 1;
     const int cull = int(key & 0xff);
     if (bits != bound_bits) {

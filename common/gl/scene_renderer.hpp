@@ -1,7 +1,7 @@
 // Draws the items of a Scene/Hierarchy (object x mesh cluster) in one of three modes:
 //   Shaded     the glTF material (materials in scene.hpp): base colour = factor x texture x
-//              COLOR_0, lit by a headlight per vertex (Lambert at the eye, |n.l| so back faces of
-//              double-sided and open CAD meshes read well) or unlit (KHR_materials_unlit);
+//              COLOR_0, lit by a headlight per fragment (Lambert at the eye, |n.l| so back faces
+//              of double-sided and open CAD meshes read well) or unlit (KHR_materials_unlit);
 //              MASK discards fragments with alpha < cutoff; BLEND is drawn after everything
 //              opaque, back to front, with depth writes off. Geometry without a material gets a
 //              mild per-object colour from a hash of the object index (double-sided, opaque);
@@ -167,8 +167,9 @@ class SceneRenderer {
   void check_items(std::span<const uint32_t> item_indices) const;
   void check_nodes(std::span<const uint32_t> node_ids) const;
   void add_item(uint32_t item, uint32_t id_plus_one, Mode mode, DrawStats& stats);
-  void add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool untextured, DrawStats& stats);
-  uint64_t batch_key(uint32_t object, Mode mode, bool untextured) const;
+  // lod: a leaf LOD draw (no texture coordinates, no vertex colours).
+  void add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool lod, DrawStats& stats);
+  uint64_t batch_key(uint32_t object, Mode mode, bool lod) const;
   const ObjectMatrices& object_matrices(uint32_t object);
   DrawStats submit(Mode mode, DrawStats stats);
   DrawStats draw_blended();
