@@ -27,18 +27,58 @@ uint64_t Scene::triangle_count() const {
   return n;
 }
 
+const char* alpha_mode_name(AlphaMode m) {
+  switch (m) {
+    case AlphaMode::Opaque: return "OPAQUE";
+    case AlphaMode::Mask: return "MASK";
+    case AlphaMode::Blend: return "BLEND";
+  }
+  return "?";
+}
+
 uint64_t Scene::content_hash() const {
   Hasher h;
   h.u64(meshes.size());
   for (const Mesh& m : meshes) {
     h.bytes(m.positions.data(), m.positions.size() * sizeof(glm::vec3));
     h.bytes(m.indices.data(), m.indices.size() * sizeof(uint32_t));
+    if (m.material != kNoMaterial || !m.uvs.empty() || !m.colors.empty()) {  // generated scenes hash as before
+      h.u32(m.material);
+      h.u64(m.uvs.size());
+      h.bytes(m.uvs.data(), m.uvs.size() * sizeof(glm::vec2));
+      h.u64(m.colors.size());
+      h.bytes(m.colors.data(), m.colors.size() * sizeof(uint32_t));
+    }
   }
   h.u64(objects.size());
   for (const Object& o : objects) {
     h.u32(o.mesh);
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r) h.f64(o.transform[c][r]);
+  }
+  if (!materials.empty()) {
+    h.u64(materials.size());
+    for (const Material& mat : materials) {
+      for (int c = 0; c < 4; ++c) h.f64(mat.base_color[c]);
+      h.u32(uint32_t(mat.base_color_texture));
+      h.u32(uint32_t(mat.alpha_mode));
+      h.f64(mat.alpha_cutoff);
+      h.u32(uint32_t(mat.double_sided) | uint32_t(mat.unlit) << 1 | uint32_t(mat.object_color) << 2);
+    }
+    h.u64(textures.size());
+    for (const Texture& t : textures) {
+      h.u32(t.image);
+      h.u32(uint32_t(t.sampler.mag_filter));
+      h.u32(uint32_t(t.sampler.min_filter));
+      h.u32(uint32_t(t.sampler.wrap_s));
+      h.u32(uint32_t(t.sampler.wrap_t));
+    }
+    h.u64(images.size());
+    for (const Image& img : images) {
+      h.u32(uint32_t(img.width));
+      h.u32(uint32_t(img.height));
+      h.bytes(img.rgba.data(), img.rgba.size());
+    }
   }
   return h.value();
 }

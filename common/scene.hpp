@@ -8,9 +8,49 @@
 
 #include <glm/glm.hpp>
 
+#include "common/image.hpp"
 #include "common/math.hpp"
 
 namespace occ {
+
+// ---------------------------------------------------------------------------------- materials
+// glTF 2.0 metallic-roughness materials reduced to what the renderers draw: base colour (factor x
+// texture x COLOR_0), alpha mode, double-sidedness, and KHR_materials_unlit. Colours are used as
+// stored (no sRGB conversion): the factor, the texture's texels and COLOR_0 multiply as they are.
+
+enum class AlphaMode : uint8_t { Opaque, Mask, Blend };
+const char* alpha_mode_name(AlphaMode m);  // "OPAQUE", "MASK", "BLEND"
+
+// glTF sampler values are OpenGL enums: filters 9728 NEAREST, 9729 LINEAR, 9984..9987
+// *_MIPMAP_*; wraps 33071 CLAMP_TO_EDGE, 33648 MIRRORED_REPEAT, 10497 REPEAT. -1 = unset (the
+// renderer then uses LINEAR / LINEAR_MIPMAP_LINEAR).
+struct Sampler {
+  int32_t mag_filter = -1, min_filter = -1;
+  int32_t wrap_s = 10497, wrap_t = 10497;
+  bool operator==(const Sampler&) const = default;
+};
+
+// A glTF texture: an image of Scene::images sampled with a sampler.
+struct Texture {
+  uint32_t image = 0;
+  Sampler sampler;
+};
+
+struct Material {
+  std::string name;
+  glm::vec4 base_color{1.0f};         // baseColorFactor (RGBA)
+  int32_t base_color_texture = -1;    // index into Scene::textures, or -1
+  AlphaMode alpha_mode = AlphaMode::Opaque;
+  float alpha_cutoff = 0.5f;          // MASK: fragments with alpha < cutoff are discarded
+  bool double_sided = false;          // false: back faces are culled (glTF)
+  bool unlit = false;                 // KHR_materials_unlit: base colour without lighting
+  bool object_color = false;          // base colour from a hash of the object index (glTF
+                                      // primitives without a material: the factor is ignored)
+};
+
+// Mesh::material for geometry without any material (generated scenes): a per-object hashed
+// colour, opaque, double-sided.
+constexpr uint32_t kNoMaterial = 0xffffffffu;
 
 // A contiguous range of a mesh's index buffer (whole triangles) with its mesh-space box.
 // Big meshes are split into spatial clusters so a single merged mesh still culls.
@@ -26,6 +66,11 @@ struct Mesh {
   std::vector<glm::vec3> normals;  // same size as positions (computed when the file has none)
   std::vector<uint32_t> indices;   // triangle list, every index < positions.size()
   std::vector<MeshCluster> clusters;  // filled by split_mesh_clusters(); covers all indices
+  std::vector<glm::vec2> uvs;      // empty, or same size as positions: the base colour texture's
+                                   // TEXCOORD_n (glTF: (0,0) = the image's top-left texel)
+  std::vector<uint32_t> colors;    // empty, or same size as positions: COLOR_0 as RGBA8
+                                   // (r in the low byte); multiplies the base colour
+  uint32_t material = kNoMaterial; // index into Scene::materials
 
   uint64_t triangle_count() const { return indices.size() / 3; }
   Aabb box() const;  // mesh-space bounds of the referenced vertices
@@ -42,10 +87,20 @@ struct Scene {
   std::string source;  // what it was made from, for messages
   std::vector<Mesh> meshes;
   std::vector<Object> objects;
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::vector<Image> images;  // decoded RGBA8, top row first
 
   Aabb bounds() const;               // world bounds of all objects
   uint64_t triangle_count() const;   // drawn triangles, counting every instance
-  uint64_t content_hash() const;     // geometry, transforms (deterministic)
+  // Geometry, transforms and materials (what the renderers draw, also what decides occluders:
+  // BLEND objects never occlude), deterministic.
+  uint64_t content_hash() const;
+  // The material of mesh m's primitive, or nullptr for kNoMaterial.
+  const Material* material_of(uint32_t mesh) const {
+    const uint32_t k = meshes[mesh].material;
+    return k == kNoMaterial ? nullptr : &materials[k];
+  }
 };
 
 // Smooth per-vertex normals from area-weighted face normals (for meshes without NORMAL).

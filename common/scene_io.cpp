@@ -2,8 +2,10 @@
 // procedural city, grid layouts, and the --scene spec parser.
 #include "common/scene_io.hpp"
 
+#include <stb/stb_image.h>
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -17,6 +19,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <tuple>
 
@@ -52,9 +55,12 @@ std::vector<unsigned char> read_file(const std::string& path) {
   return data;
 }
 
-// Geometry only: images are neither decoded nor required.
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
-                void*) {
+// Images are decoded later, and only those a drawn material uses (GltfReader::image). Here the
+// encoded bytes of uri images (files, data URIs) are kept; bytes of buffer-view images are not
+// touched (tinygltf passes them unchecked: GltfReader reads them through its checked views).
+bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+  if (image->bufferView == -1 && bytes && size > 0) image->image.assign(bytes, bytes + size);
   return true;
 }
 
@@ -310,11 +316,208 @@ class GltfReader {
       mesh.normals = read_vec3(nrm->second, "NORMAL", where);
       if (mesh.normals.size() != vertices)
         fail(where, "NORMAL count " + num(mesh.normals.size()) + " != POSITION count " + num(vertices));
+      repair_normals(mesh);
     } else {
       compute_normals(mesh);
     }
+
+    mesh.material = material(prim.material, where);
+    const Material& mat = scene_.materials[mesh.material];
+    if (mat.base_color_texture >= 0) {
+      const std::string attr = "TEXCOORD_" + std::to_string(texcoord_of_material_[mesh.material]);
+      const auto uv = prim.attributes.find(attr);
+      if (uv == prim.attributes.end())
+        fail(where, "material " + std::to_string(prim.material) + " has a baseColorTexture but the primitive has no " +
+                        attr);
+      mesh.uvs = read_uvs(uv->second, attr, where);
+      if (mesh.uvs.size() != vertices)
+        fail(where, attr + " count " + num(mesh.uvs.size()) + " != POSITION count " + num(vertices));
+    }
+    if (const auto col = prim.attributes.find("COLOR_0"); col != prim.attributes.end()) {
+      mesh.colors = read_colors(col->second, where);
+      if (mesh.colors.size() != vertices)
+        fail(where, "COLOR_0 count " + num(mesh.colors.size()) + " != POSITION count " + num(vertices));
+    }
     scene_.meshes.push_back(std::move(mesh));
     return int(scene_.meshes.size() - 1);
+  }
+
+  // Float, or normalized unsigned byte/short components (glTF's TEXCOORD_n and COLOR_0 types);
+  // `components` per element. Returns count * components floats (normalized to [0, 1]).
+  std::vector<float> read_normalized(int index, const std::string& an, int components, const std::string& where) const {
+    const tinygltf::Accessor& a = accessor(index, where);
+    const int ct = a.componentType;
+    const size_t size = ct == TINYGLTF_COMPONENT_TYPE_FLOAT                          ? 4
+                        : ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && a.normalized  ? 1
+                        : ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT && a.normalized ? 2
+                                                                                       : 0;
+    if (size == 0) fail(where, an + " must be float or normalized unsigned byte/short");
+    const Strided e = elements(index, size * size_t(components), where);
+    std::vector<float> out(e.count * size_t(components));
+    for (size_t i = 0; i < e.count; ++i)
+      for (int c = 0; c < components; ++c) {
+        const unsigned char* p = e[i] + size * size_t(c);
+        float v;
+        if (size == 4) {
+          std::memcpy(&v, p, 4);
+          if (!std::isfinite(v)) fail(where, an + ": element " + num(i) + " is not finite");
+        } else if (size == 2) {
+          uint16_t u;
+          std::memcpy(&u, p, 2);
+          v = float(u) / 65535.0f;
+        } else {
+          v = float(*p) / 255.0f;
+        }
+        out[i * size_t(components) + size_t(c)] = v;
+      }
+    return out;
+  }
+
+  std::vector<glm::vec2> read_uvs(int index, const std::string& attr, const std::string& where) const {
+    const std::string an = attr + " accessor " + std::to_string(index);
+    if (accessor(index, where).type != TINYGLTF_TYPE_VEC2) fail(where, an + " must be VEC2");
+    const std::vector<float> f = read_normalized(index, an, 2, where);
+    std::vector<glm::vec2> out(f.size() / 2);
+    for (size_t i = 0; i < out.size(); ++i) out[i] = {f[2 * i], f[2 * i + 1]};
+    return out;
+  }
+
+  // COLOR_0 (VEC3 or VEC4) as RGBA8, components clamped to [0, 1].
+  std::vector<uint32_t> read_colors(int index, const std::string& where) const {
+    const std::string an = "COLOR_0 accessor " + std::to_string(index);
+    const int type = accessor(index, where).type;
+    if (type != TINYGLTF_TYPE_VEC3 && type != TINYGLTF_TYPE_VEC4) fail(where, an + " must be VEC3 or VEC4");
+    const int n = type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+    const std::vector<float> f = read_normalized(index, an, n, where);
+    std::vector<uint32_t> out(f.size() / size_t(n));
+    for (size_t i = 0; i < out.size(); ++i) {
+      uint32_t rgba = 0;
+      for (int c = 0; c < 4; ++c) {
+        const float v = c < n ? std::clamp(f[i * size_t(n) + size_t(c)], 0.0f, 1.0f) : 1.0f;
+        rgba |= uint32_t(std::lround(v * 255.0f)) << (8 * c);
+      }
+      out[i] = rgba;
+    }
+    return out;
+  }
+
+  // Zero-length normals (a NORMAL attribute may have them) would shade as NaN: replace them by
+  // the computed smooth normal of their vertex.
+  static void repair_normals(Mesh& mesh) {
+    bool bad = false;
+    for (const glm::vec3& n : mesh.normals) bad |= !(glm::dot(n, n) > 1e-12f);
+    if (!bad) return;
+    Mesh computed;
+    computed.positions = mesh.positions;
+    computed.indices = mesh.indices;
+    compute_normals(computed);
+    for (size_t v = 0; v < mesh.normals.size(); ++v)
+      if (!(glm::dot(mesh.normals[v], mesh.normals[v]) > 1e-12f)) mesh.normals[v] = computed.normals[v];
+  }
+
+  // Scene material for glTF material `index` (-1: the glTF default material: single-sided, white
+  // in glTF, drawn here in the per-object hashed colour like material-less generated scenes).
+  uint32_t material(int index, const std::string& where) {
+    auto [it, fresh] = material_cache_.try_emplace(index, 0u);
+    if (!fresh) return it->second;
+    Material m;
+    int texcoord = 0;
+    if (index == -1) {
+      m.name = "glTF default material";
+      m.object_color = true;
+    } else {
+      const tinygltf::Material& gm = at(m_.materials, index, "material", "materials", where);
+      const std::string mw = "material " + std::to_string(index);
+      m.name = gm.name.empty() ? mw : gm.name;
+      // render_client --save-scene marks generated scenes' per-object colours this way.
+      m.object_color = gm.extras.IsObject() && gm.extras.Has("occswitch_object_colour");
+      const std::vector<double>& f = gm.pbrMetallicRoughness.baseColorFactor;
+      if (f.size() != 4) fail(mw, "baseColorFactor must have 4 numbers");
+      for (int c = 0; c < 4; ++c) {
+        if (!(f[size_t(c)] >= 0.0 && f[size_t(c)] <= 1.0)) fail(mw, "baseColorFactor must be 4 numbers in [0, 1]");
+        m.base_color[c] = float(f[size_t(c)]);
+      }
+      if (gm.alphaMode == "OPAQUE") m.alpha_mode = AlphaMode::Opaque;
+      else if (gm.alphaMode == "MASK") m.alpha_mode = AlphaMode::Mask;
+      else if (gm.alphaMode == "BLEND") m.alpha_mode = AlphaMode::Blend;
+      else fail(mw, "alphaMode '" + gm.alphaMode + "' is not OPAQUE, MASK or BLEND");
+      if (!(gm.alphaCutoff >= 0.0 && std::isfinite(gm.alphaCutoff))) fail(mw, "alphaCutoff must be a number >= 0");
+      m.alpha_cutoff = float(gm.alphaCutoff);
+      m.double_sided = gm.doubleSided;
+      m.unlit = gm.extensions.count("KHR_materials_unlit") > 0;
+      const tinygltf::TextureInfo& ti = gm.pbrMetallicRoughness.baseColorTexture;
+      if (ti.index != -1) {
+        if (ti.texCoord < 0) fail(mw, "baseColorTexture.texCoord must be >= 0");
+        texcoord = ti.texCoord;
+        m.base_color_texture = int32_t(texture(ti.index, mw + " baseColorTexture"));
+      }
+    }
+    it->second = uint32_t(scene_.materials.size());
+    scene_.materials.push_back(std::move(m));
+    texcoord_of_material_.push_back(texcoord);
+    return it->second;
+  }
+
+  uint32_t texture(int index, const std::string& where) {
+    auto [it, fresh] = texture_cache_.try_emplace(index, 0u);
+    if (!fresh) return it->second;
+    const tinygltf::Texture& gt = at(m_.textures, index, "texture", "textures", where);
+    const std::string tw = "texture " + std::to_string(index);
+    if (gt.source == -1)
+      fail(tw, "has no source image (image extensions such as KHR_texture_basisu are not supported)");
+    Texture t;
+    t.image = image(gt.source, tw);
+    if (gt.sampler != -1) {
+      const tinygltf::Sampler& gs = at(m_.samplers, gt.sampler, "sampler", "samplers", tw);
+      const std::string sw = "sampler " + std::to_string(gt.sampler);
+      auto check = [&](int v, std::initializer_list<int> allowed, const char* what) {
+        if (v == -1 && std::string_view(what).find("wrap") == std::string_view::npos) return v;
+        for (int a : allowed)
+          if (v == a) return v;
+        fail(sw, std::string(what) + " " + std::to_string(v) + " is not a glTF value");
+      };
+      t.sampler.mag_filter = check(gs.magFilter, {9728, 9729}, "magFilter");
+      t.sampler.min_filter = check(gs.minFilter, {9728, 9729, 9984, 9985, 9986, 9987}, "minFilter");
+      t.sampler.wrap_s = check(gs.wrapS, {33071, 33648, 10497}, "wrapS");
+      t.sampler.wrap_t = check(gs.wrapT, {33071, 33648, 10497}, "wrapT");
+    }
+    it->second = uint32_t(scene_.textures.size());
+    scene_.textures.push_back(t);
+    return it->second;
+  }
+
+  // Decodes glTF image `index` (PNG, JPEG, ... through stb_image) to RGBA8.
+  uint32_t image(int index, const std::string& where) {
+    auto [it, fresh] = image_cache_.try_emplace(index, 0u);
+    if (!fresh) return it->second;
+    const tinygltf::Image& gi = at(m_.images, index, "image", "images", where);
+    const std::string iw = "image " + std::to_string(index);
+    const unsigned char* bytes = gi.image.data();
+    size_t size = gi.image.size();
+    if (gi.bufferView != -1) {
+      const tinygltf::BufferView& bv = at(m_.bufferViews, gi.bufferView, "buffer view", "buffer views", iw);
+      const tinygltf::Buffer& buf = at(m_.buffers, bv.buffer, "buffer", "buffers", iw);
+      if (!fits(bv.byteOffset, 1, bv.byteLength, bv.byteLength, buf.data.size()))
+        fail(iw, "buffer view " + std::to_string(gi.bufferView) + " reads past the end of buffer " +
+                     std::to_string(bv.buffer));
+      bytes = buf.data.data() + bv.byteOffset;
+      size = bv.byteLength;
+    }
+    if (size == 0)
+      fail(iw, gi.uri.empty() ? std::string("has no data") : "cannot load '" + gi.uri + "' (missing or empty file)");
+    if (size > size_t(INT_MAX)) fail(iw, "larger than 2 GiB");
+    int w = 0, h = 0, channels = 0;
+    std::unique_ptr<stbi_uc, void (*)(void*)> px(stbi_load_from_memory(bytes, int(size), &w, &h, &channels, 4),
+                                                 stbi_image_free);
+    if (!px) fail(iw, std::string("cannot decode") + (gi.uri.empty() ? "" : " '" + gi.uri + "'") + ": " +
+                          stbi_failure_reason());
+    Image img;
+    img.width = w;
+    img.height = h;
+    img.rgba.assign(px.get(), px.get() + size_t(w) * size_t(h) * 4);
+    it->second = uint32_t(scene_.images.size());
+    scene_.images.push_back(std::move(img));
+    return it->second;
   }
 
   const tinygltf::Model& m_;
@@ -322,6 +525,10 @@ class GltfReader {
   Scene scene_;
   std::vector<int> parent_;                     // per node, -1 for roots
   std::map<int, std::vector<int>> mesh_cache_;  // glTF mesh -> scene mesh per primitive (-1: none)
+  std::map<int, uint32_t> material_cache_;      // glTF material (-1: default) -> scene material
+  std::vector<int> texcoord_of_material_;       // per scene material: its texture's TEXCOORD set
+  std::map<int, uint32_t> texture_cache_;       // glTF texture -> scene texture
+  std::map<int, uint32_t> image_cache_;         // glTF image -> scene image
   int skipped_ = 0;                             // non-triangle primitives of used meshes
 };
 
@@ -566,7 +773,7 @@ Scene load_gltf(const std::string& path) {
   const bool binary = ends_with_ci(path, ".glb") || (!ends_with_ci(path, ".gltf") && bytes.size() >= 4 &&
                                                      std::memcmp(bytes.data(), "glTF", 4) == 0);
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skip_image, nullptr);
+  loader.SetImageLoader(keep_image_bytes, nullptr);
   tinygltf::Model model;
   std::string err, warn;
   const std::string base = std::filesystem::path(path).parent_path().string();
@@ -639,6 +846,9 @@ Scene layout_grid(const Scene& asset, int nx, int nz, double gap) {
   Scene scene;
   scene.source = "layout " + std::to_string(nx) + "x" + std::to_string(nz) + " of " + asset.source;
   scene.meshes = asset.meshes;
+  scene.materials = asset.materials;
+  scene.textures = asset.textures;
+  scene.images = asset.images;
   const glm::dvec3 spacing = asset.bounds().extent() * (1.0 + gap);
   scene.objects.reserve(size_t(nx) * size_t(nz) * asset.objects.size());
   for (int i = 0; i < nx; ++i)

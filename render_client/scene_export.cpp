@@ -58,7 +58,7 @@ void save_gltf(const Scene& scene, const std::string& gltf_path) {
               << mesh.normals.size() << ",\"type\":\"VEC3\"},{\"bufferView\":" << idx
               << ",\"componentType\":5125,\"count\":" << mesh.indices.size() << ",\"type\":\"SCALAR\"}";
     meshes << (n_meshes ? "," : "") << "{\"primitives\":[{\"attributes\":{\"POSITION\":" << a
-           << ",\"NORMAL\":" << a + 1 << "},\"indices\":" << a + 2 << ",\"mode\":4}]}";
+           << ",\"NORMAL\":" << a + 1 << "},\"indices\":" << a + 2 << ",\"material\":0,\"mode\":4}]}";
     mesh_index[m] = n_meshes++;
   }
   int n_nodes = 0;
@@ -77,7 +77,11 @@ void save_gltf(const Scene& scene, const std::string& gltf_path) {
   std::ofstream g(gltf_path);
   g << "{\"asset\":{\"version\":\"2.0\",\"generator\":\"occswitch render_client --save-scene\"},"
     << "\"scene\":0,\"scenes\":[{\"nodes\":[" << roots.str() << "]}],\"nodes\":[" << nodes.str()
-    << "],\"meshes\":[" << meshes.str() << "],\"accessors\":[" << accessors.str() << "],\"bufferViews\":["
+    // Generated scenes have no materials: per-object colours, both sides drawn. Material 0 says
+    // so (an occswitch extra; other readers see a white double-sided material).
+    << "],\"materials\":[{\"name\":\"occswitch object colour\",\"doubleSided\":true,"
+       "\"extras\":{\"occswitch_object_colour\":true}}]"
+    << ",\"meshes\":[" << meshes.str() << "],\"accessors\":[" << accessors.str() << "],\"bufferViews\":["
     << views.str() << "],\"buffers\":[{\"uri\":\"" << bin_path.filename().string() << "\",\"byteLength\":"
     << bin.size() << "}]}\n";
   if (!g) throw InputError(gltf_path + ": cannot write the glTF file");

@@ -1,7 +1,8 @@
 # GL tests (label gl): need an OpenGL 4.5 core context through EGL or OSMesa (llvmpipe is fine).
 occ_test(gl_test gl LIBS occ_gl SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/gl_context_test.cpp
-  ${CMAKE_CURRENT_SOURCE_DIR}/gl_render_test.cpp)
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_render_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_material_test.cpp)
 
 # PNG files and the frame_diff tool (no GL).
 occ_test(image_test unit LIBS occ_common SOURCES

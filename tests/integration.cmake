@@ -11,3 +11,6 @@ occ_test(netns_test integration LOCK netns LIBS occ_common SOURCES ${CMAKE_CURRE
 add_dependencies(netns_test switch_node render_client link_relay)
 occ_test(link_faults_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_link_faults_test.cpp)
 add_dependencies(link_faults_test switch_node render_client link_relay frame_diff)
+# glTF materials end to end: cluster == reference exactly with glass, masks, single-sided walls
+occ_test(material_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_material_test.cpp)
+add_dependencies(material_cluster_test switch_node render_client frame_diff)

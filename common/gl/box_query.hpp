@@ -1,10 +1,15 @@
 // Occlusion queries on axis-aligned boxes against the current depth buffer (the GL side of
-// HardwareCull, common/culling.hpp). Each box is drawn as 12 triangles with colour and depth
-// writes off and the reverse-Z depth test GL_GREATER, inside a GL_SAMPLES_PASSED query (one pool
+// HardwareCull, common/culling.hpp). Each box is drawn as its front faces (12 triangles wound
+// counter-clockwise from outside, back faces culled) with colour and depth writes off and the reverse-Z depth test GL_GREATER, inside a GL_SAMPLES_PASSED query (one pool
 // per query target: a GL query object is tied to its first target, and this class only counts
 // samples). Boxes are drawn camera-relative: min/max - eye in double, then float, enlarged by a
 // relative epsilon (1e-5 of the corner's distance from the eye) so the result stays
 // conservative: geometry lying on a box face still shows through it.
+//
+// Front faces suffice: with the eye outside the box they cover its whole silhouette and lie in
+// front of its back faces, so a back-face fragment passes the depth test only where a front-face
+// one does. When the padded box comes within reach of the near rectangle (the eye inside it, or
+// its front faces possibly clipped by the near plane) both sides are drawn, as before.
 //
 // Limitation (callers decide these on the CPU, see visible_without_query): if the eye is inside
 // a box, or the box crosses the near plane, the query rasterises only far faces or nothing and
@@ -58,6 +63,7 @@ class BoxQuerier final : public OcclusionQueries {
   std::vector<GLuint> pool_;  // GL_SAMPLES_PASSED query objects
   uint32_t next_ = 0;         // first unused query of the pool in this batch
   glm::dvec3 eye_{0.0};
+  double reach_ = 0;  // eye to the near rectangle's corners, with slack
   uint64_t queries_issued_ = 0;
 };
 

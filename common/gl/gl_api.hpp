@@ -23,6 +23,9 @@ namespace occ {
   X(SCISSOR, Scissor)                                         \
   X(CLIPCONTROL, ClipControl)                                 \
   X(DEPTHFUNC, DepthFunc)                                     \
+  X(CULLFACE, CullFace)                                       \
+  X(FRONTFACE, FrontFace)                                     \
+  X(BLENDFUNCSEPARATE, BlendFuncSeparate)                     \
   X(DEPTHMASK, DepthMask)                                     \
   X(COLORMASK, ColorMask)                                     \
   X(CLEARCOLOR, ClearColor)                                   \
@@ -58,6 +61,7 @@ namespace occ {
   X(DELETEBUFFERS, DeleteBuffers)                             \
   X(NAMEDBUFFERSTORAGE, NamedBufferStorage)                   \
   X(NAMEDBUFFERDATA, NamedBufferData)                         \
+  X(NAMEDBUFFERSUBDATA, NamedBufferSubData)                   \
   X(BINDBUFFER, BindBuffer)                                   \
   X(CREATEVERTEXARRAYS, CreateVertexArrays)                   \
   X(DELETEVERTEXARRAYS, DeleteVertexArrays)                   \
@@ -70,6 +74,16 @@ namespace occ {
   X(VERTEXARRAYBINDINGDIVISOR, VertexArrayBindingDivisor)     \
   X(ENABLEVERTEXARRAYATTRIB, EnableVertexArrayAttrib)         \
   X(DRAWARRAYS, DrawArrays)                                   \
+  X(CREATETEXTURES, CreateTextures)                           \
+  X(DELETETEXTURES, DeleteTextures)                           \
+  X(TEXTURESTORAGE2D, TextureStorage2D)                       \
+  X(TEXTURESUBIMAGE2D, TextureSubImage2D)                     \
+  X(GENERATETEXTUREMIPMAP, GenerateTextureMipmap)             \
+  X(BINDTEXTUREUNIT, BindTextureUnit)                         \
+  X(CREATESAMPLERS, CreateSamplers)                           \
+  X(DELETESAMPLERS, DeleteSamplers)                           \
+  X(SAMPLERPARAMETERI, SamplerParameteri)                     \
+  X(BINDSAMPLER, BindSampler)                                 \
   X(MULTIDRAWELEMENTSINDIRECT, MultiDrawElementsIndirect)     \
   X(CREATEQUERIES, CreateQueries)                             \
   X(DELETEQUERIES, DeleteQueries)                             \

@@ -1,16 +1,43 @@
 // Draws the items of a Scene/Hierarchy (object x mesh cluster) in one of three modes:
-//   Shaded     headlight Lambert (light at the eye, |n.l| so back faces of open CAD meshes read
-//              well) on a mild per-object base colour derived from a hash of the object index;
-//   DepthOnly  colour writes off, depth writes on, the cheapest shader (occluder rendering);
+//   Shaded     the glTF material (materials in scene.hpp): base colour = factor x texture x
+//              COLOR_0, lit by a headlight per fragment (Lambert at the eye, |n.l| so back faces
+//              of double-sided and open CAD meshes read well) or unlit (KHR_materials_unlit);
+//              MASK discards fragments with alpha < cutoff; BLEND is drawn after everything
+//              opaque, back to front, with depth writes off. Geometry without a material gets a
+//              mild per-object colour from a hash of the object index (double-sided, opaque);
+//   DepthOnly  colour writes off, depth writes on, the cheapest shader (occluder rendering).
+//              BLEND items are never drawn (they never occlude); MASK items write depth only
+//              where their alpha test passes (the same test, with invariant inputs, as Shaded);
 //   ItemIds    colour = id + 1 as a little-endian 32-bit RGBA8 value (item index, or node id with
 //              draw_nodes_ids), 0 = nothing: an item buffer for exact visibility (ids_in_image).
+//              Opaque and MASK items only: what is seen through BLEND glass counts, the glass not.
 // Every mode computes gl_Position with the same invariant expression, so depth written by one
-// mode is matched exactly by another.
+// mode is matched exactly by another. Single-sided materials (glTF doubleSided false) cull back
+// faces in every mode; an object whose transform mirrors (negative determinant) has clockwise
+// front faces (glTF). Front-face culling must be the same in all modes: a single-sided wall seen
+// from behind is not drawn, so it must not occlude either.
+//
+// Draw order (z-ties resolve identically in every renderer, so a cluster frame equals the
+// reference frame): a draw call's opaque and MASK draws go in batches of one shader variant,
+// texture and face culling, batches ordered by that key and draws inside a batch in the order
+// given (ascending item ids from items_of_nodes and draw_renderables); then its BLEND draws, by
+// decreasing squared distance from the eye to their object's box centre (computed in double),
+// ties by ascending id. Both orders are total orders on items, so a subset (the visible set)
+// is drawn in the order the whole scene is.
+//
+// Only the effects a scene calls for: one shader variant per kind of material present (plain,
+// textured, masked, textured+masked, blended, textured+blended, each lit or unlit) for each mode,
+// compiled at construction; no texture coordinates, textures or blending state unless the
+// scene has them. The first renderer of a process logs the scene's variants in one line.
 //
 // GPU layout (uploaded once at construction):
-//   vertex buffer  all meshes back to back, interleaved {vec3 position; vec3 normal;} float,
-//                  24 bytes (attributes 0 and 1, binding 0); a mesh starts at its base vertex;
-//   index buffer   all meshes' u32 triangle lists back to back; item = one cluster range.
+//   vertex buffer  all meshes back to back, interleaved {vec3 position; vec3 normal; RGBA8
+//                  colour} (28 bytes; attributes 0, 1, 10, binding 0); colour = COLOR_0 (white
+//                  if none) or an HLOD vertex's object colour; a mesh starts at its base vertex;
+//   uv buffer      vec2 per vertex (attribute 12, binding 2), only when a drawn mesh is textured;
+//   index buffer   all meshes' u32 triangle lists back to back; item = one cluster range;
+//   textures       one RGBA8 texture (with mipmaps) per image a drawn material uses, one sampler
+//                  object per glTF texture.
 // Per draw call (only what is drawn): one DrawElementsIndirectCommand per item (baseVertex = its
 // mesh, firstIndex = its cluster, baseInstance = draw slot i) and one DrawRecord per item, read
 // as instanced attributes (binding 1, divisor 1, so baseInstance selects record i):
@@ -18,17 +45,21 @@
 //                                        computed in double, then rounded to float: camera-
 //                                        relative, so scenes 1e7 from the origin do not crack;
 //   locations 6..8  vec4 normal_color[3] normal-matrix columns (xyz), base colour (w);
+//   location 11     vec2                 base colour alpha, MASK cutoff;
 //   location 9      uint id + 1.
-// An object's matrices are computed once per frame and reused by all its items.
+// The record and command buffers keep their storage between frames (they grow, never shrink):
+// no per-frame allocation. An object's matrices are computed once per frame and reused by all
+// its items.
 //
 // Contracts: the GlContext is current on the calling thread for every call; the context and the
 // hierarchy outlive the renderer; `scene` is the one the hierarchy was built from (its clusters)
-// and is only read in the constructor (meshes go to the GPU, transforms are copied). Invalid item or node ids throw
-// std::out_of_range. Faces are never culled.
+// and is only read in the constructor (meshes, materials and images go to the GPU, transforms
+// are copied). Invalid item or node ids throw std::out_of_range.
 #pragma once
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -65,8 +96,10 @@ class SceneRenderer {
   SceneRenderer& operator=(const SceneRenderer&) = delete;
 
   // Starts a frame for `cam`: clears depth to 0 (far) and, if clear_color, colour to
-  // kBackgroundRgba8; forgets the previous frame's per-object transforms.
-  void begin_frame(const Camera& cam, bool clear_color);
+  // kBackgroundRgba8; forgets the previous frame's per-object transforms. Each Shaded draw call
+  // draws its BLEND items at its end, unless defer_blended: then they wait for end_frame() (for
+  // renderers that draw a frame in many calls, e.g. front to back, one leaf at a time).
+  void begin_frame(const Camera& cam, bool clear_color, bool defer_blended = false);
   // begin_frame for an item buffer: colour cleared to 0 (= no id).
   void begin_id_frame(const Camera& cam);
 
@@ -83,6 +116,13 @@ class SceneRenderer {
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
   // ItemIds rendering of whole nodes, each in colour node id + 1.
   DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);
+  // Draws the BLEND items deferred since begin_frame(..., defer_blended = true), back to front
+  // (the order above). Returns what it drew; nothing without deferred items.
+  DrawStats end_frame();
+
+  // The scene's shader variants, e.g. "shaded: plain, blended; depth: plain; ids: plain".
+  const std::string& variants() const { return variants_; }
+  bool has_blended() const { return has_blended_; }
 
  private:
   struct ItemDraw {
@@ -93,6 +133,7 @@ class SceneRenderer {
   struct ObjectMatrices {  // an object's per-frame data, as laid out in DrawRecord
     glm::mat4 model_view;
     glm::vec4 normal_color[3];
+    glm::vec2 alpha_cutoff;
   };
   struct DrawRecord {
     ObjectMatrices object;
@@ -103,33 +144,72 @@ class SceneRenderer {
     int32_t base_vertex;
     uint32_t base_instance;
   };
+  // What an object draws with (constant): material variant bits (kTextured, kMask, kBlend,
+  // kUnlit), texture (-1: none), face culling, colour.
+  struct ObjectLook {
+    uint8_t bits = 0;
+    uint8_t cull = 0;  // kCullNone, kCullBackCcw, kCullBackCw
+    int32_t texture = -1;
+    glm::vec4 color{1.0f};  // base colour, alpha
+    float cutoff = 0.5f;
+  };
+  struct Pending {  // a collected draw
+    uint64_t key;   // batch key (variant bits << 40 | texture + 1 << 8 | culling)
+    ItemDraw draw;
+    uint32_t id_plus_one;
+  };
+  struct Program {
+    GLuint id = 0;
+    GLint projection_loc = -1;
+  };
 
   void begin(const Camera& cam, const float clear_rgba[4]);
   void check_items(std::span<const uint32_t> item_indices) const;
   void check_nodes(std::span<const uint32_t> node_ids) const;
-  void add_item(uint32_t item, uint32_t id_plus_one, DrawStats& stats);
-  void add_draw(const ItemDraw& d, uint32_t id_plus_one, DrawStats& stats);
+  void add_item(uint32_t item, uint32_t id_plus_one, Mode mode, DrawStats& stats);
+  // lod: a leaf LOD draw (no texture coordinates, no vertex colours).
+  void add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool lod, DrawStats& stats);
+  uint64_t batch_key(uint32_t object, Mode mode, bool lod) const;
   const ObjectMatrices& object_matrices(uint32_t object);
   DrawStats submit(Mode mode, DrawStats stats);
+  DrawStats draw_blended();
+  // Uploads `draws` as records and commands and draws them in runs of equal key.
+  void draw_batches(std::span<const Pending> draws, Mode mode, bool blended);
+  void compile(Mode mode, unsigned bits);
+  void upload_textures(const Scene& scene, const std::vector<uint8_t>& used_textures);
 
   const GlApi& gl_;
   const Hierarchy& hierarchy_;
   std::vector<glm::dmat4> transforms_;  // per object
+  std::vector<glm::dmat3> normal_world_;  // per object: inverse transpose of its 3x3
+  std::vector<ObjectLook> looks_;       // per object
+  std::vector<glm::dvec3> centers_;     // per object: its box centre (BLEND sorting)
   std::vector<ItemDraw> item_draws_;    // per hierarchy item
   std::vector<ItemDraw> lod_draws_;     // per LodData cluster LOD (object filled per draw)
   std::vector<ItemDraw> hlod_draws_;    // per HLOD (object = a pseudo-object: its origin)
   std::vector<uint32_t> item_slot_;     // per item: LodData slot
   std::vector<uint32_t> hlod_of_node_;  // per node: HLOD index or kNoNode
-  GLuint programs_[3] = {};             // indexed by Mode
-  GLint projection_loc_[3] = {};
-  GLuint vao_ = 0, vertex_buf_ = 0, index_buf_ = 0, record_buf_ = 0, indirect_buf_ = 0;
+  Program programs_[3][16];             // [mode][variant bits]; id 0 = not compiled
+  GLuint vao_ = 0, vertex_buf_ = 0, uv_buf_ = 0, index_buf_ = 0, record_buf_ = 0, indirect_buf_ = 0;
+  size_t record_capacity_ = 0, indirect_capacity_ = 0;  // bytes
+  std::vector<GLuint> textures_;        // per scene image (0: unused)
+  std::vector<GLuint> samplers_;        // per scene texture (0: unused)
+  std::vector<uint32_t> texture_image_; // per scene texture: its image
+  bool has_blended_ = false;
+  std::string variants_;
 
   // Current frame.
   glm::dmat4 view_rotation_{1.0};
   glm::dvec3 eye_{0.0};
   uint32_t frame_ = 0;
+  bool defer_blended_ = false;
   std::vector<uint32_t> object_frame_;         // per object: frame its matrices are from
   std::vector<ObjectMatrices> object_matrices_;  // per object
+  std::vector<Pending> pending_;               // this draw call's draws
+  std::vector<Pending> blended_;               // BLEND draws not drawn yet
+  std::vector<Pending> sorted_;
+  std::vector<std::pair<uint64_t, uint32_t>> batch_order_;
+  std::vector<std::pair<double, uint32_t>> blend_order_;
   std::vector<IndirectCommand> commands_;
   std::vector<DrawRecord> records_;
 };
