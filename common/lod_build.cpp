@@ -3,6 +3,10 @@
 #include "common/lod_data.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
 #include <unordered_map>
 
 #include "common/lod_simplify.hpp"
@@ -15,6 +19,34 @@ namespace {
 // Largest axis scale of a transform's linear part (errors scale with it).
 double max_scale(const glm::dmat4& m) {
   return std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+}
+
+// Runs work(k) for every k in [0, n) on two threads (the calling one and a helper; the target
+// machines have two cores). work(k) must only write what belongs to k, so the result does not
+// depend on the order. `report` runs on the calling thread after each of its own items. The first
+// exception is rethrown after both threads stop.
+template <class Work, class Report>
+void for_each_on_two_threads(size_t n, const Work& work, const Report& report) {
+  std::atomic<size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto run = [&](bool caller) {
+    try {
+      for (size_t k; (k = next.fetch_add(1)) < n;) {
+        work(k);
+        if (caller) report();
+      }
+    } catch (...) {
+      next = n;
+      std::lock_guard<std::mutex> lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  };
+  std::thread helper;
+  if (n > 1 && std::thread::hardware_concurrency() != 1) helper = std::thread(run, false);
+  run(true);
+  if (helper.joinable()) helper.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace
@@ -38,11 +70,11 @@ struct LodBuilder {
     uint32_t interior = 0;
     for (const HNode& n : h.nodes()) interior += !n.leaf() && n.item_count > 0;
     const size_t total = slots.size() + interior;
-    size_t done = 0;
+    std::atomic<size_t> finished{0};  // slots and HLODs built, by both threads
     const double t0 = now_ms();
     double last_print = -1e9;
     auto tick = [&](const char* phase) {
-      ++done;
+      const size_t done = finished.load();
       const double t = now_ms();
       if (label.empty() || (t - last_print < 200 && done != total)) return;
       last_print = t;
@@ -55,36 +87,39 @@ struct LodBuilder {
       progress("%s: building LODs [%s] %zu/%zu nodes (%s) ETA %.0f s   ", label.c_str(), bar, done, total, phase, eta);
     };
 
-    // Leaf LOD chains per slot, in mesh space.
+    // Leaf LOD chains per slot, in mesh space (slots are independent: two threads).
     d.cluster_lods_.resize(slots.size() * kLeafLodLevels);
-    for (size_t s = 0; s < slots.size(); ++s) {
-      const Mesh& mesh = scene.meshes[slots[s].first];
-      const MeshCluster& cl = mesh.clusters[slots[s].second];
-      LodMesh base;  // the cluster, compacted
-      std::unordered_map<uint32_t, uint32_t> local;
-      for (uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) {
-        const uint32_t v = mesh.indices[i];
-        auto [it, fresh] = local.emplace(v, uint32_t(base.positions.size()));
-        if (fresh) {
-          base.positions.push_back(mesh.positions[v]);
-          base.normals.push_back(v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1));
-        }
-        base.indices.push_back(it->second);
-      }
-      const LodMesh* prev = &base;
-      for (uint32_t l = 1; l <= kLeafLodLevels; ++l) {
-        LodMesh& dst = d.cluster_lods_[s * kLeafLodLevels + l - 1];
-        const size_t target = simplify_target(prev->indices.size(), p.level_ratio, p.min_triangles);
-        if (target < prev->indices.size())
-          dst = simplify_lod_mesh(*prev, target);
-        else
-          dst = *prev;
-        if (dst.indices.size() > prev->indices.size()) dst = *prev;  // never finer
-        dst.error = std::max(dst.error, prev->error);
-        prev = &dst;
-      }
-      tick("leaf LODs");
-    }
+    for_each_on_two_threads(
+        slots.size(),
+        [&](size_t s) {
+          const Mesh& mesh = scene.meshes[slots[s].first];
+          const MeshCluster& cl = mesh.clusters[slots[s].second];
+          LodMesh base;  // the cluster, compacted
+          std::unordered_map<uint32_t, uint32_t> local;
+          for (uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) {
+            const uint32_t v = mesh.indices[i];
+            auto [it, fresh] = local.emplace(v, uint32_t(base.positions.size()));
+            if (fresh) {
+              base.positions.push_back(mesh.positions[v]);
+              base.normals.push_back(v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1));
+            }
+            base.indices.push_back(it->second);
+          }
+          const LodMesh* prev = &base;
+          for (uint32_t l = 1; l <= kLeafLodLevels; ++l) {
+            LodMesh& dst = d.cluster_lods_[s * kLeafLodLevels + l - 1];
+            const size_t target = simplify_target(prev->indices.size(), p.level_ratio, p.min_triangles);
+            if (target < prev->indices.size())
+              dst = simplify_lod_mesh(*prev, target);
+            else
+              dst = *prev;
+            if (dst.indices.size() > prev->indices.size()) dst = *prev;  // never finer
+            dst.error = std::max(dst.error, prev->error);
+            prev = &dst;
+          }
+          ++finished;
+        },
+        [&] { tick("leaf LODs"); });
 
     // Errors of leaves (world units), HLODs bottom-up (children have larger ids).
     const size_t N = h.size();
@@ -99,56 +134,64 @@ struct LodBuilder {
         for (uint32_t l = 1; l <= kLeafLodLevels; ++l)
           d.errors_[id][l] = std::max(d.errors_[id][l], d.item_lod(i, l).error * s);
       }
-      for (uint32_t l = 1; l <= kLeafLodLevels; ++l) d.errors_[id][l] = std::max(d.errors_[id][l], d.errors_[id][l - 1]);
+      for (uint32_t l = 1; l <= kLeafLodLevels; ++l)
+        d.errors_[id][l] = std::max(d.errors_[id][l], d.errors_[id][l - 1]);
     }
-    // Interior nodes in decreasing id order: children first.
+    // Interior nodes level by level from the deepest: children first. The nodes of one level are
+    // independent (each reads only its children's finished HLODs): two threads per level.
     std::vector<uint32_t> order;
     for (uint32_t id = 0; id < N; ++id)
       if (!h.node(id).leaf() && h.node(id).item_count > 0) order.push_back(id);
     d.hlods_.resize(order.size());
     for (size_t k = 0; k < order.size(); ++k) d.hlod_of_node_[order[k]] = uint32_t(k);
-    for (size_t k = order.size(); k-- > 0;) {
-      const uint32_t id = order[k];
-      const HNode& n = h.node(id);
-      LodMesh merged;
-      merged.origin = n.box.center();
-      double child_err = 0;
-      auto append = [&](const LodMesh& m, const glm::dmat4& to_world, uint32_t object) {
-        const uint32_t base = uint32_t(merged.positions.size());
-        const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(to_world)));
-        for (size_t v = 0; v < m.positions.size(); ++v) {
-          const glm::dvec3 world = glm::dvec3(to_world * glm::dvec4(glm::dvec3(m.positions[v]), 1.0));
-          merged.positions.push_back(glm::vec3(world - merged.origin));
-          glm::dvec3 nrm = nm * glm::dvec3(m.normals[v]);
-          const double len = glm::length(nrm);
-          merged.normals.push_back(len > 0 ? glm::vec3(nrm / len) : glm::vec3(0, 0, 1));
-          merged.objects.push_back(m.objects.empty() ? object : m.objects[v]);
-        }
-        for (uint32_t i : m.indices) merged.indices.push_back(base + i);
-      };
-      for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
-        const HNode& cn = h.node(c);
-        if (cn.item_count == 0) continue;
-        child_err = std::max(child_err, d.errors_[c][kLeafLodLevels]);
-        if (cn.leaf()) {
-          for (uint32_t i = cn.first_item; i < cn.first_item + cn.item_count; ++i)
-            append(d.item_lod(i, kLeafLodLevels), scene.objects[items[i].object].transform, items[i].object);
-        } else {
-          const LodMesh& ch = d.hlods_[d.hlod_of_node_[c]];
-          glm::dmat4 shift(1.0);
-          shift[3] = glm::dvec4(ch.origin, 1.0);
-          append(ch, shift, 0);
-        }
-      }
-      merged.error = 0;
-      const size_t target = simplify_target(merged.indices.size(), p.hlod_ratio, p.min_triangles);
-      LodMesh& out = d.hlods_[d.hlod_of_node_[id]];
-      out = target < merged.indices.size() ? simplify_lod_mesh(merged, target) : merged;
-      out.error += child_err;  // children's error + this simplification's: monotone
-      out.error = std::max(out.error, child_err);
-      d.errors_[id].fill(out.error);
-      tick("HLODs");
-    }
+    std::vector<std::vector<uint32_t>> levels(h.depth());
+    for (uint32_t id : order) levels[h.node(id).depth].push_back(id);
+    for (size_t level = levels.size(); level-- > 0;)
+      for_each_on_two_threads(
+          levels[level].size(),
+          [&](size_t k) {
+            const uint32_t id = levels[level][k];
+            const HNode& n = h.node(id);
+            LodMesh merged;
+            merged.origin = n.box.center();
+            double child_err = 0;
+            auto append = [&](const LodMesh& m, const glm::dmat4& to_world, uint32_t object) {
+              const uint32_t base = uint32_t(merged.positions.size());
+              const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(to_world)));
+              for (size_t v = 0; v < m.positions.size(); ++v) {
+                const glm::dvec3 world = glm::dvec3(to_world * glm::dvec4(glm::dvec3(m.positions[v]), 1.0));
+                merged.positions.push_back(glm::vec3(world - merged.origin));
+                glm::dvec3 nrm = nm * glm::dvec3(m.normals[v]);
+                const double len = glm::length(nrm);
+                merged.normals.push_back(len > 0 ? glm::vec3(nrm / len) : glm::vec3(0, 0, 1));
+                merged.objects.push_back(m.objects.empty() ? object : m.objects[v]);
+              }
+              for (uint32_t i : m.indices) merged.indices.push_back(base + i);
+            };
+            for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
+              const HNode& cn = h.node(c);
+              if (cn.item_count == 0) continue;
+              child_err = std::max(child_err, d.errors_[c][kLeafLodLevels]);
+              if (cn.leaf()) {
+                for (uint32_t i = cn.first_item; i < cn.first_item + cn.item_count; ++i)
+                  append(d.item_lod(i, kLeafLodLevels), scene.objects[items[i].object].transform, items[i].object);
+              } else {
+                const LodMesh& ch = d.hlods_[d.hlod_of_node_[c]];
+                glm::dmat4 shift(1.0);
+                shift[3] = glm::dvec4(ch.origin, 1.0);
+                append(ch, shift, 0);
+              }
+            }
+            merged.error = 0;
+            const size_t target = simplify_target(merged.indices.size(), p.hlod_ratio, p.min_triangles);
+            LodMesh& out = d.hlods_[d.hlod_of_node_[id]];
+            out = target < merged.indices.size() ? simplify_lod_mesh(merged, target) : merged;
+            out.error += child_err;  // children's error + this simplification's: monotone
+            out.error = std::max(out.error, child_err);
+            d.errors_[id].fill(out.error);
+            ++finished;
+          },
+          [&] { tick("HLODs"); });
     progress_done();
     d.finish_hash();
     return d;

@@ -94,11 +94,12 @@ bool read_mesh(Reader& r, LodMesh& m, size_t object_count) {
   return true;
 }
 
-uint64_t payload_hash(const std::vector<uint8_t>& p) {
+uint64_t payload_hash(const uint8_t* p, size_t n) {
   Hasher h;
-  h.bytes(p.data(), p.size());
+  h.bytes(p, n);
   return h.value();
 }
+uint64_t payload_hash(const std::vector<uint8_t>& p) { return payload_hash(p.data(), p.size()); }
 
 std::vector<uint8_t> serialize(const std::vector<LodMesh>& clusters, const std::vector<uint32_t>& slots,
                                const std::vector<LodMesh>& hlods, const std::vector<uint32_t>& hlod_of_node,
@@ -167,9 +168,15 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
     if (why) *why = w;
     return std::nullopt;
   };
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) return fail("missing");
-  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // One read of the whole file into a buffer of its size (not byte by byte into a growing
+  // vector: at plant:40 that took a minute and twice the file in memory); parsed in place.
+  const std::streamoff file_size = in.tellg();
+  if (file_size < 0) return fail("cannot read");
+  std::vector<uint8_t> bytes(static_cast<size_t>(file_size));
+  in.seekg(0);
+  if (!bytes.empty() && !in.read(reinterpret_cast<char*>(bytes.data()), file_size)) return fail("cannot read");
   constexpr size_t kHead = 8 + 4 + 8 + 8 + 8;
   if (bytes.size() < kHead) return fail("truncated header (" + std::to_string(bytes.size()) + " bytes)");
   if (std::memcmp(bytes.data(), kCacheMagic, 8) != 0) return fail("bad magic (not an occswitch LOD cache)");
@@ -186,20 +193,21 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   if (size != bytes.size() - kHead)
     return fail("truncated or padded payload (" + std::to_string(bytes.size() - kHead) + " bytes, header says " +
                 std::to_string(size) + ")");
-  std::vector<uint8_t> payload(bytes.begin() + kHead, bytes.end());
-  if (payload_hash(payload) != hash) return fail("checksum mismatch (corrupt)");
+  const uint8_t* const payload = bytes.data() + kHead;
+  const size_t payload_size = bytes.size() - kHead;
+  if (payload_hash(payload, payload_size) != hash) return fail("checksum mismatch (corrupt)");
   LodData d;
   d.key_ = key;
-  Reader r(payload.data(), payload.size());
+  Reader r(payload, payload_size);
   uint64_t nc = 0, nh = 0;
-  if (!r.pod(nc) || nc > payload.size()) return fail("corrupt cluster LOD count");
+  if (!r.pod(nc) || nc > payload_size) return fail("corrupt cluster LOD count");
   d.cluster_lods_.resize(nc);
   for (auto& m : d.cluster_lods_)
     if (!read_mesh(r, m, scene.objects.size())) return fail("corrupt cluster LOD mesh");
   if (!r.vec(d.item_slot_) || d.item_slot_.size() != h.items().size()) return fail("corrupt item table");
   for (uint32_t s : d.item_slot_)
     if (uint64_t(s + 1) * kLeafLodLevels > nc) return fail("item slot out of range");
-  if (!r.pod(nh) || nh > payload.size()) return fail("corrupt HLOD count");
+  if (!r.pod(nh) || nh > payload_size) return fail("corrupt HLOD count");
   d.hlods_.resize(nh);
   for (auto& m : d.hlods_)
     if (!read_mesh(r, m, scene.objects.size())) return fail("corrupt HLOD mesh");

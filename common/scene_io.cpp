@@ -24,8 +24,10 @@
 #include <tuple>
 
 #include "common/city.hpp"
+#include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/hash.hpp"
+#include "common/plant.hpp"
 
 namespace occ {
 namespace {
@@ -926,13 +928,21 @@ Scene load_scene(const std::string& spec) {
     if (f.size() > 3) p.floors_max = parse_int(spec, "floors", f[3], 1, kMaxFloors);
     if (f.size() > 4) p.detail = parse_int(spec, "detail", f[4], 1, kMaxDetail);
     scene = generate_city(p);
+  } else if (spec.rfind("plant:", 0) == 0) {
+    const std::string text = spec.substr(6);
+    const std::optional<double> m = parse_finite(text);
+    if (!m || !(*m >= plant::kMinMillions && *m <= plant::kMaxMillions))
+      throw InputError("--scene '" + spec + "': millions of triangles must be a number in 0.01..200 (got '" + text +
+                       "')");
+    scene = plant::generate_plant(plant::PlantParams{*m, 1});
   } else if (ends_with_ci(spec, ".gltf") || ends_with_ci(spec, ".glb")) {
     scene = load_gltf(spec);
   } else {
     throw InputError("--scene '" + spec +
                      "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
                      "(blocks, buildings per block side, max floors, detail), layout:NXxNZ:path.gltf|.glb, "
-                     "hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate or offset:DX,DY,DZ:<spec>");
+                     "plant:M (M million triangles), hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate or "
+                     "offset:DX,DY,DZ:<spec>");
   }
   scene.source = spec;
   return scene;

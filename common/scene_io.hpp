@@ -31,6 +31,10 @@ Scene layout_grid(const Scene& asset, int nx, int nz, double gap);
 //   path.gltf | path.glb                 a glTF file
 //   city[:BXxBZ[:N[:F[:D]]]]             generate_city (blocks, buildings/side, max floors, detail)
 //   layout:NXxNZ:path                    layout_grid of a glTF asset
+//   plant:M                              plant::generate_plant (plant.hpp): an industrial hall of
+//                                        about M million triangles (0.01 <= M <= 200, fractions
+//                                        allowed), every object its own mesh (no instancing);
+//                                        walk:N goes down its central aisle
 //   offset:DX,DY,DZ:<spec>               any scene translated by (DX,DY,DZ) (|D| <= 1e9): the object
 //                                        transforms (double) move, the meshes (float) do not
 // Hard cases (deterministic; Y up; the tests in tests/hard_*.cpp pin cameras on them):

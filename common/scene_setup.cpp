@@ -11,7 +11,8 @@ namespace occ {
 
 void add_scene_options(Cli& cli, SceneOptions& o) {
   cli.option("scene", &o.spec, "SPEC",
-             "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), layout:NXxNZ:file");
+             "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), plant:M (M million triangles, "
+             "unique meshes), layout:NXxNZ:file");
   cli.option("arity", &o.build.arity, 2, 64, "hierarchy: max children per node");
   cli.option("leaf-items", &o.build.leaf_items, 1, 1024, "hierarchy: max items per leaf");
   cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,

@@ -14,6 +14,7 @@
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/hash.hpp"
+#include "common/memory.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -218,12 +219,12 @@ class Client {
     std::printf(
         "summary: frames=%zu mean_fps=%.2f median_fps=%.2f mean_bytes_per_frame=%.0f mean_visible=%.1f "
         "leaves=%zu culled_pct=%.1f mean_triangles=%.0f triangles_culled_pct=%.1f latency_ms_mean=%.1f "
-        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f\n",
+        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f peak_rss_mb=%ld\n",
         frames, 1000.0 * frames / wall_ms, 1000.0 / sorted_iv[frames / 2], double(bytes_sum_) / frames, mean_v,
         leaf_count_, 100.0 * (1.0 - mean_v / std::max<size_t>(leaf_count_, 1)), double(tri_sum_) / frames,
         100.0 * (1.0 - double(tri_sum_) / frames / std::max<uint64_t>(total_triangles_, 1)),
         std::accumulate(lat.begin(), lat.end(), 0.0) / frames, lat[std::min(frames - 1, frames * 95 / 100)],
-        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames);
+        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb());
   }
 
   const ClientOptions& o_;

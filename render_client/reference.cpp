@@ -14,6 +14,7 @@
 #include "common/gl/context.hpp"
 #include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
+#include "common/memory.hpp"
 #include "common/progress.hpp"
 #include "render_client/baselines/single_process.hpp"
 #include "render_client/frame_output.hpp"
@@ -94,9 +95,9 @@ int run_reference(const ClientOptions& o) {
   progress_done();
   std::sort(frame_ms.begin(), frame_ms.end());
   std::printf("reference (%s): frames=%zu mean_ms=%.2f median_ms=%.2f mean_fps=%.2f triangles_per_frame=%.0f "
-              "mtri_per_s=%.2f\n",
+              "mtri_per_s=%.2f peak_rss_mb=%ld\n",
               o.cull.c_str(), path.size(), total_ms / path.size(), frame_ms[frame_ms.size() / 2],
-              1000.0 * path.size() / total_ms, double(total_tris) / path.size(), total_tris / total_ms / 1000.0);
+              1000.0 * path.size() / total_ms, double(total_tris) / path.size(), total_tris / total_ms / 1000.0, peak_rss_mb());
   return 0;
 }
 

@@ -10,7 +10,7 @@
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion), which go where they belong. OCC_BIN overrides the binaries' folder;
-# OCC_MAX_SECONDS (default 900) bounds the whole run.
+# OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
 # direction (user-space: the kernel here has no netem). Relay logs go to the output folder.
@@ -93,13 +93,13 @@ if [ $netns = 1 ]; then
   [ -n "$link" ] && relay_args=(--delay-ms "$l_delay" --jitter-ms "${l_jitter:-0}")
 fi
 
-wait_port() {  # file pid name
-  for _ in $(seq 1 600); do
+wait_port() {  # file pid name (OCC_PORT_WAIT_S, default 60: big scenes load and build LODs first)
+  for _ in $(seq 1 $((${OCC_PORT_WAIT_S:-60} * 10))); do
     [ -s "$1" ] && { cat "$1"; return 0; }
     kill -0 "$2" 2>/dev/null || { echo "error: $3 exited before listening (see $out/$3.log)" >&2; return 1; }
     sleep 0.1
   done
-  echo "error: $3 did not write its port file within 60 s" >&2; return 1
+  echo "error: $3 did not write its port file within ${OCC_PORT_WAIT_S:-60} s (set OCC_PORT_WAIT_S)" >&2; return 1
 }
 
 # start_relay NAME TARGET [PREFIX...]: a link_relay in front of TARGET (HOST:PORT), listening on

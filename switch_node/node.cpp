@@ -15,6 +15,7 @@
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
 #include "common/hash.hpp"
+#include "common/memory.hpp"
 #include "protocol/cluster/camera_receiver.hpp"
 #include "protocol/cluster/switch_step.hpp"
 #include "protocol/net/transport.hpp"
@@ -293,7 +294,7 @@ class SwitchNode {
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
               << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
               << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us), sent " << r.sent.bytes
-              << " B to the render client and " << p.sent.bytes << " B to the other node\n";
+              << " B to the render client and " << p.sent.bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
                  "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",

@@ -63,6 +63,11 @@ TEST(Cluster, CityWalkEqualsReference) {
   expect_cluster_equals_reference("city", kCity, "walk:90", 90, true);
 }
 
+// Unique geometry (every object its own mesh): the plant's aisle walk, pipes crossing overhead.
+TEST(Cluster, PlantWalkEqualsReference) {
+  expect_cluster_equals_reference("plant", "plant:0.3", "walk:40", 40, true);
+}
+
 TEST(Cluster, DuplexWalkEqualsReference) {
   if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
   expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);

@@ -4,3 +4,4 @@ occ_test(scene_test unit LIBS occ_common SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/scene_gltf_test.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/scene_generate_test.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/scene_material_test.cpp)
+occ_test(plant_test unit LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/scene_plant_test.cpp)

@@ -17,6 +17,7 @@
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
 #include "common/hzb.hpp"
+#include "common/memory.hpp"
 #include "common/scene_setup.hpp"
 #include "protocol/cluster/camera_receiver.hpp"
 #include "protocol/cluster/cluster.hpp"
@@ -118,6 +119,7 @@ int serve(const ServerOptions& o) {
   }
   if (code == 0) rvg.close(wire::kByeDone);
   cameras_in.join();
+  std::cerr << who << ": summary: peak_rss_mb=" << peak_rss_mb() << "\n";
   return code;
 }
 
