@@ -1,11 +1,24 @@
 // Scenes the unit tests build in code (no files): a grid of unit cubes and small city parameters.
 #pragma once
+#include <string>
+
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "common/error.hpp"
 #include "common/scene.hpp"
 #include "common/scene_io.hpp"
 
 namespace occtest {
+
+// The message of the InputError thrown by load_scene(spec), or "" if none.
+inline std::string spec_error(const std::string& spec) {
+  try {
+    occ::load_scene(spec);
+  } catch (const occ::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
 
 // Unit cubes [0,1]^3 on an n x n grid in the xz plane (spacing apart), one object each, all
 // sharing mesh 0.

@@ -16,15 +16,7 @@ namespace {
 
 CityParams small_city(int detail = 1) { return occtest::city_params(3, 2, 3, 6, detail); }
 
-// The message of the InputError thrown by load_scene(spec), or "" if none.
-std::string spec_error(const std::string& spec) {
-  try {
-    load_scene(spec);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using occtest::spec_error;
 
 }  // namespace
 

@@ -10,19 +10,13 @@
 #include "common/hierarchy.hpp"
 #include "common/plant.hpp"
 #include "common/scene_io.hpp"
+#include "scene_fixtures.hpp"
 
 using namespace occ;
 
 namespace {
 
-std::string spec_error(const std::string& spec) {
-  try {
-    load_scene(spec);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using occtest::spec_error;
 
 }  // namespace
 
