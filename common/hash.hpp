@@ -64,7 +64,7 @@ class Hasher {
       n -= 8;
     }
     uint64_t tail = 0;
-    std::memcpy(&tail, p, n);
+    if (n > 0) std::memcpy(&tail, p, n);  // p may be null when the data is empty
     u64(tail);
   }
   void str(std::string_view s) { bytes(s.data(), s.size()); }
