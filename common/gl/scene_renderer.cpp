@@ -19,7 +19,7 @@ namespace {
 
 // Material variant bits (a shader variant per combination the scene uses).
 constexpr unsigned kTextured = 1, kMask = 2, kBlend = 4, kUnlit = 8, kVertexColor = 16;
-constexpr unsigned kVariants = 32;
+constexpr unsigned kVariants = 32;  // = the second extent of SceneRenderer::programs_
 // Face culling of an object's triangles.
 constexpr uint8_t kCullNone = 0, kCullBackCcw = 1, kCullBackCw = 2;
 constexpr uint64_t kBlendKey = uint64_t(1) << 63;
@@ -431,6 +431,7 @@ void SceneRenderer::upload_textures(const Scene& scene, const std::vector<uint8_
 }
 
 void SceneRenderer::compile(Mode mode, unsigned bits) {
+  static_assert(sizeof(programs_[0]) / sizeof(programs_[0][0]) == kVariants);
   Program& p = programs_[int(mode)][bits];
   if (p.id) return;
   const std::string head = defines(mode, bits);

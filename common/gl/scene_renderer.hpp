@@ -189,7 +189,7 @@ class SceneRenderer {
   std::vector<ItemDraw> hlod_draws_;    // per HLOD (object = a pseudo-object: its origin)
   std::vector<uint32_t> item_slot_;     // per item: LodData slot
   std::vector<uint32_t> hlod_of_node_;  // per node: HLOD index or kNoNode
-  Program programs_[3][16];             // [mode][variant bits]; id 0 = not compiled
+  Program programs_[3][32];             // [mode][variant bits] (kVariants); id 0 = not compiled
   GLuint vao_ = 0, vertex_buf_ = 0, uv_buf_ = 0, index_buf_ = 0, record_buf_ = 0, indirect_buf_ = 0;
   size_t record_capacity_ = 0, indirect_capacity_ = 0;  // bytes
   std::vector<GLuint> textures_;        // per scene image (0: unused)
