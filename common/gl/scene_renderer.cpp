@@ -202,12 +202,13 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
   for (uint32_t o = 0; o < scene.objects.size(); ++o) {
     const Object& obj = scene.objects[o];
     transforms_.push_back(obj.transform);
-    const Material* mat = scene.material_of(obj.mesh);
-    if (mat && obj.mesh < scene.meshes.size() && scene.meshes[obj.mesh].material >= scene.materials.size())
+    const Mesh& mesh = scene.meshes[obj.mesh];
+    if (mesh.material != kNoMaterial && mesh.material >= scene.materials.size())
       throw std::runtime_error("SceneRenderer: mesh " + std::to_string(obj.mesh) + " has material " +
-                               std::to_string(scene.meshes[obj.mesh].material) + " of " +
-                               std::to_string(scene.materials.size()));
+                               std::to_string(mesh.material) + " of " + std::to_string(scene.materials.size()));
+    const Material* mat = scene.material_of(obj.mesh);
     ObjectLook look;
+    if (!mesh.colors.empty() && mesh.colors.size() == mesh.positions.size()) look.bits |= kVertexColor;
     const bool mirrored = glm::determinant(glm::dmat3(obj.transform)) < 0.0;
     if (!mat) {
       look.color = object_color(o);
@@ -219,9 +220,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
       if (mat->alpha_mode == AlphaMode::Mask) look.bits |= kMask;
       if (mat->alpha_mode == AlphaMode::Blend) look.bits |= kBlend;
       if (mat->unlit) look.bits |= kUnlit;
-      const Mesh& mesh = scene.meshes[obj.mesh];
-      if (!mesh.colors.empty()) look.bits |= kVertexColor;
-      if (mat->base_color_texture >= 0 && !mesh.uvs.empty()) {
+      if (mat->base_color_texture >= 0 && mesh.uvs.size() == mesh.positions.size()) {
         if (size_t(mat->base_color_texture) >= scene.textures.size() ||
             scene.textures[size_t(mat->base_color_texture)].image >= scene.images.size())
           throw std::runtime_error("SceneRenderer: material '" + mat->name + "' has texture " +
