@@ -56,6 +56,8 @@ class SceneRenderer {
  public:
   enum class Mode { Shaded, DepthOnly, ItemIds };
   static constexpr std::array<uint8_t, 4> kBackgroundRgba8{20, 23, 28, 255};
+  // DepthOnly draws (occluders) use glPolygonOffset(-this, -this): see submit().
+  static constexpr float kOccluderSlopeOffset = 0.1f;
 
   // With `lod`, its leaf LODs and HLODs are uploaded too (draw_renderables); it must outlive
   // nothing (only read here).
