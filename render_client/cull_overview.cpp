@@ -56,6 +56,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
   std::cerr << "cull_overview: GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
   SceneRenderer renderer(*ctx, ls.scene, h);
+  renderer.set_occluder_offset(true);  // as the switch nodes' OR
   BoxQuerier querier(*ctx);
   const Renderables renderables(h, nullptr);
   std::vector<uint32_t> before, prev;  // V_{f-2}, V_{f-1} (sorted)

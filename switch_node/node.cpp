@@ -46,6 +46,7 @@ class SwitchNode {
     ctx_ = GlContext::create(parse_gl_backend(o_.gl), o_.width, o_.height);
     std::cerr << who_ << ": GL_RENDERER " << ctx_->renderer() << " (" << ctx_->backend_name() << ")\n";
     renderer_ = std::make_unique<SceneRenderer>(*ctx_, ls.scene, ls.hierarchy, ls.lod.get());
+    renderer_->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
     querier_ = std::make_unique<BoxQuerier>(*ctx_);
     connect();
     std::thread camera_thread([this] { receive_cameras(); });

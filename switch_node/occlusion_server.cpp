@@ -61,6 +61,7 @@ int serve(const ServerOptions& o) {
   auto ctx = GlContext::create(parse_gl_backend(o.gl), o.width, o.height);
   std::cerr << who << ": GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
   SceneRenderer renderer(*ctx, ls.scene, h);
+  renderer.set_occluder_offset(true);  // occluders must not hide their own boxes from the pyramid
 
   Endpoint listen = parse_endpoint("listen", o.listen);
   auto listener = net::Listener::open(listen.port, listen.host);

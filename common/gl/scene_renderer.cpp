@@ -328,13 +328,8 @@ DrawStats SceneRenderer::submit(Mode mode, DrawStats stats) {
     gl_.NamedBufferData(indirect_buf_, commands_.size() * sizeof(IndirectCommand), commands_.data(),
                         GL_STREAM_DRAW);
     const bool color = mode != Mode::DepthOnly;
-    // Occluders (depth only) go a tenth of a pixel's depth slope farther back (reverse-Z: a
-    // negative offset). llvmpipe rasterises a sliver seen almost edge-on at depths up to ~1e-4
-    // (relative) in front of its own vertices, beyond the query box's 1e-5 padding: an occluder
-    // could hide its own box from the next HC although brute force shows it (issue 13: 16 pixels
-    // in frame 108 of the duplex layout walk, 16 in the 2.6 M city walk). Shaded and item-buffer
-    // frames are drawn without offset, and so are query boxes (it is switched off again below).
-    if (!color) {
+    const bool offset = !color && occluder_offset_;  // see set_occluder_offset()
+    if (offset) {
       gl_.Enable(GL_POLYGON_OFFSET_FILL);
       gl_.PolygonOffset(-kOccluderSlopeOffset, -kOccluderSlopeOffset);
     }
@@ -346,7 +341,7 @@ DrawStats SceneRenderer::submit(Mode mode, DrawStats stats) {
     gl_.BindVertexArray(vao_);
     gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
     gl_.MultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, nullptr, GLsizei(commands_.size()), 0);
-    if (!color) gl_.Disable(GL_POLYGON_OFFSET_FILL);
+    if (offset) gl_.Disable(GL_POLYGON_OFFSET_FILL);  // never on query boxes or shaded frames
     records_.clear();
     commands_.clear();
   }
