@@ -111,9 +111,12 @@ else
   for mode in none frustum oqn; do
     log "OpenSceneGraph $mode"
     mkdir -p "$out/osg_$mode"
-    if ! OSG_PEER_BIN=$osg_peer "$osg_run" "$osg_scene" "$out/none/path.csv" "$mode" "${view[@]}" --verbose \
-        --out "$out/osg_$mode" >"$out/osg_$mode/log.txt" 2>&1; then
-      log "OpenSceneGraph $mode failed, its rows are left out: $(tail -n 1 "$out/osg_$mode/log.txt")"
+    rc=0
+    OSG_PEER_BIN=$osg_peer "$osg_run" "$osg_scene" "$out/none/path.csv" "$mode" "${view[@]}" --verbose \
+      --out "$out/osg_$mode" >"$out/osg_$mode/log.txt" 2>&1 || rc=$?
+    if [ $rc -ne 0 ]; then
+      cp "$out/osg_$mode/log.txt" "$out/osg_failed.log"
+      log "OpenSceneGraph $mode failed (status $rc, log in $out/osg_failed.log), its rows are left out"
       rm -rf "$out"/osg_none "$out"/osg_frustum "$out"/osg_oqn
       break
     fi

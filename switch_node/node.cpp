@@ -45,6 +45,7 @@ class SwitchNode {
     if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
     if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
     step_.emplace(*g_.renderables, o_.config, o_.height);
+    g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
     querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
     connect();
     cameras_in_.emplace(*rvg_, cameras_, Viewport{o_.width, o_.height});

@@ -21,6 +21,7 @@ namespace occ {
   X(DISABLE, Disable)                                         \
   X(VIEWPORT, Viewport)                                       \
   X(SCISSOR, Scissor)                                         \
+  X(POLYGONOFFSET, PolygonOffset)                             \
   X(CLIPCONTROL, ClipControl)                                 \
   X(DEPTHFUNC, DepthFunc)                                     \
   X(CULLFACE, CullFace)                                       \

@@ -682,6 +682,11 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
   gl_.NamedBufferSubData(indirect_buf_, 0, GLsizeiptr(command_bytes), commands_.data());
 
   const bool color = mode != Mode::DepthOnly;
+  const bool offset = !color && occluder_offset_;  // see set_occluder_offset()
+  if (offset) {
+    gl_.Enable(GL_POLYGON_OFFSET_FILL);
+    gl_.PolygonOffset(-kOccluderSlopeOffset, -kOccluderSlopeOffset);
+  }
   gl_.ColorMask(color, color, color, color);
   gl_.DepthMask(blended ? GL_FALSE : GL_TRUE);
   gl_.Enable(GL_DEPTH_TEST);
@@ -726,6 +731,7 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
     b = e;
   }
   // Leave the defaults for other GL users (BoxQuerier, HZB readback).
+  if (offset) gl_.Disable(GL_POLYGON_OFFSET_FILL);  // never on query boxes or shaded frames
   if (bound_cull != kCullNone) {
     gl_.Disable(GL_CULL_FACE);
     gl_.FrontFace(GL_CCW);

@@ -87,6 +87,8 @@ class SceneRenderer {
  public:
   enum class Mode { Shaded, DepthOnly, ItemIds };
   static constexpr std::array<uint8_t, 4> kBackgroundRgba8{20, 23, 28, 255};
+  // With set_occluder_offset(true), DepthOnly draws use glPolygonOffset(-this, -this).
+  static constexpr float kOccluderSlopeOffset = 0.1f;
 
   // With `lod`, its leaf LODs and HLODs are uploaded too (draw_renderables); it must outlive
   // nothing (only read here).
@@ -94,6 +96,16 @@ class SceneRenderer {
   ~SceneRenderer();
   SceneRenderer(const SceneRenderer&) = delete;
   SceneRenderer& operator=(const SceneRenderer&) = delete;
+
+  // Occluders for a later query pass of the same depth buffer (the switch's and the occlusion
+  // server's OR): DepthOnly draws go a tenth of a pixel's depth slope farther back (reverse-Z:
+  // glPolygonOffset(-0.1, -0.1), switched off again after each draw). llvmpipe rasterises a
+  // sliver seen almost edge-on at depths up to ~1e-4 (relative) in front of its own vertices,
+  // beyond the query box's 1e-5 padding, so an occluder could hide its own box from the next HC
+  // although brute force shows it (issue 13: 16 pixels in frame 108 of the duplex layout walk,
+  // 16 in the 2.6 M city walk). Off by default: a renderer that queries each node before drawing
+  // it (CHC, stop-and-wait) does not need it, and toggling the state per draw costs llvmpipe.
+  void set_occluder_offset(bool on) { occluder_offset_ = on; }
 
   // Starts a frame for `cam`: clears depth to 0 (far) and, if clear_color, colour to
   // kBackgroundRgba8; forgets the previous frame's per-object transforms. Each Shaded draw call
@@ -125,6 +137,7 @@ class SceneRenderer {
   bool has_blended() const { return has_blended_; }
 
  private:
+  bool occluder_offset_ = false;
   struct ItemDraw {
     uint32_t index_count, first_index;
     int32_t base_vertex;

@@ -60,6 +60,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   const Hierarchy& h = ls.hierarchy;
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
+  renderer.set_occluder_offset(true);  // as the switch nodes' OR
   BoxQuerier querier(*ctx);
   const Renderables renderables(h, nullptr);
   ClusterConfig config;

@@ -63,6 +63,7 @@ int serve(const ServerOptions& o) {
   const std::string who = "occlusion_server";
   SceneGl g = start_scene_gl(who, o.scene, false, o.gl, o.width, o.height);
   const Hierarchy& h = g.hierarchy();
+  g.renderer->set_occluder_offset(true);  // occluders must not hide their own boxes from the pyramid
 
   net::Listener listener = open_listener(who, o.listen);
   const ClusterConfig config;  // lockstep, incremental: what the render client expects by default
