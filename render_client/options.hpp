@@ -14,7 +14,7 @@ namespace occ {
 struct ClientOptions {
   SceneOptions scene;
   ClusterConfig config;
-  std::string path = "walk:60";
+  std::string path;  // empty: walk:60, or interactive with --window (main.cpp)
   std::string out;
   bool no_images = false;
   int width = 512, height = 512;
@@ -27,6 +27,9 @@ struct ClientOptions {
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame
   int timeout_ms = 30000;
+  // --window (viewer.hpp)
+  bool window = false;
+  std::string record;  // every camera shown, as a path CSV
 };
 
 int run_reference(const ClientOptions& o);

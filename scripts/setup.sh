@@ -13,6 +13,8 @@ PKGS=(
   libgtest-dev libgmock-dev                                # tests
   gnuplot-nox                                              # plots in benchmarks
   iproute2 python3                                         # netlab / scripts
+  libx11-dev                                               # render_client --window (Xlib)
+  xvfb xdotool                                             # window tests (virtual X server, key presses)
 )
 
 missing=()

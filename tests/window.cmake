@@ -1,0 +1,4 @@
+# render_client --window: the navigator (unit) and a windowed cluster under Xvfb + xdotool.
+occ_test(navigator_test unit LIBS occ_navigator SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/navigator_test.cpp)
+occ_test(window_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/window_test.cpp)
+add_dependencies(window_test switch_node render_client)
