@@ -79,7 +79,7 @@ void Viewer::start(const Aabb& bounds, const Viewport& vp) {
   thread_ = std::thread([this] { run_window(); });
 }
 
-bool Viewer::next_camera(std::vector<Camera>& cameras) {
+bool Viewer::next_camera(std::vector<Camera>& cameras, const Camera* in_hand) {
   std::unique_lock<std::mutex> lock(mu_);
   if (quit_) return false;
   const size_t n = cameras.size();
@@ -90,6 +90,11 @@ bool Viewer::next_camera(std::vector<Camera>& cameras) {
     sent_changes_ = nav_->changes();
     return true;
   }
+  // Nothing moves and the frame in hand shows nothing new: wait up to 100 ms for the user first
+  // (an idle window refreshes at about 10 fps; the nodes keep getting cameras, the CPU rests).
+  if (nav_->changes() == sent_changes_ && (!in_hand || (!recorded_.empty() && *in_hand == recorded_.back())))
+    changed_.wait_for(lock, std::chrono::milliseconds(100), [&] { return quit_ || nav_->changes() != sent_changes_; });
+  if (quit_) return false;
   sent_changes_ = nav_->changes();
   cameras.push_back(nav_->camera());
   return true;
@@ -108,10 +113,6 @@ void Viewer::show(const Camera& cam, Image img, const HudStats& hud) {
   }
   const char c = 1;
   [[maybe_unused]] ssize_t w = ::write(wake_[1], &c, 1);
-  // Nothing moves: the next frame in at most 100 ms (the nodes keep getting cameras, the CPU rests).
-  std::unique_lock<std::mutex> lock(mu_);
-  if ((interactive_ || taken_over_) && nav_->changes() == sent_changes_)
-    changed_.wait_for(lock, std::chrono::milliseconds(100), [&] { return quit_ || nav_->changes() != sent_changes_; });
 }
 
 bool Viewer::quit() const {

@@ -49,10 +49,10 @@ class Viewer {
   void start(const Aabb& bounds, const Viewport& vp);
   // Appends camera number cameras.size() to `cameras` (numbers are sequential): the path's
   // until the user takes over, then the user's. False when there is none (the path ended or the
-  // user quit).
-  bool next_camera(std::vector<Camera>& cameras);
-  // A frame was rendered with `cam`: show it, record the camera. While nothing moves, waits up
-  // to 100 ms for the user first (idle refresh rate).
+  // user quit). While nothing moves, waits up to 100 ms for the user first, unless `in_hand` (the
+  // camera of a frame about to be shown) differs from the frame on screen.
+  bool next_camera(std::vector<Camera>& cameras, const Camera* in_hand = nullptr);
+  // A frame was rendered with `cam`: show it, record the camera.
   void show(const Camera& cam, Image img, const HudStats& hud);
   bool quit() const;
   // Stops the window thread and writes --record. Throws InputError when the file cannot be written.
