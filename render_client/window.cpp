@@ -8,7 +8,9 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <bit>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -17,6 +19,20 @@ namespace occ {
 
 namespace {
 constexpr int kHudHeight = 16;
+
+// The window destroyed under us (xdotool windowclose, a crashed window manager): Xlib's default
+// handler would exit(1); this one ends the run like the close button.
+std::atomic<bool> g_window_gone{false};
+int on_x_error(Display* dpy, XErrorEvent* e) {
+  if (e->error_code == BadWindow || e->error_code == BadDrawable) {
+    g_window_gone = true;
+  } else {
+    char text[256];
+    XGetErrorText(dpy, e->error_code, text, sizeof text);
+    std::fprintf(stderr, "render_client: X error (ignored): %s (request %d)\n", text, int(e->request_code));
+  }
+  return 0;
+}
 
 int shift_of(unsigned long mask) { return mask ? std::countr_zero(mask) : 0; }
 
@@ -66,6 +82,7 @@ struct X11Window::Impl {
   }
 
   void paint() {
+    if (g_window_gone) return;
     if (have_frame) XPutImage(dpy, win, gc, ximage, 0, 0, 0, 0, unsigned(width), unsigned(height));
     XSetForeground(dpy, gc, BlackPixel(dpy, DefaultScreen(dpy)));
     XFillRectangle(dpy, win, gc, 0, height, unsigned(width), kHudHeight);
@@ -89,6 +106,7 @@ std::unique_ptr<X11Window> X11Window::open(const std::string& title, int width, 
     throw std::runtime_error(std::string("--window: cannot open X display '") + name +
                              "' (no X server there, or not allowed to connect)");
   Display* dpy = impl->dpy;
+  XSetErrorHandler(on_x_error);
   const int screen = DefaultScreen(dpy);
   impl->visual = DefaultVisual(dpy, screen);
   impl->depth = DefaultDepth(dpy, screen);
@@ -193,6 +211,9 @@ std::vector<WindowEvent> X11Window::poll(int timeout_ms, int wake_fd) {
       case ClientMessage:
         if (Atom(ev.xclient.data.l[0]) == m.wm_delete) out.push_back({T::close});
         break;
+      case DestroyNotify:
+        out.push_back({T::close});
+        break;
       case FocusOut:
         out.push_back({T::focus_out});
         break;
@@ -203,6 +224,8 @@ std::vector<WindowEvent> X11Window::poll(int timeout_ms, int wake_fd) {
         break;
     }
   }
+  XSync(m.dpy, False);  // errors of what this poll and the last show() sent arrive now
+  if (g_window_gone) out.push_back({WindowEvent::Type::close});
   return out;
 }
 

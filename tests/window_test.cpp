@@ -13,6 +13,8 @@
 #include "common/image.hpp"
 #include "integration_util.hpp"
 
+#include <X11/Xlib.h>  // last: its macros (None, Bool, ...) would break the headers above
+
 using namespace occtest;
 using namespace std::chrono_literals;
 
@@ -168,4 +170,57 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
         break;
       }
   EXPECT_EQ(differing, 0u) << "screenshot frame " << index << " vs the replay's " << name;
+}
+
+// The window manager's close button (WM_DELETE_WINDOW) quits cleanly, and a movement key takes
+// over a playing path (reference renderer: same viewer as the cluster).
+TEST(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
+  if (which("Xvfb").empty() || which("xdotool").empty())
+    GTEST_SKIP() << "needs Xvfb and xdotool (Debian packages xvfb, xdotool): not installed";
+  const fs::path dir = fresh_dir("window_close");
+  Xvfb x(dir);
+  ASSERT_TRUE(x.ok()) << "Xvfb did not start: " << x.log();
+  ::setenv("DISPLAY", x.display().c_str(), 1);
+  const fs::path rec = dir / "rec.csv";
+  Proc ref({bin("render_client"), "--reference", "--window", "--scene", kScene, "--path", "walk:20000", "--record",
+            rec.string(), kView[0], kView[1], kView[2], kView[3]},
+           dir / "reference.log");
+  std::string id = xdotool(dir, {"search", "--sync", "--name", "occswitch"});
+  id = id.substr(0, id.find('\n'));
+  ASSERT_FALSE(id.empty());
+  xdotool(dir, {"mousemove", "--window", id, "64", "48"});
+  xdotool(dir, {"windowfocus", id});
+  std::this_thread::sleep_for(300ms);
+  xdotool(dir, {"key", "a"});
+  ASSERT_TRUE(wait_for([&] { return ref.log().find("you took over") != std::string::npos || !ref.running(); }, 10s))
+      << ref.log();
+  std::this_thread::sleep_for(300ms);
+
+  // What a window manager sends when the close button is clicked.
+  Display* dpy = XOpenDisplay(x.display().c_str());
+  ASSERT_NE(dpy, nullptr);
+  XEvent ev{};
+  ev.xclient.type = ClientMessage;
+  ev.xclient.window = ::Window(std::stoul(id));
+  ev.xclient.message_type = XInternAtom(dpy, "WM_PROTOCOLS", False);
+  ev.xclient.format = 32;
+  ev.xclient.data.l[0] = long(XInternAtom(dpy, "WM_DELETE_WINDOW", False));
+  ev.xclient.data.l[1] = CurrentTime;
+  XSendEvent(dpy, ev.xclient.window, False, NoEventMask, &ev);
+  XFlush(dpy);
+  XCloseDisplay(dpy);
+
+  EXPECT_EQ(ref.wait(30s), 0) << ref.log();
+  std::smatch m;
+  const std::string log = ref.log();
+  ASSERT_TRUE(std::regex_search(log, m, std::regex("took over the camera at frame (\\d+)"))) << log;
+  const size_t k = std::stoul(m[1].str());
+  const occ::Aabb bounds{{-1e4, -1e4, -1e4}, {1e4, 1e4, 1e4}};  // near/far are in the file
+  const auto cams = occ::load_camera_path(rec.string(), bounds, {128, 96});
+  ASSERT_GT(k, 0u);
+  ASSERT_GT(cams.size(), k);
+  EXPECT_LT(cams.size(), 20000u) << "the close button did not end the run";
+  // A: a step to the left of the last path camera.
+  EXPECT_LT(glm::dot(cams.back().eye - cams[k - 1].eye, cams[k - 1].right()), 0.0);
+  EXPECT_GT(glm::length(cams.back().eye - cams[k - 1].eye), 1e-3);
 }
