@@ -91,10 +91,8 @@ class Client {
   }
 
   // Whether camera `number` exists (the next to send): on the path, or (--window) one more from
-  // the viewer, appended to path_ (in_hand: the camera of the frame about to be shown).
-  bool have_camera(uint32_t number, const Camera* in_hand = nullptr) {
-    return number < path_.size() || (viewer_ && viewer_->next_camera(path_, in_hand));
-  }
+  // the viewer, appended to path_.
+  bool have_camera(uint32_t number) { return number < path_.size() || (viewer_ && viewer_->next_camera(path_)); }
 
   void send_camera(uint32_t number) {
     sent_at_[number] = Clock::now();
@@ -179,7 +177,7 @@ class Client {
         }
       }
       // Keep the nodes busy: the next camera goes out before this frame is rendered.
-      if (have_camera(next_camera, &cam)) send_camera(next_camera++);
+      if (have_camera(next_camera)) send_camera(next_camera++);
       // 3. Render V_f with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());

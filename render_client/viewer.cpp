@@ -79,7 +79,7 @@ void Viewer::start(const Aabb& bounds, const Viewport& vp) {
   thread_ = std::thread([this] { run_window(); });
 }
 
-bool Viewer::next_camera(std::vector<Camera>& cameras, const Camera* in_hand) {
+bool Viewer::next_camera(std::vector<Camera>& cameras) {
   std::unique_lock<std::mutex> lock(mu_);
   if (quit_) return false;
   const size_t n = cameras.size();
@@ -90,9 +90,10 @@ bool Viewer::next_camera(std::vector<Camera>& cameras, const Camera* in_hand) {
     sent_changes_ = nav_->changes();
     return true;
   }
-  // Nothing moves and the frame in hand shows nothing new: wait up to 100 ms for the user first
-  // (an idle window refreshes at about 10 fps; the nodes keep getting cameras, the CPU rests).
-  if (nav_->changes() == sent_changes_ && (!in_hand || (!recorded_.empty() && *in_hand == recorded_.back())))
+  // Reference renderer: nothing moves, so wait up to 100 ms for the user first (an idle window
+  // refreshes at about 10 fps). Not in the cluster: there pacing the cameras lets frames queue up
+  // (in latest mode both nodes may use one camera: two frames per camera sent) and the view lags.
+  if (o_.reference && nav_->changes() == sent_changes_)
     changed_.wait_for(lock, std::chrono::milliseconds(100), [&] { return quit_ || nav_->changes() != sent_changes_; });
   if (quit_) return false;
   sent_changes_ = nav_->changes();

@@ -8,7 +8,8 @@
 // in --out), O culling overlay (not implemented yet: says so), Esc or the close button quits.
 // With a --path the path plays; any movement key, drag or R takes over (the run then goes on
 // until the user quits). With no --path (or --path interactive) the user drives from the start
-// of walk:1. While nothing moves, an interactive run shows a new frame at most every 100 ms.
+// of walk:1. While nothing moves, the reference renderer draws a new frame at most every 100 ms;
+// the cluster keeps going at full rate (one camera per frame shown, as latest mode does).
 #pragma once
 #include <condition_variable>
 #include <cstdint>
@@ -49,9 +50,8 @@ class Viewer {
   void start(const Aabb& bounds, const Viewport& vp);
   // Appends camera number cameras.size() to `cameras` (numbers are sequential): the path's
   // until the user takes over, then the user's. False when there is none (the path ended or the
-  // user quit). While nothing moves, waits up to 100 ms for the user first, unless `in_hand` (the
-  // camera of a frame about to be shown) differs from the frame on screen.
-  bool next_camera(std::vector<Camera>& cameras, const Camera* in_hand = nullptr);
+  // user quit). Reference renderer: while nothing moves, waits up to 100 ms for the user first.
+  bool next_camera(std::vector<Camera>& cameras);
   // A frame was rendered with `cam`: show it, record the camera.
   void show(const Camera& cam, Image img, const HudStats& hud);
   bool quit() const;
