@@ -29,22 +29,23 @@ std::string which(const std::string& prog) {
   return "";
 }
 
-// An Xvfb on a free display number, stopped (SIGTERM: it removes its socket and lock) at the end.
+// An Xvfb on a display number it picks itself (-displayfd: free even when tests run in parallel),
+// stopped with SIGTERM (it removes its socket and lock) at the end.
 class Xvfb {
  public:
-  explicit Xvfb(const fs::path& dir) {
-    for (int n = 57; n < 300; ++n)
-      if (!fs::exists("/tmp/.X11-unix/X" + std::to_string(n)) && !fs::exists("/tmp/.X" + std::to_string(n) + "-lock")) {
-        display_ = ":" + std::to_string(n);
-        proc_ = std::make_unique<Proc>(std::vector<std::string>{which("Xvfb"), display_, "-screen", "0", "800x600x24",
-                                                                "-nolisten", "tcp"},
-                                       dir / "xvfb.log");
-        for (int i = 0; i < 250 && proc_->running(); ++i) {
-          if (fs::exists("/tmp/.X11-unix/X" + std::to_string(n))) return;
-          std::this_thread::sleep_for(20ms);
+  explicit Xvfb(const fs::path& dir) : log_(dir / "xvfb.log") {
+    proc_ = std::make_unique<Proc>(std::vector<std::string>{which("Xvfb"), "-displayfd", "1", "-screen", "0",
+                                                            "800x600x24", "-nolisten", "tcp"},
+                                   log_);
+    for (int i = 0; i < 500 && proc_->running(); ++i) {  // it writes the number once it accepts clients
+      std::istringstream log(read_file(log_));
+      for (std::string line; std::getline(log, line);)
+        if (!line.empty() && line.find_first_not_of("0123456789") == std::string::npos && !log.eof()) {
+          display_ = ":" + line;
+          return;
         }
-        return;
-      }
+      std::this_thread::sleep_for(20ms);
+    }
   }
   ~Xvfb() {
     if (proc_) {
@@ -52,11 +53,12 @@ class Xvfb {
       proc_->wait(5s);
     }
   }
-  bool ok() { return proc_ && proc_->running(); }
+  bool ok() { return proc_ && proc_->running() && !display_.empty(); }
   const std::string& display() const { return display_; }
   std::string log() const { return proc_ ? proc_->log() : ""; }
 
  private:
+  fs::path log_;
   std::string display_;
   std::unique_ptr<Proc> proc_;
 };
