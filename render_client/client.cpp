@@ -49,6 +49,7 @@ class Client {
         viewer_->start(ls.scene.bounds(), {o_.width, o_.height});  // path_ grows with next_camera()
       else
         path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
+      if (!o_.save_path.empty()) save_camera_path(o_.save_path, path_);
     });
     if (viewer_ && o_.config.camera_mode == CameraMode::lockstep)
       std::cerr << "render_client: --window in lockstep camera mode: the view lags " << o_.lookahead

@@ -31,7 +31,9 @@ int main(int argc, char** argv) {
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
              "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, Esc quits");
     cli.option("record", &o.record, "FILE.csv", "--window: write every camera shown as a --path CSV (replays the flight)");
+    cli.option("save-path", &o.save_path, "FILE.csv", "write the camera path (e.g. a generated walk:N) as a --path CSV");
     if (!cli.parse(argc, argv)) return 0;
+    if (!o.save_path.empty() && o.window) throw occ::InputError("--save-path: with --window, use --record");
     if (o.path.empty()) o.path = o.window ? "interactive" : "walk:60";
     if (o.path == "interactive" && !o.window) throw occ::InputError("--path interactive needs --window");
     if (!o.record.empty() && !o.window) throw occ::InputError("--record needs --window");

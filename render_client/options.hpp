@@ -30,6 +30,7 @@ struct ClientOptions {
   // --window (viewer.hpp)
   bool window = false;
   std::string record;  // every camera shown, as a path CSV
+  std::string save_path;  // --save-path: the path (generated or read) as CSV
 };
 
 int run_reference(const ClientOptions& o);

@@ -31,6 +31,7 @@ int run_reference(const ClientOptions& o) {
       viewer->start(ls.scene.bounds(), vp);
     else
       path = load_camera_path(o.path, ls.scene.bounds(), vp);
+    if (!o.save_path.empty()) save_camera_path(o.save_path, path);
   });
   const Hierarchy& h = g.hierarchy();
   GlContext* ctx = g.ctx.get();

@@ -13,6 +13,7 @@
 # Each configuration runs twice: once without images (the frame times) and once with images
 # (the error), so PNG writing does not count as frame time. The LOD cache goes to OUT/lod-cache.
 set -uo pipefail
+[ "${1:-}" = --version ] && { echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0; }
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${OCC_BIN:-$here/build/bin}
 scene="" path="walk" frames=150 width=640 height=480 out="out/accuracy"

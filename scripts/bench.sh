@@ -13,6 +13,7 @@
 #
 #   scripts/bench.sh --scene S [--path P] [--width W --height H] [--out DIR]
 set -euo pipefail
+[ "${1:-}" = --version ] && { echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0; }
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${OCC_BIN:-$here/build/bin}
 scene="" path="walk:200" width=640 height=480 out="out/bench"

@@ -25,6 +25,7 @@
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
 set -uo pipefail
+[ "${1:-}" = --version ] && { echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0; }
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${OCC_BIN:-$here/build/bin}
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}

@@ -13,6 +13,7 @@
 # direction; delays are one-way, per link. --netns (root): the three processes run in three
 # network namespaces joined by veth pairs, rates as tc tbf qdiscs (see scripts/cluster.sh).
 set -euo pipefail
+[ "${1:-}" = --version ] && { echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0; }
 here=$(cd "$(dirname "$0")/.." && pwd)
 scene="" path="walk:150" delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay=5
 mode=latest width=320 height=240 out="out/netlab" netns=()

@@ -116,3 +116,19 @@ TEST(Navigator, JumpToFollowsAPathCameraAndNearFarFollowTheEye) {
   EXPECT_NEAR(glm::dot(c.forward(), path[1].forward()), 1, 1e-12);
   EXPECT_DOUBLE_EQ(c.far_dist, path[1].far_dist);  // auto_near_far at the same eye
 }
+
+// Item 4 of issue 17: an unknown --path kind says so (not "cannot open camera path file").
+TEST(CameraPathSpec, UnknownKindAndMissingCountSaySo) {
+  auto error_of = [](const std::string& spec) -> std::string {
+    try {
+      load_camera_path(spec, kBounds, {64, 48});
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error_of("spiral:10"), "--path 'spiral:10': unknown kind 'spiral' (expected orbit:N, walk:N, fly:N or a CSV file)");
+  EXPECT_EQ(error_of("walk"), "--path 'walk': give a frame count, e.g. walk:60");
+  EXPECT_NE(error_of("/nonexistent/p.csv").find("cannot open camera path file"), std::string::npos);
+  EXPECT_EQ(error_of("walk:3"), "");
+}
