@@ -192,7 +192,10 @@ TEST(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
   ASSERT_FALSE(id.empty());
   xdotool(dir, {"mousemove", "--window", id, "64", "48"});
   xdotool(dir, {"windowfocus", id});
-  std::this_thread::sleep_for(300ms);
+  // The window opens before the scene loads: let the path play a little first.
+  ASSERT_TRUE(wait_for([&] { return ref.log().find("GL_RENDERER") != std::string::npos || !ref.running(); }, 60s))
+      << ref.log();
+  std::this_thread::sleep_for(500ms);
   xdotool(dir, {"key", "a"});
   ASSERT_TRUE(wait_for([&] { return ref.log().find("you took over") != std::string::npos || !ref.running(); }, 10s))
       << ref.log();
