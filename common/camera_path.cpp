@@ -138,7 +138,11 @@ std::vector<Camera> load_camera_path(const std::string& spec, const Aabb& bounds
     std::string kind = spec.substr(0, colon);
     if (kind == "orbit" || kind == "walk" || kind == "fly")
       return generated(spec, kind, parse_count(spec, spec.substr(colon + 1)), bounds, vp);
+    if (!std::ifstream(spec))
+      throw InputError("--path '" + spec + "': unknown kind '" + kind + "' (expected orbit:N, walk:N, fly:N or a CSV file)");
   }
+  if ((spec == "orbit" || spec == "walk" || spec == "fly") && !std::ifstream(spec))
+    throw InputError("--path '" + spec + "': give a frame count, e.g. " + spec + ":60");
   return from_csv(spec, bounds, vp);
 }
 

@@ -111,6 +111,10 @@ bool Cli::parse(int argc, char** argv) {
       std::cout << help();
       return false;
     }
+    if (a == "--version") {
+      std::cout << program_ << " (occswitch) " << version_text() << "\n";
+      return false;
+    }
     if (a.rfind("--", 0) != 0) throw InputError("unexpected argument '" + a + "' (see " + program_ + " --help)");
     std::string name = a.substr(2), value;
     bool inline_value = false;
@@ -144,7 +148,19 @@ std::string Cli::help() const {
     o << "\n";
   }
   o << "  --help                      this text\n";
+  o << "  --version                   the occswitch version\n";
   return o.str();
+}
+
+std::string version_text() {
+#ifndef OCC_VERSION
+#define OCC_VERSION "unknown"
+#endif
+#ifndef OCC_GIT
+#define OCC_GIT ""
+#endif
+  const std::string git = OCC_GIT;
+  return std::string(OCC_VERSION) + (git.empty() ? "" : " (git " + git + ")");
 }
 
 int run_main(const std::function<int()>& body) {

@@ -30,7 +30,7 @@ class Cli {
   // Repeatable option: each occurrence appends.
   void multi(const std::string& name, std::vector<std::string>* out, const std::string& value, const std::string& help);
 
-  // Returns false when --help was given (help printed to stdout): the caller exits 0.
+  // Returns false when --help or --version was given (printed to stdout): the caller exits 0.
   bool parse(int argc, char** argv);
   std::string help() const;
 
@@ -61,6 +61,10 @@ void Cli::choice(const std::string& name, T* out, std::vector<std::pair<std::str
   }
   word_option(name, names, def, help, [out, words](size_t i) { *out = words[i].second; });
 }
+
+// "0.1.0 (git 1a2b3c4)": the VERSION file and the commit the build was configured at. --version
+// prints "PROGRAM (occswitch) 0.1.0 (git 1a2b3c4)".
+std::string version_text();
 
 // Runs body(); InputError -> "error: <what>" exit 2, other exceptions -> "error: <what>" exit 1.
 int run_main(const std::function<int()>& body);

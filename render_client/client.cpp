@@ -23,6 +23,7 @@
 #include "protocol/visible_set.hpp"
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
+#include "render_client/viewer.hpp"
 
 namespace occ {
 
@@ -44,8 +45,17 @@ class Client {
   explicit Client(const ClientOptions& o) : o_(o) {}
 
   int run() {
-    g_ = start_scene_gl("render_client", o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height,
-                        [&](const LoadedScene& ls) { path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height}); });
+    if (o_.window) viewer_ = std::make_unique<Viewer>(o_);  // no display: fail before loading the scene
+    g_ = start_scene_gl("render_client", o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
+      if (viewer_)
+        viewer_->start(ls.scene.bounds(), {o_.width, o_.height});  // path_ grows with next_camera()
+      else
+        path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
+      if (!o_.save_path.empty()) save_camera_path(o_.save_path, path_);
+    });
+    if (viewer_ && o_.config.camera_mode == CameraMode::lockstep)
+      std::cerr << "render_client: --window in lockstep camera mode: the view lags " << o_.lookahead
+                << " frames; --camera-mode latest (on all three processes) is the interactive mode\n";
     leaf_count_ = 0;
     for (const HNode& n : g_.hierarchy().nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
     total_triangles_ = g_.scene().triangle_count();
@@ -60,6 +70,7 @@ class Client {
     for (auto& c : nodes_)
       if (c) code ? c->close_with_error("render client failed") : c->close("render client done");
     summary();
+    if (viewer_) viewer_->finish();  // writes --record
     return code;
   }
 
@@ -81,6 +92,10 @@ class Client {
     std::cerr << "render_client: connected to switch node 0 (" << nodes_[0]->peer() << ")"
               << (nodes_[1] ? " and 1 (" + nodes_[1]->peer() + ")" : std::string(" only")) << "\n";
   }
+
+  // Whether camera `number` exists (the next to send): on the path, or (--window) one more from
+  // the viewer, appended to path_.
+  bool have_camera(uint32_t number) { return number < path_.size() || (viewer_ && viewer_->next_camera(path_)); }
 
   void send_camera(uint32_t number) {
     sent_at_[number] = Clock::now();
@@ -104,7 +119,6 @@ class Client {
 
   void loop() {
     const bool lockstep = o_.config.camera_mode == CameraMode::lockstep;
-    const uint32_t n = uint32_t(path_.size());
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
@@ -115,9 +129,10 @@ class Client {
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
     if (lockstep)
-      while (next_camera < std::min<uint32_t>(n, uint32_t(o_.lookahead))) send_camera(next_camera++);
-    else
+      while (next_camera < uint32_t(o_.lookahead) && have_camera(next_camera)) send_camera(next_camera++);
+    else if (have_camera(next_camera))
       send_camera(next_camera++);
+    if (next_camera == 0) return;  // --window: the user quit before the first frame
     start_ = Clock::now();
     cpu_start_ = process_cpu_us();
     for (uint32_t frame = 0;; ++frame) {
@@ -128,7 +143,7 @@ class Client {
       auto* wcam = std::get_if<wire::Camera>(&r.message);
       if (!wcam) throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) +
                                      " sent " + std::string(wire::type_name(wire::type_of(r.message))) + " before the camera");
-      if (wcam->frame >= n || !sent_at_.count(wcam->frame))
+      if (wcam->frame >= path_.size() || !sent_at_.count(wcam->frame))
         throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) +
                             " used camera " + std::to_string(wcam->frame) + " that was never sent");
       if (lockstep && wcam->frame != frame)
@@ -168,7 +183,7 @@ class Client {
         }
       }
       // Keep the nodes busy: the next camera goes out before this frame is rendered.
-      if (next_camera < n) send_camera(next_camera++);
+      if (have_camera(next_camera)) send_camera(next_camera++);
       // 3. Render V_f with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
       const uint64_t cpu_r0 = process_cpu_us();
@@ -178,8 +193,12 @@ class Client {
       g_.ctx->gl().Finish();
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       const uint64_t cpu_shown = process_cpu_us();
-      if (out.writes_images()) out.write_frame(frame, g_.ctx->read_rgba());
       const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
+      Image image;
+      if (out.writes_images() || viewer_) image = g_.ctx->read_rgba();
+      if (out.writes_images()) out.write_frame(frame, image);
+      if (viewer_)
+        viewer_->show(cam, std::move(image), {latency_ms, visible.size(), leaf_count_, st.triangles, o_.config.pixel_error});
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
                      double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
                      eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
@@ -196,8 +215,12 @@ class Client {
       hc_ms_ += eof.hc_us / 1000.0;
       or_ms_ += eof.or_us / 1000.0;
       rvg_ms_ += ms_between(r0, shown);
-      if (frame % 10 == 9) progress("render_client: frame %u (camera %u/%u)", frame + 1, wcam->frame + 1, n);
-      if (wcam->frame + 1 == n) break;
+      if (frame % 10 == 9) progress("render_client: frame %u (camera %u/%zu)", frame + 1, wcam->frame + 1, path_.size());
+      if (viewer_ && viewer_->quit()) break;
+      if (wcam->frame + 1 == path_.size()) {  // every camera sent was used: the last frame, unless the viewer has more
+        if (!have_camera(next_camera)) break;
+        send_camera(next_camera++);
+      }
     }
     progress_done();
   }
@@ -228,6 +251,7 @@ class Client {
   }
 
   const ClientOptions& o_;
+  std::unique_ptr<Viewer> viewer_;  // --window
   SceneGl g_;
   std::vector<Camera> path_;
   std::unique_ptr<net::Connection> nodes_[2];

@@ -13,7 +13,9 @@ int main(int argc, char** argv) {
                  "Drives the camera along a path, receives the visible set of every frame from the switch\n"
                  "node doing HC, verifies it, renders it and writes frames and statistics. With --reference\n"
                  "it renders the whole scene itself (no culling or frustum culling only): the ground truth.");
-    cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
+    cli.option("path", &o.path, "P",
+               "camera path: file.csv, orbit:N, walk:N or fly:N (default walk:60), or interactive (--window; "
+               "its default)");
     cli.option("out", &o.out, "DIR", "write DIR/frame_%05d.png and DIR/stats.csv");
     cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl);
@@ -21,14 +23,22 @@ int main(int argc, char** argv) {
     cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
                "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
-    cli.option("save-path", &o.save_path, "FILE", "reference renderer: also write the camera path as CSV");
     cli.option("save-scene", &o.save_scene, "FILE.gltf",
                "reference renderer: also write the scene as glTF (FILE.gltf + FILE.bin, geometry only)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
     occ::add_cluster_options(cli, o.config);
     cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
+    cli.flag("window", &o.window,
+             "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
+             "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, Esc quits");
+    cli.option("record", &o.record, "FILE.csv", "--window: write every camera shown as a --path CSV (replays the flight)");
+    cli.option("save-path", &o.save_path, "FILE.csv", "write the camera path (e.g. a generated walk:N) as a --path CSV");
     if (!cli.parse(argc, argv)) return 0;
+    if (!o.save_path.empty() && o.window) throw occ::InputError("--save-path: with --window, use --record");
+    if (o.path.empty()) o.path = o.window ? "interactive" : "walk:60";
+    if (o.path == "interactive" && !o.window) throw occ::InputError("--path interactive needs --window");
+    if (!o.record.empty() && !o.window) throw occ::InputError("--record needs --window");
     if (o.reference) {
       if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
       return occ::run_reference(o);

@@ -14,7 +14,7 @@ namespace occ {
 struct ClientOptions {
   SceneOptions scene;
   ClusterConfig config;
-  std::string path = "walk:60";
+  std::string path;  // empty: walk:60, or interactive with --window (main.cpp)
   std::string out;
   bool no_images = false;
   int width = 512, height = 512;
@@ -23,12 +23,15 @@ struct ClientOptions {
   bool reference = false;
   std::string cull = "frustum";
   bool exact = false;  // item-buffer pass per frame: exactly visible nodes
-  std::string save_path;   // write the camera path as CSV (for other renderers: bench.sh's OSG rows)
   std::string save_scene;  // write the loaded scene as glTF (ditto, generated scenes included)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame
   int timeout_ms = 30000;
+  // --window (viewer.hpp)
+  bool window = false;
+  std::string record;  // every camera shown, as a path CSV
+  std::string save_path;  // --save-path: the path (generated or read) as CSV (also for bench.sh's OSG rows)
 };
 
 int run_reference(const ClientOptions& o);

@@ -20,14 +20,20 @@
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
 #include "render_client/scene_export.hpp"
+#include "render_client/viewer.hpp"
 
 namespace occ {
 
 int run_reference(const ClientOptions& o) {
   const Viewport vp{o.width, o.height};
   std::vector<Camera> path;
+  std::unique_ptr<Viewer> viewer;  // --window: path grows with next_camera()
+  if (o.window) viewer = std::make_unique<Viewer>(o);
   SceneGl g = start_scene_gl("render_client", o.scene, false, o.gl, o.width, o.height, [&](const LoadedScene& ls) {
-    path = load_camera_path(o.path, ls.scene.bounds(), vp);
+    if (viewer)
+      viewer->start(ls.scene.bounds(), vp);
+    else
+      path = load_camera_path(o.path, ls.scene.bounds(), vp);
     if (!o.save_path.empty()) save_camera_path(o.save_path, path);
     if (!o.save_scene.empty()) save_gltf(ls.scene, o.save_scene);
   });
@@ -50,7 +56,7 @@ int run_reference(const ClientOptions& o) {
   double total_ms = 0;
   uint64_t total_tris = 0;
   std::vector<double> frame_ms;
-  for (uint32_t f = 0; f < path.size(); ++f) {
+  for (uint32_t f = 0; f < path.size() || (viewer && viewer->next_camera(path)); ++f) {
     const Camera& cam = path[f];
     auto t0 = std::chrono::steady_clock::now();
     const uint64_t cpu0 = process_cpu_us();
@@ -73,7 +79,10 @@ int run_reference(const ClientOptions& o) {
     ctx->gl().Finish();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const double cpu_ms = double(process_cpu_us() - cpu0) / 1000.0;
-    if (out.writes_images()) out.write_frame(f, ctx->read_rgba());
+    Image image;
+    if (out.writes_images() || viewer) image = ctx->read_rgba();
+    if (out.writes_images()) out.write_frame(f, image);
+    if (viewer) viewer->show(cam, std::move(image), {ms, st.nodes_drawn, all_leaves.size(), st.triangles, 0.0});
     std::vector<double> row{double(f), double(st.nodes_drawn), double(st.triangles), ms, double(st.queries), cpu_ms};
     if (o.exact) {
       renderer.begin_id_frame(cam);
@@ -90,14 +99,18 @@ int run_reference(const ClientOptions& o) {
     total_ms += ms;
     total_tris += st.triangles;
     frame_ms.push_back(ms);
+    if (viewer && viewer->quit()) break;
     if (f % 10 == 9 || f + 1 == path.size()) progress("render_client: frame %u/%zu", f + 1, path.size());
   }
   progress_done();
+  if (viewer) viewer->finish();  // writes --record
+  if (frame_ms.empty()) return 0;  // --window: the user quit before the first frame
   std::sort(frame_ms.begin(), frame_ms.end());
   std::printf("reference (%s): frames=%zu mean_ms=%.2f median_ms=%.2f mean_fps=%.2f triangles_per_frame=%.0f "
               "mtri_per_s=%.2f peak_rss_mb=%ld\n",
-              o.cull.c_str(), path.size(), total_ms / path.size(), frame_ms[frame_ms.size() / 2],
-              1000.0 * path.size() / total_ms, double(total_tris) / path.size(), total_tris / total_ms / 1000.0, peak_rss_mb());
+              o.cull.c_str(), frame_ms.size(), total_ms / frame_ms.size(), frame_ms[frame_ms.size() / 2],
+              1000.0 * frame_ms.size() / total_ms, double(total_tris) / frame_ms.size(), total_tris / total_ms / 1000.0,
+              peak_rss_mb());
   return 0;
 }
 

@@ -19,17 +19,24 @@
 # 10.77.3.0/30 node0-node1); with --link the rate is a tc tbf qdisc on every veth and the delay a
 # link_relay on the connecting side. Namespaces, veths and qdiscs are removed at exit, also on
 # Ctrl-C or failure.
+# --window shows the frames in an X11 window ($DISPLAY) and lets you drive (render_client --help;
+# keys: W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset,
+# P screenshot, Esc quits). Without --path you drive from the start; with --path the path plays
+# and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
+# time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
-scene="" path="walk" frames=60 out="out/cluster" link="" netns=0
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --scene|--path|--frames|--out|--link) occ_set "$@"; shift 2 ;;
     --netns) netns=1; shift ;;
     --no-images) rvg_only+=("$1"); shift ;;
+    --window) window=1; rvg_only+=("$1"); shift ;;
+    --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --lookahead) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
@@ -39,6 +46,12 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
+if [ $window = 1 ]; then
+  [ -n "$path" ] || path=interactive
+  [[ " ${common[*]} " == *" --camera-mode "* ]] || common+=(--camera-mode latest)
+  MAX_SECONDS=${OCC_MAX_SECONDS:-31536000}
+fi
+[ -n "$path" ] || path=walk
 path=$(occ_frames_path "$path" "$frames")
 relay_args=()
 if [ -n "$link" ]; then

@@ -12,6 +12,12 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BIN=${OCC_BIN:-$here/build/bin}
 OCC_SCRIPT="scripts/$(basename "$0")"
 
+# --version as the first argument: the script's name and the project's version (the VERSION file).
+if [ "${1:-}" = --version ]; then
+  echo "$(basename "$0") (occswitch) $(cat "$here/VERSION")"
+  exit 0
+fi
+
 # The script's header comment (line 2 up to the first line that is not a comment), as help.
 occ_usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
 

@@ -2,6 +2,10 @@
 # Installs everything occswitch needs from Debian packages. Idempotent: only missing
 # packages are installed, so a second run costs one dpkg query.
 set -euo pipefail
+case "${1:-}" in  # before anything is installed or built
+  -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
+  --version) echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0 ;;
+esac
 
 PKGS=(
   build-essential cmake pkg-config
@@ -13,6 +17,9 @@ PKGS=(
   libgtest-dev libgmock-dev                                # tests
   gnuplot-nox                                              # plots in benchmarks
   iproute2 python3                                         # netlab / scripts
+  libx11-dev                                               # render_client --window (Xlib)
+  xvfb xdotool                                             # window tests (virtual X server, key presses)
+  ffmpeg                                                   # scripts/video.sh (frames -> MP4)
 )
 
 missing=()
