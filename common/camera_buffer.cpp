@@ -19,10 +19,27 @@ void CameraBuffer::close(const std::string& reason) {
   cv_.notify_all();
 }
 
+void CameraBuffer::interrupt() {
+  {
+    std::lock_guard lock(mu_);
+    interrupted_ = true;
+  }
+  cv_.notify_all();
+}
+
+void CameraBuffer::clear_interrupt() {
+  std::lock_guard lock(mu_);
+  interrupted_ = false;
+}
+
 template <class Pred>
 bool CameraBuffer::wait(std::unique_lock<std::mutex>& lock, std::chrono::milliseconds timeout, Pred ready,
                         std::string* why) {
-  bool ok = cv_.wait_for(lock, timeout, [&] { return ready() || closed_.has_value(); });
+  bool ok = cv_.wait_for(lock, timeout, [&] { return interrupted_ || ready() || closed_.has_value(); });
+  if (interrupted_) {
+    if (why) *why = kInterrupted;
+    return false;
+  }
   if (ok && ready()) return true;
   if (why) *why = closed_ ? *closed_ : "timed out after " + std::to_string(timeout.count()) + " ms waiting for a camera";
   return false;

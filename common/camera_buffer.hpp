@@ -3,7 +3,9 @@
 //   lockstep: take(expected) waits for the camera numbered `expected` (reproducible runs).
 //   latest:   take_latest(min) returns the newest camera numbered >= min (interactive; older
 //             cameras are dropped, as with the paper's buffer of one).
-// close() (peer said Bye or disconnected) wakes waiters, who then get the reason.
+// close() (peer said Bye or disconnected) wakes waiters, who then get the reason. interrupt()
+// (the render client sent an instruction, a Resync) makes waiters return nullopt with
+// *why = kInterrupted until clear_interrupt(); a pending interrupt wins over a camera.
 #pragma once
 #include <chrono>
 #include <condition_variable>
@@ -24,8 +26,11 @@ struct NumberedCamera {
 
 class CameraBuffer {
  public:
+  static constexpr const char* kInterrupted = "interrupted";
   void put(const NumberedCamera& c);
   void close(const std::string& reason);
+  void interrupt();
+  void clear_interrupt();
 
   // nullopt on timeout or close; *why says which.
   std::optional<NumberedCamera> take(uint32_t expected, std::chrono::milliseconds timeout, std::string* why);
@@ -39,6 +44,7 @@ class CameraBuffer {
   std::condition_variable cv_;
   std::map<uint32_t, Camera> cameras_;
   std::optional<std::string> closed_;
+  bool interrupted_ = false;
 };
 
 }  // namespace occ

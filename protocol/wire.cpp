@@ -123,6 +123,7 @@ constexpr uint32_t kCameraBytes = 100;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
 constexpr uint32_t kEndOfFrameBytes = 68;
 constexpr uint32_t kByeFixedBytes = 2;
+constexpr uint32_t kResyncBytes = 12;
 
 // ---- field lists: the fixed-width fields of a message in wire order (the tables in wire.hpp).
 // One list serves both directions: called with a Writer it encodes `m`, with a Reader it decodes
@@ -157,6 +158,8 @@ constexpr uint32_t list_bytes(void (*list)(ByteCount&, M&)) {
   list(c, m);
   return c.bytes;
 }
+constexpr void resync_fields(auto& io, auto& m) { io(m.frame, m.epoch, m.nodes); }
+static_assert(list_bytes<Resync>(resync_fields) == kResyncBytes);
 static_assert(list_bytes<Hello>(hello_fields) == kHelloFixedBytes - 4 - 2 - 2);  // magic, version, name_bytes
 static_assert(list_bytes<Camera>(camera_fields) == kCameraBytes);
 static_assert(list_bytes<EndOfFrame>(end_of_frame_fields) == kEndOfFrameBytes);
@@ -171,6 +174,7 @@ Bounds payload_bounds(Type t) {
     case Type::node_diff: return {kNodeDiffFixedBytes, kMaxPayloadBytes};
     case Type::end_of_frame: return {kEndOfFrameBytes, kEndOfFrameBytes};
     case Type::bye: return {kByeFixedBytes, kByeFixedBytes + uint32_t(kMaxReasonBytes)};
+    case Type::resync: return {kResyncBytes, kResyncBytes};
   }
   return {0, 0};
 }
@@ -289,6 +293,12 @@ std::optional<std::string> check(const Bye& m) {
   return text_error("reason", m.reason, kMaxReasonBytes);
 }
 
+std::optional<std::string> check(const Resync& m) {
+  if (m.nodes != 1 && m.nodes != 2) return "frame " + num(m.frame) + ": nodes " + num(m.nodes) + ", expected 1 or 2";
+  if (m.epoch == 0) return "frame " + num(m.frame) + ": epoch 0 (epochs start at 1)";
+  return std::nullopt;
+}
+
 // ---- payload codecs ----
 
 void put(Writer& w, const Hello& m) {
@@ -311,6 +321,8 @@ void put(Writer& w, const NodeDiff& m) {
 void put(Writer& w, const EndOfFrame& m) { end_of_frame_fields(w, m); }
 
 void put(Writer& w, const Bye& m) { w.str(m.reason); }
+
+void put(Writer& w, const Resync& m) { resync_fields(w, m); }
 
 // Reads a u16-prefixed string; the caller has checked the fixed part.
 Result<std::string> get_str(Reader& r, std::string_view what) {
@@ -373,6 +385,7 @@ std::string_view type_name(Type t) {
     case Type::node_diff: return "node_diff";
     case Type::end_of_frame: return "end_of_frame";
     case Type::bye: return "bye";
+    case Type::resync: return "resync";
   }
   return "unknown";
 }
@@ -428,6 +441,7 @@ Result<Message> decode_payload(Type type, std::span<const uint8_t> payload) {
       case Type::node_diff: return get_node_diff(r);
       case Type::end_of_frame: return get_fields<EndOfFrame>(r, end_of_frame_fields);
       case Type::bye: return get_bye(r);
+      case Type::resync: return get_fields<Resync>(r, resync_fields);
     }
     return Error{"unreachable"};
   }();

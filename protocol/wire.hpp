@@ -9,7 +9,7 @@
 //
 // Frame header (6 bytes)
 //   off size field
-//     0  u16  type            1 hello, 2 camera, 3 node_diff, 4 end_of_frame, 5 bye
+//     0  u16  type            1 hello, 2 camera, 3 node_diff, 4 end_of_frame, 5 bye, 6 resync
 //     2  u32  payload_bytes   <= kMaxPayloadBytes and within the type's size bounds below
 //
 // Hello (46 + name_bytes; 46..110) — first message on every connection, in both directions
@@ -70,6 +70,16 @@
 // finished cleanly; any other reason says why it failed or gave up.
 //     0  u16  reason_bytes      <= kMaxReasonBytes
 //     2  u8[] reason
+//
+// Resync (12) — render client -> switch node, and back (the node's acknowledgement). The cluster
+// starts over at frame `frame` with empty visible sets (V_{frame-1} = V_{frame-2} = empty, fronts
+// from the root), as at frame 0: with nodes = 2 as the switch (node frame % 2 does HC(frame)), with
+// nodes = 1 the receiving node alone does OR and HC of every frame (its peer is dropped). `epoch`
+// numbers the render client's resyncs (1, 2, ...). The node sends the same Resync back before its
+// first message of frame `frame`: whatever the render client received from it before is stale.
+//     0  u32  frame
+//     4  u32  epoch             >= 1
+//     8  u32  nodes             1 or 2
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -85,7 +95,7 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 2;  // 2: EndOfFrame carries CPU times
+constexpr uint16_t kProtocolVersion = 3;  // 2: EndOfFrame carries CPU times; 3: Resync
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
@@ -94,8 +104,8 @@ constexpr uint32_t kMaxViewportPx = 16384;
 constexpr uint32_t kDefaultDiffChunkIds = 100;  // the paper's buffer size b
 constexpr uint32_t kMaxDiffIds = (kMaxPayloadBytes - 12) / 4;  // ids in one NodeDiff
 
-enum class Type : uint16_t { hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5 };
-constexpr size_t kTypeCount = 5;
+enum class Type : uint16_t { hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5, resync = 6 };
+constexpr size_t kTypeCount = 6;
 constexpr size_t type_index(Type t) { return static_cast<size_t>(t) - 1; }  // 0..kTypeCount-1
 std::string_view type_name(Type t);  // "hello", ...; "unknown" for values outside the enum
 
@@ -161,7 +171,14 @@ struct Bye {
   bool operator==(const Bye&) const = default;
 };
 
-using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye>;
+struct Resync {
+  uint32_t frame = 0;
+  uint32_t epoch = 1;
+  uint32_t nodes = 2;
+  bool operator==(const Resync&) const = default;
+};
+
+using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye, Resync>;
 Type type_of(const Message& m);
 
 // The rules a decoded message must satisfy beyond its layout (finite camera values, unit

@@ -2,7 +2,11 @@
 // actually used for frame f, the diff and EndOfFrame from the node doing HC(f), rebuilds and
 // verifies V_f, renders it and writes the frame and its statistics.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <mutex>
+#include <optional>
+#include <thread>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -40,6 +44,37 @@ struct ClientFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Switch node `node` failed (died, stalled past --timeout-ms, sent something invalid).
+struct NodeFault : std::runtime_error {
+  NodeFault(int n, const std::string& what) : std::runtime_error(what), node(n) {}
+  int node;
+};
+
+// How a frame's visible set was found (stats.csv column `mode`, the window's HUD):
+//   switch   the occlusion switch (both nodes), as designed
+//   resync   the first frame after a resync (empty sets everywhere: the node's HC sends the full set)
+//   single   one switch node serves alone (OR and HC of every frame), the other being down
+//   frustum  no node serves: this client's own hierarchical frustum culling
+// single and frustum are the degraded modes. Every one is conservative: a frame is drawn from a
+// set computed for its own camera, never from a stale one.
+enum class Mode { switch_, resync, single, frustum };
+const char* mode_name(Mode m) {
+  switch (m) {
+    case Mode::switch_: return "switch";
+    case Mode::resync: return "resync";
+    case Mode::single: return "single";
+    case Mode::frustum: return "frustum";
+  }
+  return "?";
+}
+
+// One switch node as the client sees it.
+struct NodeLink {
+  std::unique_ptr<net::Connection> conn;  // null: down (the rejoiner looks for it)
+  std::string address;                    // its --connect
+  uint32_t await_epoch = 0;               // its messages are stale until it echoes this Resync (0: none)
+};
+
 class Client {
  public:
   explicit Client(const ClientOptions& o) : o_(o) {}
@@ -67,8 +102,9 @@ class Client {
       std::cerr << "error: render_client: " << e.what() << "\n";
       code = 1;
     }
-    for (auto& c : nodes_)
-      if (c) code ? c->close_with_error("render client failed") : c->close("render client done");
+    stop_rejoiner();
+    for (auto& n : nodes_)
+      if (n.conn) code ? n.conn->close_with_error("render client failed") : n.conn->close("render client done");
     summary();
     if (viewer_) viewer_->finish();  // writes --record
     return code;
@@ -76,45 +112,225 @@ class Client {
 
  private:
   void connect() {
-    const wire::Hello mine = make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, g_.fingerprint(),
-                                        g_.hierarchy().params(), o_.config, "render_client");
+    mine_ = make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, g_.fingerprint(), g_.hierarchy().params(),
+                       o_.config, "render_client");
     for (const std::string& text : o_.connect) {
       const net::Endpoint e = net::parse_endpoint("connect", text);
       auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
       if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
-      auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, std::nullopt}, Millis(o_.timeout_ms));
+      auto hello = net::handshake(*conn, mine_, {wire::Role::switch_node, std::nullopt}, Millis(o_.timeout_ms));
       if (!hello) throw std::runtime_error(hello.error());
-      auto& slot = nodes_[hello->node_id & 1];
-      if (slot) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));
-      slot = std::make_unique<net::Connection>(std::move(*conn));
+      NodeLink& slot = nodes_[hello->node_id & 1];
+      if (slot.conn) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));
+      slot.conn = std::make_unique<net::Connection>(std::move(*conn));
+      slot.address = text;
     }
-    if (!nodes_[0]) throw InputError("--connect: a single server must be node 0 (an occlusion_server)");
-    std::cerr << "render_client: connected to switch node 0 (" << nodes_[0]->peer() << ")"
-              << (nodes_[1] ? " and 1 (" + nodes_[1]->peer() + ")" : std::string(" only")) << "\n";
+    if (!nodes_[0].conn) throw InputError("--connect: a single server must be node 0 (an occlusion_server)");
+    switch_ = bool(nodes_[1].conn);
+    std::cerr << "render_client: connected to switch node 0 (" << nodes_[0].conn->peer() << ")"
+              << (switch_ ? " and 1 (" + nodes_[1].conn->peer() + ")" : std::string(" only")) << "\n";
+  }
+
+  std::string node_name(int k) const {
+    return "switch node " + std::to_string(k) + " (" + (nodes_[k].conn ? nodes_[k].conn->peer() : nodes_[k].address) + ")";
+  }
+  int members() const { return bool(nodes_[0].conn) + bool(nodes_[1].conn); }
+  // The node serving frame `frame`: the switch's HC node, the one left, or none (-1).
+  int server_of(uint32_t frame) const {
+    if (nodes_[0].conn && nodes_[1].conn) return int(hc_node_of_frame(frame));
+    return nodes_[0].conn ? 0 : nodes_[1].conn ? 1 : -1;
   }
 
   // Whether camera `number` exists (the next to send): on the path, or (--window) one more from
   // the viewer, appended to path_.
   bool have_camera(uint32_t number) { return number < path_.size() || (viewer_ && viewer_->next_camera(path_)); }
 
+  // To every node that is up; a node that cannot take it is dropped (or, --on-node-failure exit,
+  // the run ends).
   void send_camera(uint32_t number) {
     sent_at_[number] = Clock::now();
-    wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height});
     for (int k = 0; k < 2; ++k)
-      if (nodes_[k])
-        if (auto err = nodes_[k]->send(w))
-        throw ClientFailure("frame " + std::to_string(frame_) + ": sending camera " + std::to_string(number) +
-                            " to switch node " + std::to_string(k) + " (" + nodes_[k]->peer() + "): " + *err);
+      if (nodes_[k].conn) send_camera_to(k, number);
+  }
+  void send_camera_to(int k, uint32_t number) {
+    const wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height});
+    if (auto err = nodes_[k].conn->send(w))
+      drop(k, "frame " + std::to_string(frame_) + ": sending camera " + std::to_string(number) + " to " + node_name(k) +
+                  ": " + *err);
   }
 
   net::Received receive_from(int node, uint32_t frame) {
-    net::Received r = nodes_[node]->receive(Millis(o_.timeout_ms));
+    net::Received r = nodes_[node].conn->receive(Millis(o_.timeout_ms));
     if (r.ok()) return r;
     std::string what = r.status == net::Received::Status::timeout
                            ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms"
                            : (r.status == net::Received::Status::closed ? "closed the connection: " : "failed: ") + r.reason;
-    throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(node) + " (" +
-                        nodes_[node]->peer() + ") " + what);
+    throw NodeFault(node, "frame " + std::to_string(frame) + ": " + node_name(node) + " " + what);
+  }
+
+  // A failed node: with --on-node-failure exit the run ends here (exit 1). Otherwise the node is
+  // closed, the next frame starts over without it (resync) and the rejoiner waits for it.
+  void drop(int k, const std::string& what) {
+    if (!o_.degrade) throw ClientFailure(what);
+    nodes_[k].conn->close_with_error("render client dropped switch node " + std::to_string(k) + ": " + what);
+    dropped_.push_back(std::move(nodes_[k].conn));  // destroyed at the end: closing lingers up to 1.5 s
+    nodes_[k].await_epoch = 0;
+    need_resync_ = true;
+    const int other = 1 - k;
+    std::cerr << "render_client: " << what << ": degraded: "
+              << (switch_ && nodes_[other].conn ? node_name(other) + " serves alone"
+                                               : std::string("frustum culling in the render client"))
+              << " until it is back\n";
+    if (switch_) want_rejoin(k);
+  }
+
+  // ---- rejoin: a thread tries the dropped node's address until a restarted node answers the
+  // hello (same scene and settings, node id), and hands the connection over; the next frame
+  // starts with a resync.
+  void want_rejoin(int k) {
+    {
+      std::lock_guard<std::mutex> lock(rejoin_mu_);
+      wanted_[k] = true;
+    }
+    if (!rejoiner_.joinable()) rejoiner_ = std::thread([this] { rejoin_loop(); });
+  }
+  void rejoin_loop() {
+    Clock::time_point next_try[2] = {Clock::now(), Clock::now()};
+    Millis backoff[2] = {Millis(200), Millis(200)};
+    while (!stop_rejoin_) {
+      std::this_thread::sleep_for(Millis(20));
+      for (int k = 0; k < 2 && !stop_rejoin_; ++k) {
+        std::string address;
+        {
+          std::lock_guard<std::mutex> lock(rejoin_mu_);
+          if (!wanted_[k] || Clock::now() < next_try[k]) continue;
+          address = nodes_[k].address;
+        }
+        next_try[k] = Clock::now() + Millis(200);
+        const net::Endpoint e = net::parse_endpoint("connect", address);
+        auto conn = net::Connection::connect(e.host, e.port, Millis(20));
+        if (!conn) continue;  // nothing listens there (yet)
+        auto hello = net::handshake(*conn, mine_, {wire::Role::switch_node, uint8_t(k)}, Millis(std::min(o_.timeout_ms, 5000)));
+        if (!hello) {  // logged by the connection; a stranger there is not asked again at once
+          next_try[k] = Clock::now() + backoff[k];
+          backoff[k] = std::min(backoff[k] * 2, Millis(5000));
+          continue;
+        }
+        std::lock_guard<std::mutex> lock(rejoin_mu_);
+        rejoined_[k] = std::make_unique<net::Connection>(std::move(*conn));
+        wanted_[k] = false;
+        backoff[k] = Millis(200);
+      }
+    }
+  }
+  void stop_rejoiner() {
+    stop_rejoin_ = true;
+    if (rejoiner_.joinable()) rejoiner_.join();
+    for (auto& c : rejoined_)
+      if (c) c->close("render client done");
+  }
+  // Nodes the rejoiner brought back since the last frame.
+  void take_rejoined(uint32_t frame) {
+    std::lock_guard<std::mutex> lock(rejoin_mu_);
+    for (int k = 0; k < 2; ++k) {
+      if (!rejoined_[k]) continue;
+      nodes_[k].conn = std::move(rejoined_[k]);
+      std::cerr << "render_client: frame " << frame << ": " << node_name(k) << " is back\n";
+      need_resync_ = true;
+    }
+  }
+
+  // Everyone starts over at `frame` with empty sets (wire.hpp Resync): the switch if both nodes
+  // are up, the one that is up alone, or nobody (frustum culling here). Nodes that fail to take it
+  // are dropped, and the caller calls again.
+  void resync(uint32_t frame, VisibleSet& visible) {
+    need_resync_ = false;
+    visible.clear();
+    for (auto& s : streams_) s = DiffReceiver{};
+    resync_frame_.reset();
+    const int n = members();
+    if (n == 0) {
+      std::cerr << "render_client: frame " << frame << ": no switch node: frustum culling in the render client\n";
+      return;
+    }
+    if (!switch_) return;  // an occlusion_server is never resynchronised (its failure leaves frustum culling)
+    ++epoch_;
+    for (int k = 0; k < 2; ++k) {
+      if (!nodes_[k].conn) continue;
+      nodes_[k].await_epoch = epoch_;
+      if (auto err = nodes_[k].conn->send(wire::Resync{frame, epoch_, uint32_t(n)})) {
+        drop(k, "frame " + std::to_string(frame) + ": sending the resync to " + node_name(k) + ": " + *err);
+        return;
+      }
+      // The cameras it may lack (a restarted node has none; the other may have used them).
+      if (o_.config.camera_mode == CameraMode::lockstep) {
+        for (uint32_t c = frame; c < next_camera_ && nodes_[k].conn; ++c) send_camera_to(k, c);
+      } else if (next_camera_ > 0) {
+        send_camera_to(k, next_camera_ - 1);
+      }
+      if (!nodes_[k].conn) return;  // dropped: need_resync_ is set again
+    }
+    resync_frame_ = frame;
+    ++resyncs_;
+    std::cerr << "render_client: frame " << frame << ": resync " << epoch_ << ": "
+              << (n == 2 ? std::string("the switch resumes (switch nodes 0 and 1)")
+                         : node_name(server_of(frame)) + " serves alone")
+              << ", from a full visible set\n";
+  }
+
+  // Frame `frame` from switch node k: its camera, the diff, EndOfFrame; `visible` becomes V_f.
+  // Throws NodeFault.
+  struct Served {
+    wire::Camera wcam;
+    wire::EndOfFrame eof;
+    uint64_t bytes = 0;
+  };
+  Served receive_frame(int k, uint32_t frame, VisibleSet& visible, const SwitchStep& step) {
+    const bool lockstep = o_.config.camera_mode == CameraMode::lockstep;
+    const std::string f = "frame " + std::to_string(frame) + ": ";
+    auto fault = [&](const std::string& what) { return NodeFault(k, f + node_name(k) + " " + what); };
+    // 0. What it sent before acknowledging the last resync is stale.
+    net::Received r = receive_from(k, frame);
+    while (nodes_[k].await_epoch) {
+      if (auto* rs = std::get_if<wire::Resync>(&r.message); rs && rs->epoch == nodes_[k].await_epoch) {
+        if (!resync_frame_ || rs->frame != *resync_frame_ || rs->nodes != uint32_t(members()))
+          throw fault("acknowledged resync " + std::to_string(rs->epoch) + " for frame " + std::to_string(rs->frame) +
+                      " with " + std::to_string(rs->nodes) + " nodes");
+        nodes_[k].await_epoch = 0;
+      }
+      r = receive_from(k, frame);
+    }
+    // 1. The camera HC used for this frame comes first.
+    auto* wcam = std::get_if<wire::Camera>(&r.message);
+    if (!wcam) throw fault("sent " + std::string(wire::type_name(wire::type_of(r.message))) + " before the camera");
+    if (wcam->frame >= path_.size() || !sent_at_.count(wcam->frame))
+      throw fault("used camera " + std::to_string(wcam->frame) + " that was never sent");
+    if (lockstep && wcam->frame != frame) throw fault("used camera " + std::to_string(wcam->frame) + " (lockstep)");
+    if (auto err = viewport_mismatch(*wcam, {o_.width, o_.height})) throw fault("sent " + *err);
+    Served s{*wcam, {}, r.wire_bytes};  // this frame's messages only (the io thread may read ahead)
+    // Front tracking (switch_step.hpp): coarsen V_{f-1} for camera f exactly as the switch
+    // nodes do; the diff is relative to the result, whose hash EndOfFrame.front_hash carries.
+    const uint64_t expected_front = step.coarsen(visible, from_wire(*wcam));
+    // 2. Diff chunks, then EndOfFrame.
+    bool cleared = false;
+    for (;;) {
+      net::Received m = receive_from(k, frame);
+      s.bytes += m.wire_bytes;
+      if (o_.config.full_sets && !cleared) visible.clear();
+      cleared = true;
+      if (auto* d = std::get_if<wire::NodeDiff>(&m.message)) {
+        if (auto err = streams_[k].on_diff(visible, *d)) throw fault("desync: " + *err);
+      } else if (auto* e = std::get_if<wire::EndOfFrame>(&m.message)) {
+        if (e->frame != frame) throw fault("ended frame " + std::to_string(e->frame));
+        if (auto err = streams_[k].on_end_of_frame(visible, *e)) throw fault("desync: " + *err);
+        if (e->front_hash != expected_front)
+          throw fault("desync: front hash " + hex(e->front_hash) + " from the node, " + hex(expected_front) + " here");
+        s.eof = *e;
+        return s;
+      } else {
+        throw fault("sent an unexpected " + std::string(wire::type_name(wire::type_of(m.message))));
+      }
+    }
   }
 
   void loop() {
@@ -122,104 +338,95 @@ class Client {
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
-                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms"});
+                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms",
+                     "mode"});
     VisibleSet visible(g_.renderables->count());
-    // Front tracking is the switch's (both nodes): a single server sends plain diffs.
-    const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), nodes_[1] && o_.config.tracks_fronts());
-    DiffReceiver streams[2];
-    uint32_t next_camera = 0;
+    // Front tracking is the switch's (both nodes, or one of them alone after a failure): a
+    // single occlusion_server sends plain diffs.
+    const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), switch_ && o_.config.tracks_fronts());
     if (lockstep)
-      while (next_camera < uint32_t(o_.lookahead) && have_camera(next_camera)) send_camera(next_camera++);
-    else if (have_camera(next_camera))
-      send_camera(next_camera++);
-    if (next_camera == 0) return;  // --window: the user quit before the first frame
+      while (next_camera_ < uint32_t(o_.lookahead) && have_camera(next_camera_)) send_camera(next_camera_++);
+    else if (have_camera(next_camera_))
+      send_camera(next_camera_++);
+    if (next_camera_ == 0) return;  // --window: the user quit before the first frame
     start_ = Clock::now();
     cpu_start_ = process_cpu_us();
     for (uint32_t frame = 0;; ++frame) {
       frame_ = frame;
-      const int k = nodes_[1] ? int(hc_node_of_frame(frame)) : 0;  // one server: it does every frame
-      // 1. The camera HC used for this frame comes first.
-      net::Received r = receive_from(k, frame);
-      auto* wcam = std::get_if<wire::Camera>(&r.message);
-      if (!wcam) throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) +
-                                     " sent " + std::string(wire::type_name(wire::type_of(r.message))) + " before the camera");
-      if (wcam->frame >= path_.size() || !sent_at_.count(wcam->frame))
-        throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) +
-                            " used camera " + std::to_string(wcam->frame) + " that was never sent");
-      if (lockstep && wcam->frame != frame)
-        throw ClientFailure("frame " + std::to_string(frame) + ": lockstep, but switch node " + std::to_string(k) +
-                            " used camera " + std::to_string(wcam->frame));
-      if (auto err = viewport_mismatch(*wcam, {o_.width, o_.height}))
-        throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) + " sent " + *err);
-      const Camera cam = from_wire(*wcam);
-      uint64_t bytes = r.wire_bytes;  // this frame's messages only (the io thread may read ahead)
-      // Front tracking (switch_step.hpp): coarsen V_{f-1} for camera f exactly as both switch
-      // nodes do; the diff is relative to the result, whose hash EndOfFrame.front_hash carries.
-      const uint64_t expected_front = step.coarsen(visible, cam);
-      // 2. Diff chunks, then EndOfFrame.
-      bool cleared = false;
-      wire::EndOfFrame eof;
-      for (;;) {
-        net::Received m = receive_from(k, frame);
-        bytes += m.wire_bytes;
-        if (o_.config.full_sets && !cleared) visible.clear();
-        cleared = true;
-        if (auto* d = std::get_if<wire::NodeDiff>(&m.message)) {
-          if (auto err = streams[k].on_diff(visible, *d)) throw ClientFailure("desync with switch node " + std::to_string(k) + ": " + *err);
-        } else if (auto* e = std::get_if<wire::EndOfFrame>(&m.message)) {
-          if (e->frame != frame)
-            throw ClientFailure("switch node " + std::to_string(k) + " ended frame " + std::to_string(e->frame) +
-                                ", expected " + std::to_string(frame));
-          if (auto err = streams[k].on_end_of_frame(visible, *e)) throw ClientFailure("desync with switch node " + std::to_string(k) + ": " + *err);
-          if (e->front_hash != expected_front)
-            throw ClientFailure("desync with switch node " + std::to_string(k) + ": frame " + std::to_string(frame) +
-                                ": front hash " + hex(e->front_hash) + " from switch node " + std::to_string(k) + ", " +
-                                hex(expected_front) + " here");
-          eof = *e;
-          break;
-        } else {
-          throw ClientFailure("frame " + std::to_string(frame) + ": unexpected " +
-                              std::string(wire::type_name(wire::type_of(m.message))) + " from switch node " + std::to_string(k));
+      take_rejoined(frame);
+      while (need_resync_) resync(frame, visible);
+      const int k = server_of(frame);
+      std::optional<Served> served;
+      if (k >= 0) {
+        try {
+          served = receive_frame(k, frame, visible, step);
+        } catch (const NodeFault& e) {
+          drop(e.node, e.what());
         }
       }
-      // Keep the nodes busy: the next camera goes out before this frame is rendered.
-      if (have_camera(next_camera)) send_camera(next_camera++);
-      // 3. Render V_f with the camera of frame f.
+      Mode mode = Mode::frustum;
+      uint32_t cam_number = 0;
+      if (served) {
+        mode = resync_frame_ == frame ? Mode::resync : members() == 2 ? Mode::switch_ : Mode::single;
+        cam_number = served->wcam.frame;
+        // Keep the nodes busy: the next camera goes out before this frame is rendered.
+        if (have_camera(next_camera_)) send_camera(next_camera_++);
+      } else if (lockstep) {  // camera `frame` was sent (lookahead >= 2); the next one goes out
+        cam_number = frame;
+        if (have_camera(next_camera_)) send_camera(next_camera_++);
+      } else {  // latest: the newest camera
+        if (have_camera(next_camera_)) send_camera(next_camera_++);
+        cam_number = next_camera_ - 1;
+      }
+      const Camera cam = served ? from_wire(served->wcam) : path_[cam_number];
+      // 3. Render V_f (or the frustum set) with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
       const uint64_t cpu_r0 = process_cpu_us();
-      std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
+      std::vector<uint32_t> ids;
+      if (served)
+        ids.assign(visible.ids().begin(), visible.ids().end());
+      else
+        ids = frustum_cull(g_.hierarchy(), cam);  // leaves at full detail: renderable id = node id
       g_.renderer->begin_frame(cam, true);
       DrawStats st = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::Shaded);
       g_.ctx->gl().Finish();
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       const uint64_t cpu_shown = process_cpu_us();
-      const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
+      const double latency_ms = ms_between(sent_at_[cam_number], shown);
       Image image;
       if (out.writes_images() || viewer_) image = g_.ctx->read_rgba();
       if (out.writes_images()) out.write_frame(frame, image);
       if (viewer_)
-        viewer_->show(cam, std::move(image), {latency_ms, visible.size(), leaf_count_, st.triangles, o_.config.pixel_error});
-      out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
-                     double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
-                     eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
+        viewer_->show(cam, std::move(image),
+                      {latency_ms, ids.size(), leaf_count_, st.triangles, o_.config.pixel_error,
+                       mode == Mode::single    ? "degraded: one switch node"
+                       : mode == Mode::frustum ? "degraded: frustum culling"
+                                               : mode_name(mode)});
+      const wire::EndOfFrame eof = served ? served->eof : wire::EndOfFrame{};
+      const uint64_t bytes = served ? served->bytes : 0;
+      out.write_row({double(frame), double(cam_number), double(served ? k : -1), double(ids.size()),
+                     double(eof.total_added), double(eof.total_removed), double(eof.queries), double(st.triangles),
+                     double(bytes), eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
                      ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown), eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
                      (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
-                     eof.or_tail_us / 1000.0});
+                     eof.or_tail_us / 1000.0},
+                    {mode_name(mode)});
+      ++mode_frames_[int(mode)];
       cpu_prev_shown_ = cpu_shown;
       frame_done_.push_back(shown);
-      visible_sum_ += visible.size();
+      visible_sum_ += ids.size();
       bytes_sum_ += bytes;
       tri_sum_ += st.triangles;
       latency_.push_back(latency_ms);
       hc_ms_ += eof.hc_us / 1000.0;
       or_ms_ += eof.or_us / 1000.0;
       rvg_ms_ += ms_between(r0, shown);
-      if (frame % 10 == 9) progress("render_client: frame %u (camera %u/%zu)", frame + 1, wcam->frame + 1, path_.size());
+      if (frame % 10 == 9) progress("render_client: frame %u (camera %u/%zu)", frame + 1, cam_number + 1, path_.size());
       if (viewer_ && viewer_->quit()) break;
-      if (wcam->frame + 1 == path_.size()) {  // every camera sent was used: the last frame, unless the viewer has more
-        if (!have_camera(next_camera)) break;
-        send_camera(next_camera++);
+      if (cam_number + 1 == path_.size()) {  // every camera sent was used: the last frame, unless the viewer has more
+        if (!have_camera(next_camera_)) break;
+        send_camera(next_camera_++);
       }
     }
     progress_done();
@@ -248,13 +455,30 @@ class Client {
         100.0 * (1.0 - double(tri_sum_) / frames / std::max<uint64_t>(total_triangles_, 1)),
         std::accumulate(lat.begin(), lat.end(), 0.0) / frames, lat[std::min(frames - 1, frames * 95 / 100)],
         hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb());
+    if (frames != mode_frames_[int(Mode::switch_)])
+      std::printf("modes: switch=%zu resync=%zu single=%zu frustum=%zu resyncs=%u\n", mode_frames_[0],
+                  mode_frames_[1], mode_frames_[2], mode_frames_[3], resyncs_);
   }
 
   const ClientOptions& o_;
   std::unique_ptr<Viewer> viewer_;  // --window
   SceneGl g_;
   std::vector<Camera> path_;
-  std::unique_ptr<net::Connection> nodes_[2];
+  wire::Hello mine_;
+  NodeLink nodes_[2];
+  std::vector<std::unique_ptr<net::Connection>> dropped_;
+  DiffReceiver streams_[2];
+  bool switch_ = false;       // two switch nodes (not one occlusion_server)
+  bool need_resync_ = false;  // the nodes that are up start over at the next frame
+  uint32_t epoch_ = 0, resyncs_ = 0, next_camera_ = 0;
+  std::optional<uint32_t> resync_frame_;  // the frame of the last resync
+  size_t mode_frames_[4] = {0, 0, 0, 0};
+  // The rejoiner thread (rejoin_loop) and what it shares with the renderer thread.
+  std::thread rejoiner_;
+  std::atomic<bool> stop_rejoin_{false};
+  std::mutex rejoin_mu_;
+  bool wanted_[2] = {false, false};
+  std::unique_ptr<net::Connection> rejoined_[2];
   std::map<uint32_t, Clock::time_point> sent_at_;
   uint32_t frame_ = 0;  // the frame being received (for messages)
   Clock::time_point start_;

@@ -34,7 +34,7 @@ void FrameOutput::write_frame(uint32_t frame, const Image& img) {
   std::filesystem::rename(tmp, final_path);
 }
 
-void FrameOutput::write_row(const std::vector<double>& values) {
+void FrameOutput::write_row(const std::vector<double>& values, const std::vector<std::string>& text) {
   if (dir_.empty()) return;
   for (size_t i = 0; i < values.size() && i < columns_; ++i) {
     double v = values[i];
@@ -43,6 +43,7 @@ void FrameOutput::write_row(const std::vector<double>& values) {
     else
       csv_ << (i ? "," : "") << v;
   }
+  for (size_t i = 0; i < text.size() && values.size() + i < columns_; ++i) csv_ << (values.size() + i ? "," : "") << text[i];
   csv_ << "\n";
   csv_.flush();
 }

@@ -15,7 +15,8 @@ class FrameOutput {
   // dir empty = nothing written. Creates dir. columns: the stats.csv header.
   FrameOutput(const std::string& dir, bool images, std::vector<std::string> columns);
   void write_frame(uint32_t frame, const Image& img);
-  void write_row(const std::vector<double>& values);  // one per column, in order
+  // One per column, in order: the numbers, then `text` (words without commas) for the last columns.
+  void write_row(const std::vector<double>& values, const std::vector<std::string>& text = {});
   bool writes_images() const { return !dir_.empty() && images_; }
   const std::string& dir() const { return dir_; }
 

@@ -29,6 +29,10 @@ int main(int argc, char** argv) {
     occ::add_cluster_options(cli, o.config);
     cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
+    cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
+                     "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
+                     "with the other node alone or frustum culling here, and take the node back when it is "
+                     "restarted) or exit (status 1, naming node and frame: benchmarks)");
     cli.flag("window", &o.window,
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
              "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, Esc quits");

@@ -28,6 +28,7 @@ struct ClientOptions {
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame
   int timeout_ms = 30000;
+  bool degrade = true;  // --on-node-failure degrade|exit (client.cpp)
   // --window (viewer.hpp)
   bool window = false;
   std::string record;  // every camera shown, as a path CSV

@@ -131,6 +131,7 @@ std::string Viewer::hud_line(const HudStats& h) const {
                 h.latency_ms, h.visible, culled, double(h.triangles) / 1e6, h.tau, nav_->walking() ? "walk" : "fly",
                 interactive_ || taken_over_ ? "" : "  (path)");
   std::string s = buf;
+  if (!h.mode.empty() && h.mode != "switch") s = "[" + h.mode + "]  " + s;
   if (!message_.empty() && now_ms() < message_until_ms_) s = message_ + "  " + s;
   return s;
 }

@@ -34,6 +34,9 @@ struct HudStats {
   size_t leaves = 0;       // leaves in the scene (culled % = 1 - visible / leaves)
   uint64_t triangles = 0;
   double tau = 0;          // pixel error
+  // Cluster: how this frame was culled (client.cpp: switch, resync, single, frustum); shown in
+  // front of the line unless it is the normal "switch". Empty for the reference renderer.
+  std::string mode;
 };
 
 class Viewer {

@@ -81,7 +81,7 @@ gigawalk() {
   "$BIN/occlusion_server" --scene "$scene" "${view[@]}" --port-file "$dir/server.port" >"$dir/server.log" 2>&1 &
   server=$!
   for _ in $(seq 1 600); do [ -s "$dir/server.port" ] && break; sleep 0.1; done
-  "$BIN/render_client" --scene "$scene" --path "$path" "${view[@]}" "$@" --out "$dir" \
+  "$BIN/render_client" --scene "$scene" --path "$path" "${view[@]}" "$@" --on-node-failure exit --out "$dir" \
     --connect "127.0.0.1:$(cat "$dir/server.port")" >"$dir/log.txt" 2>&1
   wait $server
 }
@@ -93,14 +93,14 @@ wrong "$out/gigawalk" "$out/none" "$out/gigawalk_frames"
 drop_frames "$out/gigawalk_frames"
 
 log "switch (3 processes)"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --no-images --out "$out/switch" >/dev/null
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --on-node-failure exit --no-images --out "$out/switch" >/dev/null
 cp "$out/switch/render_client.log" "$out/switch/log.txt"
 log "switch, frames for the comparison"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --out "$out/switch_frames" >/dev/null
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --on-node-failure exit --out "$out/switch_frames" >/dev/null
 wrong "$out/switch" "$out/none" "$out/switch_frames"
 drop_frames "$out/switch_frames"
 log "switch --full-sets"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --no-images --full-sets \
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --on-node-failure exit --no-images --full-sets \
   --out "$out/switch_full" >/dev/null
 
 # OpenSceneGraph on the same cameras (the path as CSV) and viewport, each mode against OSG's own

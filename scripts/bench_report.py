@@ -36,10 +36,18 @@ CSV_COLUMNS = ["method", "processes", "frames", "mean_ms", "median_ms", "mean_fp
                "cpu_ms_per_frame_or_tail", "cpu_ms_per_frame_rvg", "model_ms_three_machines"]
 
 
+def number(v):
+    try:
+        return float(v)
+    except ValueError:
+        return None
+
+
 def read_rows(path):
-    """stats.csv as a list of {column: float} (empty cells left out)."""
+    """stats.csv as a list of {column: float} (empty and text cells, e.g. the cluster's mode, left out)."""
     with open(path) as f:
-        return [{k: float(v) for k, v in r.items() if v not in ("", None)} for r in csv.DictReader(f)]
+        return [{k: x for k, v in r.items() if v not in ("", None) and (x := number(v)) is not None}
+                for r in csv.DictReader(f)]
 
 
 def read_wrong(path):

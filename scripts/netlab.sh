@@ -34,7 +34,7 @@ run() {  # delay rate chunk
   local dir="$out/d$1_r$2_b$3"
   echo "netlab: delay $1 ms, rate $2 Mbit/s, chunk $3 ids" >&2
   if ! "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --width "$width" --height "$height" \
-      --camera-mode "$mode" --no-images --diff-chunk "$3" --link "$1:$2" "${netns[@]}" --out "$dir" >/dev/null; then
+      --camera-mode "$mode" --no-images --on-node-failure exit --diff-chunk "$3" --link "$1:$2" "${netns[@]}" --out "$dir" >/dev/null; then
     echo "netlab: run failed (see $dir)" >&2
     echo "$1,$2,$3,,,,,0" >>"$csv"
     return

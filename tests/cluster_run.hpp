@@ -48,6 +48,19 @@ class Cluster {
                 out_ / "node1.log");
     return p1_ = wait_port(out_ / "n1.port", *n1_);
   }
+  // Switch node k once more after it died, as an operator restarts it: the same flags, the same
+  // port (the render client and node 1 reach it where they did), its own log (nodeK_again.log).
+  // Returns the port it wrote (0 if it ended first).
+  int restart_node(int k) {
+    auto& p = k == 0 ? n0_again_ : n1_again_;
+    const std::string port = std::to_string(k == 0 ? p0_ : p1_), pf = file("n" + std::to_string(k) + "_again.port");
+    std::vector<std::string> a = {bin("switch_node"), "--id", std::to_string(k), "--port", port, "--port-file", pf};
+    if (k == 1) a.insert(a.end(), {"--peer", local(p0_)});
+    p.emplace(args(a, k == 0 ? o_.node0 : o_.node1), out_ / ("node" + std::to_string(k) + "_again.log"));
+    return wait_port(pf, *p);
+  }
+  Proc& restarted(int k) { return k == 0 ? *n0_again_ : *n1_again_; }
+
   // link_relay in front of node 1; control_port() takes "stall", "cut", ... (see relay_test).
   int start_relay() {
     relay_.emplace(std::vector<std::string>{bin("link_relay"), "--target", local(p1_), "--port-file", file("relay.port"),
@@ -93,7 +106,9 @@ class Cluster {
   // The logs of the processes started so far, for failure messages.
   std::string logs() const {
     const std::pair<const char*, const std::optional<Proc>*> procs[] = {
-        {"node 0", &n0_}, {"node 1", &n1_}, {"link_relay", &relay_}, {"render_client", &client_}};
+        {"node 0", &n0_},         {"node 1", &n1_},
+        {"node 0 restarted", &n0_again_}, {"node 1 restarted", &n1_again_},
+        {"link_relay", &relay_},  {"render_client", &client_}};
     std::string s;
     for (const auto& [name, p] : procs)
       if (*p) s += std::string("--- ") + name + "\n" + (*p)->log();
@@ -122,7 +137,7 @@ class Cluster {
   fs::path out_;
   ClusterOptions o_;
   int p0_ = 0, p1_ = 0, pr_ = 0, pc_ = 0;
-  std::optional<Proc> n0_, n1_, relay_, client_;
+  std::optional<Proc> n0_, n1_, relay_, client_, n0_again_, n1_again_;
 };
 
 // The whole run: start, then finish (the client is not started when a node wrote no port).

@@ -14,3 +14,6 @@ add_dependencies(link_faults_test switch_node render_client link_relay frame_dif
 # glTF materials end to end: cluster == reference exactly with glass, masks, single-sided walls
 occ_test(material_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_material_test.cpp)
 add_dependencies(material_cluster_test switch_node render_client frame_diff)
+# a node killed, stalled or restarted mid-run: degraded frames, resync, frames equal to the reference
+occ_test(recovery_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_recovery_test.cpp)
+add_dependencies(recovery_test switch_node render_client frame_diff link_relay)

@@ -91,8 +91,12 @@ TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {
   EXPECT_LT(sum(a["bytes_received"]), sum(b["bytes_received"]));
 }
 
+// --on-node-failure exit (benchmarks): a killed node ends the run at once, named. The default,
+// degrade, goes on without it: integration_recovery_test.cpp.
 TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage) {
-  Cluster c(fresh_dir("kill") / "cluster", cluster(kCity, "walk:100000"));
+  ClusterOptions o = cluster(kCity, "walk:100000");
+  o.client = {"--on-node-failure", "exit"};
+  Cluster c(fresh_dir("kill") / "cluster", o);
   ASSERT_TRUE(c.start()) << c.logs();
   // Kill node 1 once frames are flowing.
   ASSERT_GE(wait_frames(c.stats(), 20, 10s), 20u) << c.client().log();

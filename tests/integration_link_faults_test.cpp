@@ -1,6 +1,7 @@
 // Faults on the links, through the user-space link emulator: a slow, jittery link never changes a
-// frame; a link that stalls or is cut makes the render client stop with an error that names the
-// node and the frame, within its timeout, and nothing partial is written.
+// frame; with --on-node-failure exit, a link that stalls or is cut makes the render client stop
+// with an error that names the node and the frame, within its timeout, and nothing partial is
+// written (what the default, degrade, does: integration_recovery_test.cpp).
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -40,6 +41,7 @@ void stop_link_mid_run(const std::string& name, const std::string& command) {
   ClusterOptions o(kScene, "walk:100000", kView);
   o.timeout_ms = 3000;
   o.relay_node1 = true;
+  o.client = {"--on-node-failure", "exit"};  // the default, degrade: integration_recovery_test.cpp
   Cluster c(fresh_dir(name), o);
   ASSERT_TRUE(c.start()) << c.logs();
   ASSERT_GE(wait_frames(c.stats(), 10, 10s), 10u) << c.client().log();

@@ -119,7 +119,29 @@ inline std::map<std::string, std::vector<double>> read_csv(const fs::path& file)
   while (std::getline(in, line)) {
     std::stringstream ss(line);
     size_t i = 0;
-    for (std::string c; std::getline(ss, c, ',') && i < cols.size(); ++i) out[cols[i]].push_back(std::stod(c));
+    for (std::string c; std::getline(ss, c, ',') && i < cols.size(); ++i) {
+      char* end = nullptr;
+      const double v = std::strtod(c.c_str(), &end);
+      if (end != c.c_str() && *end == '\0') out[cols[i]].push_back(v);  // text columns (mode): read_csv_text
+    }
+  }
+  return out;
+}
+
+// The text columns of stats.csv (e.g. the cluster's mode) as column name -> values.
+inline std::map<std::string, std::vector<std::string>> read_csv_text(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::vector<std::string> cols;
+  std::map<std::string, std::vector<std::string>> out;
+  if (std::getline(in, line)) {
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cols.push_back(c);
+  }
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    size_t i = 0;
+    for (std::string c; std::getline(ss, c, ',') && i < cols.size(); ++i) out[cols[i]].push_back(c);
   }
   return out;
 }

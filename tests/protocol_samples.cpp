@@ -44,5 +44,5 @@ std::vector<Message> sample_messages() {
 
   return {Message{hello},      Message{Hello{}}, Message{cam},           Message{Camera{}},
           Message{diff},       Message{only_removed}, Message{empty},   Message{eof},
-          Message{Bye{"done"}}, Message{Bye{""}}};
+          Message{Bye{"done"}}, Message{Bye{""}}, Message{Resync{41, 3, 1}}, Message{Resync{}}};
 }

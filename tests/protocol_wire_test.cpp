@@ -51,6 +51,12 @@ TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
   EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
   EXPECT_EQ(encode(Bye{"bye"}).size(), 6u + 2u + 3u);
+  const auto resync = encode(Resync{0x01020304, 5, 1});
+  ASSERT_EQ(resync.size(), 6u + 12u);
+  EXPECT_EQ(resync[0], 6);  // type resync
+  EXPECT_EQ(resync[6], 4);  // frame, u32 LE
+  EXPECT_EQ(resync[10], 5);  // epoch
+  EXPECT_EQ(resync[14], 1);  // nodes
 }
 
 TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
@@ -280,6 +286,14 @@ TEST(Wire, ByeRejectsLongOrUnprintableReasons) {
   EXPECT_EQ(decode_error(encode(Bye{"a\tb"})), "bye: reason: control character 0x09 at byte 1");
 }
 
+TEST(Wire, ResyncNamesOneOrTwoNodesAndAnEpochFromOne) {
+  EXPECT_FALSE(invalid_reason(Resync{7, 1, 1}));
+  EXPECT_FALSE(invalid_reason(Resync{7, 2, 2}));
+  EXPECT_EQ(invalid_reason(Resync{7, 1, 3}).value_or(""), "resync: frame 7: nodes 3, expected 1 or 2");
+  EXPECT_EQ(decode_error(encode(Resync{7, 1, 0})), "resync: frame 7: nodes 0, expected 1 or 2");
+  EXPECT_EQ(decode_error(encode(Resync{7, 0, 2})), "resync: frame 7: epoch 0 (epochs start at 1)");
+}
+
 TEST(Wire, ChunkNodeDiffSplitsIntoAtMostBIdsPerMessage) {
   std::vector<uint32_t> added(250), removed(120);
   for (uint32_t i = 0; i < added.size(); ++i) added[i] = i;
@@ -310,5 +324,6 @@ TEST(Wire, TypeAndRoleNames) {
   EXPECT_EQ(role_name(Role::render_client), "render_client");
   EXPECT_EQ(role_name(static_cast<Role>(7)), "unknown");
   EXPECT_EQ(type_index(Type::hello), 0u);
-  EXPECT_EQ(type_index(Type::bye), kTypeCount - 1);
+  EXPECT_EQ(type_index(Type::resync), kTypeCount - 1);
+  EXPECT_EQ(type_name(Type::resync), "resync");
 }

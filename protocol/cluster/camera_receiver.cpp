@@ -18,6 +18,20 @@ std::string CameraReceiver::end_reason() const {
   return end_;
 }
 
+std::optional<wire::Resync> CameraReceiver::take_resync() {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (resyncs_.empty()) return std::nullopt;
+  wire::Resync r = resyncs_.front();
+  resyncs_.pop_front();
+  if (resyncs_.empty()) cameras_.clear_interrupt();
+  return r;
+}
+
+bool CameraReceiver::resync_pending() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return !resyncs_.empty();
+}
+
 void CameraReceiver::run() {
   auto finish = [&](const std::string& why, bool bye) {
     {
@@ -34,6 +48,12 @@ void CameraReceiver::run() {
     if (!r.ok()) {
       const bool bye = r.status == net::Received::Status::closed;
       return finish((bye ? "render client closed: " : "render client failed: ") + r.reason, bye);
+    }
+    if (const auto* rs = std::get_if<wire::Resync>(&r.message)) {
+      std::lock_guard<std::mutex> lock(mu_);  // then the buffer's lock, as in take_resync()
+      resyncs_.push_back(*rs);
+      cameras_.interrupt();
+      continue;
     }
     const auto* c = std::get_if<wire::Camera>(&r.message);
     std::string wrong;

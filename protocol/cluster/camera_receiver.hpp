@@ -1,10 +1,13 @@
 // The camera-receiver thread of a culling server (a switch node or the occlusion_server; paper
 // Fig. 2): every camera the render client sends goes into a CameraBuffer, where the OR stage
-// takes one per frame. The client's Bye, its failure, or anything but a camera (including a
-// camera for another viewport) closes the buffer with the reason.
+// takes one per frame. A Resync (the render client's instruction to start over, wire.hpp) is
+// queued in order and interrupts the buffer's waiters. The client's Bye, its failure, or anything
+// else (including a camera for another viewport) closes the buffer with the reason.
 #pragma once
 #include <atomic>
+#include <deque>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -27,6 +30,9 @@ class CameraReceiver {
   bool done() const { return done_; }
   bool client_said_bye() const { return bye_; }
   std::string end_reason() const;  // "render client closed: peer said bye: done", ...
+  // The oldest Resync not yet taken (the buffer stays interrupted while more are queued).
+  std::optional<wire::Resync> take_resync();
+  bool resync_pending() const;
 
  private:
   void run();
@@ -35,6 +41,7 @@ class CameraReceiver {
   Viewport viewport_;
   mutable std::mutex mu_;
   std::string end_;
+  std::deque<wire::Resync> resyncs_;
   std::atomic<bool> bye_{false}, done_{false};
   std::thread thread_;
 };

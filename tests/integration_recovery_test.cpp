@@ -1,0 +1,194 @@
+// Degrade and resync (issue 18), through the real processes on loopback: a switch node killed or
+// stalled mid-run leaves the render client going on (--on-node-failure degrade, the default): the
+// other node serves alone, or the client frustum-culls; a node restarted on its port rejoins with
+// a resync and the switch resumes. Through all of it every frame equals the reference renderer's
+// (frame_diff) and the client exits 0. stats.csv's `mode` column says how each frame was culled.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include "cluster_run.hpp"
+
+using namespace occtest;
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::string kCity = "city:6x6:3:10:1";
+const std::vector<std::string> kView = {"--width", "96", "--height", "72"};
+
+// The mode of every frame, in order.
+std::vector<std::string> modes(const fs::path& stats) { return read_csv_text(stats)["mode"]; }
+
+size_t count(const std::vector<std::string>& v, const std::string& x) { return size_t(std::count(v.begin(), v.end(), x)); }
+
+// Index of the first element equal to x at or after `from` (v.size() if none).
+size_t find_from(const std::vector<std::string>& v, const std::string& x, size_t from) {
+  for (size_t i = from; i < v.size(); ++i)
+    if (v[i] == x) return i;
+  return v.size();
+}
+
+// Every frame of the cluster run in `dir` equals the reference renderer's, and there are `frames`.
+void expect_equals_reference(const fs::path& dir, const std::string& path, size_t frames) {
+  const Outcome ref = run_reference(dir.parent_path() / "reference", kCity, path, kView);
+  ASSERT_EQ(ref.code, 0) << ref.log;
+  EXPECT_EQ(frame_count(dir), frames);
+  const Outcome diff = frame_diff(dir.parent_path() / "reference", dir);
+  EXPECT_EQ(diff.code, 0) << diff.log;
+  EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
+}
+
+// One command on link_relay's control port; returns the answer line.
+std::string control(int port, const std::string& command) {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(uint16_t(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::string reply;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+    std::string line = command + "\n";
+    (void)!::write(fd, line.data(), line.size());
+    char c;
+    while (::read(fd, &c, 1) == 1 && c != '\n') reply += c;
+  }
+  ::close(fd);
+  return reply;
+}
+
+}  // namespace
+
+// Node k killed after 20 frames: the other node serves alone to the end of the path.
+void killed_node_leaves_the_other_serving(int k) {
+  const std::string path = "walk:160";
+  const fs::path dir = fresh_dir("recovery_kill" + std::to_string(k)) / "cluster";
+  Cluster c(dir, ClusterOptions(kCity, path, kView));
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  (k == 0 ? c.node0() : c.node1()).kill_now();
+  const ClusterRun r = c.finish();
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(k == 0 ? r.node1_code : r.node0_code, 0) << r.logs();  // the survivor ends cleanly
+  // One line says what happened and what the client does now.
+  const std::string survivor = "switch node " + std::to_string(1 - k);
+  EXPECT_NE(r.rvg_log.find("switch node " + std::to_string(k)), std::string::npos) << r.rvg_log;
+  EXPECT_NE(r.rvg_log.find("degraded: " + survivor), std::string::npos) << r.rvg_log;
+  EXPECT_NE(r.rvg_log.find("serves alone"), std::string::npos) << r.rvg_log;
+  const std::vector<std::string> m = modes(c.stats());
+  ASSERT_EQ(m.size(), 160u);
+  EXPECT_GE(count(m, "switch"), 20u);
+  // After the kill: at most a frame or two the client culls itself, the resync, then the other node alone.
+  const size_t first_degraded = std::find_if(m.begin(), m.end(), [](auto& x) { return x != "switch"; }) - m.begin();
+  ASSERT_LT(first_degraded, m.size());
+  EXPECT_EQ(count(m, "switch"), first_degraded);  // the switch never came back (nobody restarted the node)
+  EXPECT_EQ(count(m, "resync"), 1u);
+  EXPECT_LE(count(m, "frustum"), 2u);
+  EXPECT_EQ(m.back(), "single");
+  EXPECT_GE(count(m, "single"), 100u);
+  auto hc = read_csv(c.stats())["hc_node"];
+  EXPECT_EQ(hc.back(), double(1 - k));
+  EXPECT_NE(r.rvg_log.find("modes: switch=" + std::to_string(count(m, "switch"))), std::string::npos) << r.rvg_log;
+  expect_equals_reference(dir, path, 160);
+}
+
+TEST(Recovery, KilledNode1LeavesNode0ServingAloneAndFramesEqualTheReference) { killed_node_leaves_the_other_serving(1); }
+TEST(Recovery, KilledNode0LeavesNode1ServingAloneAndFramesEqualTheReference) { killed_node_leaves_the_other_serving(0); }
+
+// Both nodes killed: the render client frustum-culls alone to the end, exit 0, frames exact.
+TEST(Recovery, BothNodesKilledLeaveFrustumCullingInTheClient) {
+  const std::string path = "walk:120";
+  const fs::path dir = fresh_dir("recovery_both") / "cluster";
+  Cluster c(dir, ClusterOptions(kCity, path, kView));
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  c.node1().kill_now();
+  c.node0().kill_now();
+  const ClusterRun r = c.finish();
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_NE(r.rvg_log.find("frustum culling in the render client"), std::string::npos) << r.rvg_log;
+  const std::vector<std::string> m = modes(c.stats());
+  ASSERT_EQ(m.size(), 120u);
+  EXPECT_EQ(m.back(), "frustum");
+  EXPECT_GE(count(m, "frustum"), 90u);
+  auto q = read_csv(c.stats());
+  EXPECT_EQ(q["hc_node"].back(), -1.0);
+  EXPECT_EQ(q["queries"].back(), 0.0);
+  expect_equals_reference(dir, path, 120);
+}
+
+// Node k killed, then restarted on its port: it rejoins, a resync sends the full set, the switch
+// resumes with incremental diffs; every frame equals the reference.
+void restarted_node_rejoins(int k) {
+  // Long enough for the restart (scene load, GL) to happen well before the end.
+  const std::string path = "walk:1500";
+  const fs::path dir = fresh_dir("recovery_rejoin" + std::to_string(k)) / "cluster";
+  Cluster c(dir, ClusterOptions(kCity, path, kView));
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  (k == 0 ? c.node0() : c.node1()).kill_now();
+  // The other node serves alone for a while.
+  const size_t killed_at = read_csv(c.stats())["frame"].size();
+  ASSERT_GE(wait_frames(c.stats(), killed_at + 30, 60s, &c.client()), killed_at + 30) << c.logs();
+  ASSERT_NE(c.restart_node(k), 0) << c.logs();
+  const int code = c.client().wait(300s);
+  const std::string rvg = c.client().log();
+  ASSERT_EQ(code, 0) << c.logs();
+  EXPECT_EQ(c.restarted(k).wait(30s), 0) << c.logs();
+  EXPECT_EQ((k == 0 ? c.node1() : c.node0()).wait(30s), 0) << c.logs();
+  EXPECT_NE(rvg.find("switch node " + std::to_string(k) + " (127.0.0.1:"), std::string::npos) << rvg;
+  EXPECT_NE(rvg.find("is back"), std::string::npos) << rvg;
+  EXPECT_NE(rvg.find("the switch resumes"), std::string::npos) << rvg;
+  const std::vector<std::string> m = modes(c.stats());
+  ASSERT_EQ(m.size(), 1500u);
+  // switch ... (frustum) resync single ... resync switch ... to the end.
+  const size_t single = find_from(m, "single", 0);
+  ASSERT_LT(single, m.size());
+  const size_t back = find_from(m, "resync", single);
+  ASSERT_LT(back, m.size()) << "the switch never resumed";
+  EXPECT_EQ(count(m, "resync"), 2u);
+  for (size_t i = back + 1; i < m.size(); ++i) ASSERT_EQ(m[i], "switch") << "frame " << i;
+  EXPECT_GT(m.size() - back, 100u);
+  auto s = read_csv(c.stats());
+  // The resync frame carries the full set (everything is added: the sets started empty), the
+  // switch then goes on with diffs smaller than the sets, from both nodes again.
+  EXPECT_EQ(s["added"][back], s["visible"][back]);
+  EXPECT_GT(s["visible"][back], 0.0);
+  double ids = 0, visible = 0;
+  for (size_t i = back + 1; i < m.size(); ++i) {
+    ids += s["added"][i] + s["removed"][i];
+    visible += s["visible"][i];
+  }
+  EXPECT_LT(ids, 0.5 * visible);
+  EXPECT_NE(s["hc_node"][back + 1], s["hc_node"][back + 2]);
+  EXPECT_NE(c.restarted(k).log().find("resync at frame " + std::to_string(back)), std::string::npos)
+      << c.restarted(k).log();
+  expect_equals_reference(dir, path, 1500);
+}
+
+TEST(Recovery, RestartedNode1RejoinsAndTheSwitchResumes) { restarted_node_rejoins(1); }
+TEST(Recovery, RestartedNode0RejoinsAndTheSwitchResumes) { restarted_node_rejoins(0); }
+
+// The render client's link to node 1 stalls (link_relay): after its receive timeout the client
+// drops node 1 and node 0 serves alone; the path finishes with exit 0 and exact frames.
+TEST(Recovery, StalledLinkDegradesAfterTheTimeoutAndFramesEqualTheReference) {
+  const std::string path = "walk:300";
+  const fs::path dir = fresh_dir("recovery_stall") / "cluster";
+  ClusterOptions o(kCity, path, kView);
+  o.timeout_ms = 3000;
+  o.relay_node1 = true;
+  Cluster c(dir, o);
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  EXPECT_EQ(control(c.control_port(), "stall").rfind("ok", 0), 0u);
+  const ClusterRun r = c.finish();
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(r.node0_code, 0) << r.logs();
+  EXPECT_NE(r.rvg_log.find("sent nothing for 3000 ms"), std::string::npos) << r.rvg_log;
+  EXPECT_NE(r.rvg_log.find("degraded: switch node 0"), std::string::npos) << r.rvg_log;
+  const std::vector<std::string> m = modes(c.stats());
+  ASSERT_EQ(m.size(), 300u);
+  EXPECT_EQ(m.back(), "single");
+  expect_equals_reference(dir, path, 300);
+}
