@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
     occ::add_cluster_options(cli, o.config);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
     occ::add_hc_options(cli, o.hc);
-    cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer, a camera or a message");
+    cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer or a message (for the next camera: twice this)");
     if (!cli.parse(argc, argv)) return 0;
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
     if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");

@@ -196,8 +196,10 @@ class SwitchNode {
   }
 
   // The camera of `frame` (lockstep) or the newest (latest); nullopt when the render client is done.
+  // Waits up to twice --timeout-ms: the render client may itself be waiting out its timeout on
+  // the other node before it drops that one and sends this one a Resync.
   std::optional<NumberedCamera> take_camera(uint32_t frame) {
-    const Millis timeout(o_.timeout_ms);
+    const Millis timeout(2 * int64_t(o_.timeout_ms));
     for (;;) {
       std::string why;
       std::optional<NumberedCamera> cam =

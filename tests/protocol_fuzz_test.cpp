@@ -33,7 +33,8 @@ void check_frame(const std::vector<uint8_t>& bytes, Tally& tally) {
 // A frame header with a known type and a length inside that type's bounds, followed by random
 // payload bytes, so the input gets past the header checks into the payload decoders.
 std::vector<uint8_t> random_plausible_frame(std::mt19937_64& rng) {
-  static const uint32_t sizes[][2] = {{46, 110}, {100, 100}, {12, 200}, {68, 68}, {2, 120}};
+  static const uint32_t sizes[][2] = {{46, 110}, {100, 100}, {12, 200}, {68, 68}, {2, 120}, {12, 12}};
+  static_assert(std::size(sizes) == kTypeCount);
   const uint16_t type = static_cast<uint16_t>(1 + rng() % kTypeCount);
   const auto [lo, hi] = sizes[type - 1];
   const uint32_t len = lo + static_cast<uint32_t>(rng() % (hi - lo + 1));

@@ -139,7 +139,7 @@ TEST(Wire, TrailingBytesAreRejected) {
 
 TEST(Wire, CorruptedHeaderFieldsAreRejected) {
   auto bytes = encode(Camera{});
-  for (uint16_t type : {0, 6, 255, 0xffff}) {
+  for (uint16_t type : {0, 7, 255, 0xffff}) {
     auto b = bytes;
     put_u16(b, 0, type);
     EXPECT_EQ(decode_error(b), "unknown message type " + std::to_string(type));
@@ -170,7 +170,7 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 2)");
+            "hello: unsupported protocol version 1 (this build speaks 3)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
