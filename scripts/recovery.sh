@@ -55,12 +55,26 @@ if [ "$restart_at" -gt 0 ] && [ $kill_both = 0 ]; then
 fi
 wait $rvg; status=$?
 grep -E "^(summary|modes):|degraded|resync|is back" "$out/render_client.log"
-# Per mode: frames, median and mean frame interval, mean render time (rvg_ms), mean triangles.
-awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
-  { m = $c["mode"]; n[m]++; iv[m, n[m]] = $c["frame_interval_ms"]; s[m] += $c["frame_interval_ms"];
-    r[m] += $c["rvg_ms"]; t[m] += $c["triangles"] }
-  END { printf "%-8s %6s %10s %10s %10s %12s\n", "mode", "frames", "median_ms", "mean_ms", "rvg_ms", "triangles";
-    for (m in n) { k = n[m]; for (i = 1; i <= k; i++) v[i] = iv[m, i]; asort(v);
-      printf "%-8s %6d %10.2f %10.2f %10.2f %12.0f\n", m, k, v[int((k + 1) / 2)], s[m] / k, r[m] / k, t[m] / k; delete v } }' \
-  "$out/stats.csv"
+# Per mode: frames, median and mean frame interval, mean render time (rvg_ms), mean triangles;
+# then the frames from the kill to the resync and to the switch's return.
+python3 - "$out/stats.csv" <<'PY'
+import csv, statistics, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+print(f"{'mode':8} {'frames':>6} {'median_ms':>10} {'mean_ms':>9} {'rvg_ms':>7} {'triangles':>10} {'visible':>8}")
+for m in ("switch", "resync", "single", "frustum"):
+    r = [x for x in rows if x["mode"] == m]
+    if not r:
+        continue
+    iv = [float(x["frame_interval_ms"]) for x in r]
+    mean = lambda k: statistics.mean(float(x[k]) for x in r)
+    print(f"{m:8} {len(r):6d} {statistics.median(iv):10.2f} {statistics.mean(iv):9.2f} {mean('rvg_ms'):7.2f} "
+          f"{mean('triangles'):10.0f} {mean('visible'):8.1f}")
+modes = [x["mode"] for x in rows]
+first = next((i for i, m in enumerate(modes) if m != "switch"), None)
+if first is not None:
+    resync = next((i for i in range(first, len(modes)) if modes[i] == "resync"), None)
+    back = next((i for i in range(first, len(modes)) if modes[i] == "switch"), None)
+    print(f"first degraded frame {first}: its interval {float(rows[first]['frame_interval_ms']):.1f} ms; "
+          f"resync at {resync}; switch again at {back}")
+PY
 exit $status
