@@ -178,9 +178,11 @@ class Client {
     need_resync_ = true;
     const int other = 1 - k;
     std::cerr << "render_client: " << what << ": degraded: "
-              << (switch_ && nodes_[other].conn ? node_name(other) + " serves alone"
-                                               : std::string("frustum culling in the render client"))
-              << " until it is back\n";
+              << (switch_ && nodes_[other].conn ? node_name(other) + " serves alone until it is back"
+                  : switch_ ? std::string("frustum culling in the render client until a node is back")
+                            : std::string("frustum culling in the render client to the end (an occlusion_server is not "
+                                          "taken back)"))
+              << "\n";
     if (switch_) want_rejoin(k);
   }
 
