@@ -267,4 +267,24 @@ std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_
   return items;
 }
 
+bool OccluderSelection::worth(const Aabb& box, uint64_t triangles, const Camera& cam,
+                              double viewport_height_px) const {
+  if (!(min_pixels_per_triangle > 0) || triangles == 0) return true;
+  const double radius_px =
+      projected_error_px(0.5 * box.diagonal(), std::sqrt(box.distance2(cam.eye)), viewport_height_px, cam.fovy_rad);
+  if (!std::isfinite(radius_px)) return true;  // eye in or on the box
+  const double viewport_px = viewport_height_px * viewport_height_px * cam.aspect;
+  const double area_px = std::min(3.14159265358979 * radius_px * radius_px, viewport_px);
+  return area_px >= min_pixels_per_triangle * double(triangles);
+}
+
+void OccluderSelection::filter(std::vector<uint32_t>& ids, const Renderables& r, const Camera& cam,
+                               double viewport_height_px) const {
+  if (!(min_pixels_per_triangle > 0)) return;
+  const Hierarchy& h = r.hierarchy();
+  std::erase_if(ids, [&](uint32_t id) {
+    return !worth(h.node(r.node_of(id)).box, r.triangles(id), cam, viewport_height_px);
+  });
+}
+
 }  // namespace occ

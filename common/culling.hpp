@@ -167,6 +167,20 @@ struct HcOptions {
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, const HcOptions& o = {});
 
+// Occluder selection, for the OR pass and occluder fusion: drawing an object as an occluder costs
+// its triangles, and what it can hide is bounded by the pixels it covers. An object is drawn as
+// an occluder when its projected bounding sphere (radius: half the box diagonal, at the box's
+// nearest point) covers at least min_pixels_per_triangle pixels per triangle; dense small
+// geometry (bolts, pipe runs far away) costs the OR more than it can hide. The eye in or on the
+// box always keeps it. Drawing fewer occluders leaves depth farther, so queries find more
+// visible, never less: conservative. 0 keeps every object.
+struct OccluderSelection {
+  double min_pixels_per_triangle = 0;
+  bool worth(const Aabb& box, uint64_t triangles, const Camera& cam, double viewport_height_px) const;
+  // Removes from `ids` (renderable ids) the objects not worth drawing as occluders.
+  void filter(std::vector<uint32_t>& ids, const Renderables& r, const Camera& cam, double viewport_height_px) const;
+};
+
 // The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
 // identically in every renderer).
 std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes);

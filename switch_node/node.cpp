@@ -150,6 +150,8 @@ class SwitchNode {
       std::vector<uint32_t> ids(visible.ids().begin(), visible.ids().end());
       std::sort(ids.begin(), ids.end());
       for (uint32_t id : ids) drawn[id] = 1;
+      or_camera_ = cam->camera;
+      select_.filter(ids, *g_.renderables, or_camera_, o_.height);
       or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
       Clock::duration waited{0};  // for the other node's stream: not OR work
       if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
@@ -219,6 +221,7 @@ class SwitchNode {
             drawn[id] = 1;
             fresh.push_back(id);
           }
+        select_.filter(fresh, *g_.renderables, or_camera_, o_.height);
         or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         start_frame();
@@ -247,6 +250,7 @@ class SwitchNode {
             drawn_[id] = 1;
             fresh.push_back(id);
           }
+        select_.filter(fresh, *g_.renderables, cam, o_.height);
         if (fresh.empty()) return;
         g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
         querier_->begin(cam);  // the renderer changed the GL state the queries need
@@ -313,6 +317,8 @@ class SwitchNode {
   std::optional<CameraReceiver> cameras_in_;
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
+  OccluderSelection select_{o_.hc.occluder_pixels_per_triangle};
+  Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)
   std::optional<QueryBudget> budget_;
   bool peer_ended_cleanly_ = false;  // a send to the other node failed after its clean goodbye
   uint64_t or_triangles_ = 0;  // drawn by the current OR

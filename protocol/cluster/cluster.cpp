@@ -99,6 +99,9 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "accept a subtree without queries where its queries cost more (measured) than they saved"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
+  cli.option("occluder-pixels-per-triangle", &c.occluder_pixels_per_triangle, 0.0, 1e9,
+             "OR and occluder fusion skip objects whose projected bounding sphere covers fewer pixels per "
+             "triangle than this (dense small parts cost more to draw than they hide; 0: draw every one)");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {

@@ -56,8 +56,11 @@ struct HcChoices {
   HcOrder order = HcOrder::near_first;
   bool occluder_fusion = true;     // draw what each batch found visible before the next batch
   bool query_budget = true;        // accept subtrees whole where measured costs say queries do not pay
+  // OR and fusion draw an object as an occluder only if it covers at least this many pixels per
+  // triangle (OccluderSelection in common/culling.hpp; 0: every visible object).
+  double occluder_pixels_per_triangle = 1.0;
 };
-// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget.
+// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --occluder-pixels-per-triangle.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
