@@ -139,7 +139,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       } else if (sel.satisfies(id)) {
         r = id;
         ++st.hlods;
-      } else if (few_pixels) {
+      } else if (few_pixels && sel.hlod_allowed(id)) {
         r = id;
         ++st.hlods;
         ++st.pixel_stops;

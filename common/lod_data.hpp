@@ -13,6 +13,7 @@
 //     it keeps normals and colours: lod_simplify.hpp.
 #pragma once
 #include <array>
+#include <limits>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -77,6 +78,13 @@ class LodData {
   double error(uint32_t node, uint32_t level) const { return errors_[node][level]; }
   // The coarsest representation's error (leaf level 3, interior HLOD).
   double coarsest_error(uint32_t node) const { return errors_[node][kLeafLodLevels]; }
+  // An interior node whose HLOD must never be drawn (its subtree holds BLEND items, which an
+  // opaque HLOD would turn into occluders): its error becomes infinite, so no tau accepts it and
+  // the traversal refines it. In memory only: not part of the cache or its hash (every process
+  // decides the same from the same scene).
+  void forbid_hlod(uint32_t node);
+  bool hlod_allowed(uint32_t node) const { return hlod_of_node_[node] != kNoNode && errors_[node][0] < kForbidden; }
+  static constexpr double kForbidden = std::numeric_limits<double>::infinity();
 
   const std::vector<LodMesh>& cluster_lods() const { return cluster_lods_; }
   const std::vector<uint32_t>& item_slots() const { return item_slot_; }

@@ -62,6 +62,9 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
                     static_cast<unsigned long long>(LodBenefit::kMinSavedTriangles));
       std::cerr << buf << "\n";
       ls.lod.reset();
+    } else if (const uint32_t n = forbid_blended_hlods(*ls.lod, ls.scene, ls.hierarchy)) {
+      std::cerr << who << ": " << n << " HLODs not used: their subtrees hold BLEND (transparent) objects, "
+                << "which an HLOD would draw opaque\n";
     }
   }
   return ls;
