@@ -21,7 +21,7 @@
 # Ctrl-C or failure.
 # --window shows the frames in an X11 window ($DISPLAY) and lets you drive (render_client --help;
 # keys: W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset,
-# P screenshot, Esc quits). Without --path you drive from the start; with --path the path plays
+# P screenshot, O culling overlay, Esc quits). Without --path you drive from the start; with --path the path plays
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
 set -uo pipefail
@@ -106,10 +106,21 @@ if [ $netns = 1 ]; then
   [ -n "$link" ] && relay_args=(--delay-ms "$l_delay" --jitter-ms "${l_jitter:-0}")
 fi
 
+# The process's own error lines (its log's "error:" lines, else its last line) and where its log is.
+report_failure() {  # name why
+  local lines
+  lines=$(grep -m 3 '^error' "$out/$1.log" 2>/dev/null) || lines=$(tail -n 1 "$out/$1.log" 2>/dev/null)
+  echo "cluster: $1 $2 (log: $out/$1.log):" >&2
+  [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
+}
+
 wait_port() {  # file pid name (OCC_PORT_WAIT_S, default 60: big scenes load and build LODs first)
   for _ in $(seq 1 $((${OCC_PORT_WAIT_S:-60} * 10))); do
     [ -s "$1" ] && { cat "$1"; return 0; }
-    kill -0 "$2" 2>/dev/null || { echo "error: $3 exited before listening (see $out/$3.log)" >&2; return 1; }
+    if ! kill -0 "$2" 2>/dev/null; then
+      report_failure "$3" "exited before listening"
+      return 1
+    fi
     sleep 0.1
   done
   echo "error: $3 did not write its port file within ${OCC_PORT_WAIT_S:-60} s (set OCC_PORT_WAIT_S)" >&2; return 1
@@ -151,24 +162,39 @@ fi
 rvg_pid=$!
 pids+=($rvg_pid)
 
-# Bounded wait for all three (the relays are stopped afterwards).
+# Bounded wait for all three (the relays are stopped afterwards). The first process to fail is
+# reported with its own error line and the others are stopped at once (they would otherwise wait
+# for it until their --timeout-ms); once the render client is done the nodes get 30 s to finish.
 status=0
 deadline=$((SECONDS + MAX_SECONDS))
-for entry in "render_client:$rvg_pid" "node0:$node0_pid" "node1:$node1_pid"; do
-  name=${entry%%:*} pid=${entry##*:}
-  while kill -0 "$pid" 2>/dev/null && [ $SECONDS -lt $deadline ]; do sleep 0.2; done
-  if kill -0 "$pid" 2>/dev/null; then
-    echo "error: $name still running after its deadline: killed" >&2
+declare -A running=([render_client]=$rvg_pid [node0]=$node0_pid [node1]=$node1_pid)
+while [ ${#running[@]} -gt 0 ]; do
+  for name in render_client node0 node1; do
+    pid=${running[$name]:-}
+    [ -n "$pid" ] && ! kill -0 "$pid" 2>/dev/null || continue
+    wait "$pid"; rc=$?
+    unset "running[$name]"
+    [ "$name" = render_client ] && [ $deadline -gt $((SECONDS + 30)) ] && deadline=$((SECONDS + 30))
+    if [ $rc -ne 0 ]; then
+      report_failure "$name" "exited with status $rc"
+      status=1
+      if [ ${#running[@]} -gt 0 ]; then
+        echo "cluster: stopping$(for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done)" >&2
+        cleanup
+        for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
+        running=()
+      fi
+      break
+    fi
+  done
+  [ ${#running[@]} -gt 0 ] || break
+  if [ $SECONDS -ge $deadline ]; then
+    echo "error:$(for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done) still running after the deadline: killed" >&2
     cleanup; status=1
+    for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
+    break
   fi
-  wait "$pid"; rc=$?
-  if [ $rc -ne 0 ]; then
-    echo "cluster: $name exited with status $rc; last lines of $out/$name.log:" >&2
-    tail -n 5 "$out/$name.log" | sed 's/^/  /' >&2
-    status=1
-  fi
-  # Once the render client is done, give the nodes a short grace period.
-  [ "$name" = render_client ] && deadline=$((SECONDS + 30))
+  sleep 0.1
 done
 cleanup
 grep -h "^summary:" "$out/render_client.log" || true
