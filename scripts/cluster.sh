@@ -53,6 +53,13 @@ if [ $window = 1 ]; then
 fi
 [ -n "$path" ] || path=walk
 path=$(occ_frames_path "$path" "$frames")
+# A missing path file or an unknown kind fails now, not after both nodes have loaded the scene
+# (the render client checks the file's contents as soon as it starts).
+case "$path" in
+  interactive|orbit:*|walk:*|fly:*) ;;
+  *:*) [ -e "$path" ] || occ_die "--path '$path': unknown kind '${path%%:*}' (expected orbit:N, walk:N, fly:N or a CSV file)" ;;
+  *) [ -r "$path" ] || occ_die "--path '$path': cannot open camera path file" ;;
+esac
 relay_args=()
 if [ -n "$link" ]; then
   IFS=: read -r l_delay l_rate l_jitter <<<"$link"

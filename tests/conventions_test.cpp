@@ -2,6 +2,8 @@
 // help without installing or building, and scripts/video.sh makes an MP4 (skipped without ffmpeg).
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "integration_util.hpp"
 
 using namespace occtest;
@@ -91,14 +93,25 @@ TEST(Conventions, ClusterPrintsTheFailingProcessesOwnError) {
     EXPECT_NE(log.find("  error:"), std::string::npos) << log;
     EXPECT_NE(log.find("--no-such-flag"), std::string::npos) << log;
   }
-  {  // a bad --path: the render client's own line, and the nodes are stopped, not left to time out
-    Proc p(cluster(dir / "c", {"--scene", "city:2x2:2:4:1", "--path", (dir / "no_such_path.csv").string(),
-                               "--timeout-ms", "600000"}),
+  {  // a missing --path file: said before any process starts
+    Proc p(cluster(dir / "c", {"--scene", "city:2x2:2:4:1", "--path", (dir / "no_such_path.csv").string()}),
            dir / "c.log");
+    EXPECT_EQ(p.wait(60s), 2);
+    const std::string log = p.log();
+    EXPECT_NE(log.find("no_such_path.csv': cannot open camera path file"), std::string::npos) << log;
+    EXPECT_FALSE(fs::exists(dir / "c" / "node0.log")) << log;
+  }
+  {  // a broken --path file: the render client's own line, and the nodes are stopped at once, not
+     // left to wait for it until their --timeout-ms
+    std::ofstream(dir / "broken.csv") << "frame,eye_x\n0,1\n";
+    Proc p(cluster(dir / "d", {"--scene", "city:2x2:2:4:1", "--path", (dir / "broken.csv").string(),
+                               "--timeout-ms", "600000"}),
+           dir / "d.log");
     EXPECT_NE(p.wait(300s), 0);
     const std::string log = p.log();
-    EXPECT_NE(log.find("cluster: render_client exited with status"), std::string::npos) << log;
-    EXPECT_NE(log.find("no_such_path.csv: cannot open camera path file"), std::string::npos) << log;
+    EXPECT_NE(log.find("cluster: render_client exited with status 2"), std::string::npos) << log;
+    EXPECT_NE(log.find("  error: " + (dir / "broken.csv").string() + ": line 2: expected 11 or 13 columns"),
+              std::string::npos) << log;
     EXPECT_NE(log.find("cluster: stopping node0 node1"), std::string::npos) << log;
   }
 }
