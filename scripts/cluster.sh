@@ -2,11 +2,14 @@
 # Runs the occlusion-switch cluster on this machine: switch nodes 0 and 1 and the render client
 # on 127.0.0.1 with ephemeral ports (port files, no fixed ports). Prints the render client's
 # summary, keeps every process's log in the output folder, and exits non-zero if any process
-# failed or hung (bounded waits). Ctrl-C stops all three.
+# failed or hung (bounded waits): the first process to fail is named with its own error line and
+# the others are stopped at once. Ctrl-C stops all three.
 #
 #   scripts/cluster.sh --scene S [--path P] [--frames N] [--out DIR] [extra args]
 #
-# --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file.
+# --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file (a missing
+# file or an unknown kind is refused before anything starts). --lookahead N (render client,
+# default 2): cameras sent ahead, docs/latency.md.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion), which go where they belong. OCC_BIN overrides the binaries' folder;
