@@ -38,6 +38,18 @@ std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullSt
   return out;
 }
 
+std::vector<uint32_t> occluded_leaves(const Hierarchy& h, const Camera& cam, std::span<const uint32_t> drawn_nodes) {
+  std::vector<uint8_t> drawn(h.size(), 0);
+  for (uint32_t n : drawn_nodes) drawn.at(n) = 1;
+  std::vector<uint32_t> out;
+  for (uint32_t leaf : frustum_cull(h, cam)) {
+    bool covered = false;
+    for (uint32_t n = leaf; n != kNoNode && !covered; n = h.node(n).parent) covered = drawn[n];
+    if (!covered) out.push_back(leaf);
+  }
+  return out;
+}
+
 std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, OcclusionQueries& q,
                                     const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
   // With tau = 0 every accepted node is a leaf at full detail (LOD data, if any, is never used):

@@ -110,6 +110,11 @@ class QueryBudget {
 // Leaves whose boxes are not outside the frustum, in ascending id order.
 std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats = nullptr);
 
+// What occlusion culling removed (render_client --window's O overlay): the non-empty leaves
+// frustum_cull keeps for `cam` that neither are nor descend from any of `drawn_nodes` (the
+// hierarchy nodes of a visible set: leaves, or interior nodes drawn at their HLOD). Ascending.
+std::vector<uint32_t> occluded_leaves(const Hierarchy& h, const Camera& cam, std::span<const uint32_t> drawn_nodes);
+
 // HardwareCull: breadth-first, one level at a time. For every node of a level: frustum test,
 // then either visible_without_query() or an occlusion query; all queries of the level are issued
 // before any result is read. Children of visible interior nodes form the next level; each

@@ -15,6 +15,7 @@
 #include "common/error.hpp"
 #include "common/hash.hpp"
 #include "common/memory.hpp"
+#include "common/gl/box_overlay.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -122,17 +123,17 @@ class Client {
     FrameOutput out(o_.out, !o_.no_images,
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
-                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms"});
+                     "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms", "camera_gap"});
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes): a single server sends plain diffs.
     const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), nodes_[1] && o_.config.tracks_fronts());
     DiffReceiver streams[2];
     uint32_t next_camera = 0;
-    if (lockstep)
-      while (next_camera < uint32_t(o_.lookahead) && have_camera(next_camera)) send_camera(next_camera++);
-    else if (have_camera(next_camera))
-      send_camera(next_camera++);
+    // `lookahead` cameras ahead, then one per frame received. Latest mode: the nodes take the
+    // newest camera after the previous frame's, so at most `lookahead` frames are ever in flight.
+    while (next_camera < uint32_t(o_.lookahead) && have_camera(next_camera)) send_camera(next_camera++);
     if (next_camera == 0) return;  // --window: the user quit before the first frame
+    std::optional<uint32_t> prev_camera;  // the camera of the previous frame
     start_ = Clock::now();
     cpu_start_ = process_cpu_us();
     for (uint32_t frame = 0;; ++frame) {
@@ -149,6 +150,14 @@ class Client {
       if (lockstep && wcam->frame != frame)
         throw ClientFailure("frame " + std::to_string(frame) + ": lockstep, but switch node " + std::to_string(k) +
                             " used camera " + std::to_string(wcam->frame));
+      if (prev_camera && wcam->frame <= *prev_camera)
+        throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) + " used camera " +
+                            std::to_string(wcam->frame) + ", not newer than frame " + std::to_string(frame - 1) +
+                            "'s camera " + std::to_string(*prev_camera));
+      prev_camera = wcam->frame;
+      // Cameras newer than this frame's that were already sent (latest mode: what a slow
+      // render client lets pile up; lockstep: lookahead - 1).
+      const uint32_t camera_gap = next_camera - 1 - wcam->frame;
       if (auto err = viewport_mismatch(*wcam, {o_.width, o_.height}))
         throw ClientFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(k) + " sent " + *err);
       const Camera cam = from_wire(*wcam);
@@ -196,22 +205,29 @@ class Client {
       const double latency_ms = ms_between(sent_at_[wcam->frame], shown);
       Image image;
       if (out.writes_images() || viewer_) image = g_.ctx->read_rgba();
-      if (out.writes_images()) out.write_frame(frame, image);
-      if (viewer_)
-        viewer_->show(cam, std::move(image), {latency_ms, visible.size(), leaf_count_, st.triangles, o_.config.pixel_error});
+      if (out.writes_images()) out.write_frame(frame, image);  // the frame itself, never the overlay
+      if (viewer_) {
+        HudStats hud{latency_ms, visible.size(), leaf_count_, st.triangles, o_.config.pixel_error};
+        if (viewer_->overlay()) {
+          hud.occluded = long(draw_overlay(cam, ids));
+          image = g_.ctx->read_rgba();
+        }
+        viewer_->show(cam, std::move(image), hud);
+      }
       out.write_row({double(frame), double(wcam->frame), double(k), double(visible.size()), double(eof.total_added),
                      double(eof.total_removed), double(eof.queries), double(st.triangles), double(bytes),
                      eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
                      ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown), eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
                      (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
-                     eof.or_tail_us / 1000.0});
+                     eof.or_tail_us / 1000.0, double(camera_gap)});
       cpu_prev_shown_ = cpu_shown;
       frame_done_.push_back(shown);
       visible_sum_ += visible.size();
       bytes_sum_ += bytes;
       tri_sum_ += st.triangles;
       latency_.push_back(latency_ms);
+      camera_gap_max_ = std::max(camera_gap_max_, camera_gap);
       hc_ms_ += eof.hc_us / 1000.0;
       or_ms_ += eof.or_us / 1000.0;
       rvg_ms_ += ms_between(r0, shown);
@@ -223,6 +239,19 @@ class Client {
       }
     }
     progress_done();
+  }
+
+  // The O overlay: tints the boxes of the leaves in the frustum that occlusion culling removed
+  // over the frame just drawn; returns how many.
+  size_t draw_overlay(const Camera& cam, const std::vector<uint32_t>& visible_ids) {
+    if (!overlay_) overlay_ = std::make_unique<BoxOverlay>(*g_.ctx);
+    std::vector<uint32_t> nodes;
+    for (uint32_t r : visible_ids) nodes.push_back(g_.renderables->node_of(r));
+    std::vector<Aabb> boxes;
+    for (uint32_t leaf : occluded_leaves(g_.hierarchy(), cam, nodes)) boxes.push_back(g_.hierarchy().node(leaf).box);
+    overlay_->draw(cam, boxes);
+    g_.ctx->gl().Finish();
+    return boxes.size();
   }
 
   void summary() const {
@@ -242,16 +271,19 @@ class Client {
     std::printf(
         "summary: frames=%zu mean_fps=%.2f median_fps=%.2f mean_bytes_per_frame=%.0f mean_visible=%.1f "
         "leaves=%zu culled_pct=%.1f mean_triangles=%.0f triangles_culled_pct=%.1f latency_ms_mean=%.1f "
-        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f peak_rss_mb=%ld\n",
+        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f peak_rss_mb=%ld latency_frames=%.2f "
+        "camera_gap_max=%u\n",
         frames, 1000.0 * frames / wall_ms, 1000.0 / sorted_iv[frames / 2], double(bytes_sum_) / frames, mean_v,
         leaf_count_, 100.0 * (1.0 - mean_v / std::max<size_t>(leaf_count_, 1)), double(tri_sum_) / frames,
         100.0 * (1.0 - double(tri_sum_) / frames / std::max<uint64_t>(total_triangles_, 1)),
         std::accumulate(lat.begin(), lat.end(), 0.0) / frames, lat[std::min(frames - 1, frames * 95 / 100)],
-        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb());
+        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb(),
+        std::accumulate(lat.begin(), lat.end(), 0.0) / wall_ms, camera_gap_max_);
   }
 
   const ClientOptions& o_;
   std::unique_ptr<Viewer> viewer_;  // --window
+  std::unique_ptr<BoxOverlay> overlay_;  // --window, O
   SceneGl g_;
   std::vector<Camera> path_;
   std::unique_ptr<net::Connection> nodes_[2];
@@ -264,6 +296,7 @@ class Client {
   size_t leaf_count_ = 0;
   uint64_t total_triangles_ = 0, visible_sum_ = 0, bytes_sum_ = 0, tri_sum_ = 0;
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
+  uint32_t camera_gap_max_ = 0;
 };
 
 }  // namespace

@@ -1,5 +1,6 @@
 // render_client: the RVG display client of the occlusion switch, or (--reference) the
 // single-process reference renderer.
+#include "common/camera_path.hpp"
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
@@ -27,11 +28,13 @@ int main(int argc, char** argv) {
                "reference renderer: also write the scene as glTF (FILE.gltf + FILE.bin, geometry only)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
     occ::add_cluster_options(cli, o.config);
-    cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
+    cli.option("lookahead", &o.lookahead, 1, 64,
+               "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
+               "in flight)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
     cli.flag("window", &o.window,
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
-             "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, Esc quits");
+             "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, O culling overlay (occlusion-culled boxes tinted), Esc quits");
     cli.option("record", &o.record, "FILE.csv", "--window: write every camera shown as a --path CSV (replays the flight)");
     cli.option("save-path", &o.save_path, "FILE.csv", "write the camera path (e.g. a generated walk:N) as a --path CSV");
     if (!cli.parse(argc, argv)) return 0;
@@ -39,6 +42,12 @@ int main(int argc, char** argv) {
     if (o.path.empty()) o.path = o.window ? "interactive" : "walk:60";
     if (o.path == "interactive" && !o.window) throw occ::InputError("--path interactive needs --window");
     if (!o.record.empty() && !o.window) throw occ::InputError("--record needs --window");
+    if (o.path != "interactive") {  // a bad --path fails now, not after the scene has loaded
+      occ::Aabb unit;
+      unit.grow(glm::dvec3(0.0));
+      unit.grow(glm::dvec3(1.0));
+      occ::load_camera_path(o.path, unit, {o.width, o.height});
+    }
     if (o.reference) {
       if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
       return occ::run_reference(o);

@@ -26,7 +26,7 @@ struct ClientOptions {
   std::string save_scene;  // write the loaded scene as glTF (ditto, generated scenes included)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
-  int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame
+  int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
   // --window (viewer.hpp)
   bool window = false;

@@ -127,11 +127,29 @@ class SwitchNode {
     std::optional<uint32_t> last_camera;
     for (uint32_t frame = uint32_t(o_.id);; frame += 2) {
       // ---- OR(frame): camera, clear depth, draw V_{frame-2} then V_{frame-1}'s additions.
+      // Latest mode: the newest camera after the one the other node used for frame-1 (the first
+      // message of its stream), so no two frames share a camera and the nodes never run ahead of
+      // the cameras the render client sent (it sends one per frame received: bounded latency).
       std::string why;
+      Clock::duration waited{0};  // for the other node's stream: not OR work
+      std::optional<wire::Camera> peer_camera;
+      uint32_t min_camera = last_camera ? *last_camera + 1 : 0;
+      if (o_.config.camera_mode == CameraMode::latest && frame > 0) {
+        const Clock::time_point wait_start = Clock::now();
+        std::optional<net::Received> r = receive_peer(frame - 1);
+        waited += Clock::now() - wait_start;
+        if (!r) return;  // the other node finished cleanly
+        auto* c = std::get_if<wire::Camera>(&r->message);
+        if (!c)
+          throw NodeFailure("frame " + std::to_string(frame - 1) + ": switch node " + std::to_string(1 - o_.id) +
+                            " sent " + std::string(wire::type_name(wire::type_of(r->message))) + " before its camera");
+        peer_camera = *c;
+        min_camera = std::max(min_camera, c->frame + 1);
+      }
       std::optional<NumberedCamera> cam =
           o_.config.camera_mode == CameraMode::lockstep
               ? cameras_.take(frame, timeout, &why)
-              : cameras_.take_latest(last_camera ? *last_camera + 1 : 0, timeout, &why);
+              : cameras_.take_latest(min_camera, timeout, &why);
       if (!cam) {
         if (cameras_in_->client_said_bye()) {  // the render client finished (or gave up: its reason says which)
           std::cerr << who_ << ": " << why << "\n";
@@ -153,8 +171,7 @@ class SwitchNode {
       or_camera_ = cam->camera;
       select_.filter(ids, *g_.renderables, or_camera_, o_.height);
       or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
-      Clock::duration waited{0};  // for the other node's stream: not OR work
-      if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited)) return;
+      if (frame > 0 && !receive_stream(frame - 1, visible, stream, drawn, waited, peer_camera)) return;
       g_.ctx->gl().Finish();  // the OR's rasterisation belongs to the OR, not to HC's first query
       const uint64_t or_cpu1 = process_cpu_us();
       or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
@@ -178,8 +195,25 @@ class SwitchNode {
 
   // Applies and draws the other node's diff of `frame` until its EndOfFrame. Returns false when
   // the other node closed cleanly instead (the run is over).
+  // The next message of the other node's stream of `frame`; nullopt when it closed cleanly
+  // (the render client said goodbye to it first: the run is over). Any other goodbye is its
+  // failure, and this node fails with it, naming it.
+  std::optional<net::Received> receive_peer(uint32_t frame) {
+    net::Received r = peer_->receive(Millis(o_.timeout_ms));
+    if (r.status == net::Received::Status::closed) {
+      if (cameras_in_->client_said_bye() || r.reason == std::string("peer said bye: ") + wire::kByeDone) return std::nullopt;
+      throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
+                        peer_->peer() + ") ended: " + r.reason);
+    }
+    if (!r.ok())
+      throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
+                        peer_->peer() + ") " + (r.status == net::Received::Status::timeout ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms" : r.reason));
+    return r;
+  }
+
+  // `early`: the stream's camera, already received (latest mode: it chose this node's camera).
   bool receive_stream(uint32_t frame, VisibleSet& visible, DiffReceiver& stream, std::vector<uint8_t>& drawn,
-                      Clock::duration& waited) {
+                      Clock::duration& waited, const std::optional<wire::Camera>& early) {
     bool cleared = false;  // full-sets mode: the frame's first message replaces the set
     bool have_camera = false;
     uint64_t expected_front = 0;
@@ -190,20 +224,18 @@ class SwitchNode {
       if (o_.config.full_sets && !cleared) visible.clear();
       cleared = true;
     };
-    for (;;) {
-      const Clock::time_point wait_start = Clock::now();
-      net::Received r = peer_->receive(Millis(o_.timeout_ms));
-      waited += Clock::now() - wait_start;
-      if (r.status == net::Received::Status::closed) {
-        // The other node finished cleanly (the render client said goodbye to it first): the run
-        // is over. Any other goodbye is its failure, and this node fails with it, naming it.
-        if (cameras_in_->client_said_bye() || r.reason == std::string("peer said bye: ") + wire::kByeDone) return false;
-        throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
-                          peer_->peer() + ") ended: " + r.reason);
+    for (bool first = true;; first = false) {
+      net::Received r;
+      if (first && early) {
+        r.status = net::Received::Status::message;
+        r.message = *early;
+      } else {
+        const Clock::time_point wait_start = Clock::now();
+        std::optional<net::Received> got = receive_peer(frame);
+        waited += Clock::now() - wait_start;
+        if (!got) return false;
+        r = std::move(*got);
       }
-      if (!r.ok())
-        throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) + " (" +
-                          peer_->peer() + ") " + (r.status == net::Received::Status::timeout ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms" : r.reason));
       if (auto* c = std::get_if<wire::Camera>(&r.message)) {
         if (have_camera)
           throw NodeFailure("frame " + std::to_string(frame) + ": two cameras from switch node " + std::to_string(1 - o_.id));
