@@ -1,5 +1,7 @@
 // render_client: the RVG display client of the occlusion switch, or (--reference) the
 // single-process reference renderer.
+#include <string>
+
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
@@ -29,6 +31,8 @@ int main(int argc, char** argv) {
     occ::add_cluster_options(cli, o.config);
     cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
+    std::string key_file;
+    occ::add_key_option(cli, &key_file);
     cli.flag("window", &o.window,
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
              "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, Esc quits");
@@ -41,6 +45,7 @@ int main(int argc, char** argv) {
     if (!o.record.empty() && !o.window) throw occ::InputError("--record needs --window");
     if (o.reference) {
       if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
+      if (!key_file.empty()) throw occ::InputError("--cluster-key-file makes no sense with --reference");
       return occ::run_reference(o);
     }
     if (o.connect.empty() || o.connect.size() > 2)
@@ -48,6 +53,7 @@ int main(int argc, char** argv) {
           "give --connect twice (both switch nodes), once (an occlusion_server), or --reference (see render_client "
           "--help)");
     for (const auto& c : o.connect) occ::net::parse_endpoint("connect", c);  // fail before loading the scene
+    o.key = occ::load_cluster_key(key_file);
     return occ::run_cluster_client(o);
   });
 }
