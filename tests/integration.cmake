@@ -16,4 +16,4 @@ occ_test(material_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRE
 add_dependencies(material_cluster_test switch_node render_client frame_diff)
 # issue 18: cluster key (membership) and switch_node --serve (successive clients)
 occ_test(membership_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_membership_test.cpp)
-add_dependencies(membership_test switch_node render_client frame_diff occlusion_server)
+add_dependencies(membership_test switch_node render_client frame_diff occlusion_server link_relay)

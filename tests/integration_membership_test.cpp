@@ -3,7 +3,11 @@
 // switch_node --serve the node pair outlives its clients, one at a time: a second client while one
 // is served is told the cluster is busy (at once, not after a timeout), a client that dies does
 // not take the nodes with it, and the next client is served with frames equal to the reference.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -27,11 +31,12 @@ std::string write_key(const fs::path& file, char fill) {
 }
 
 // A render client of the cluster started by `c` (nodes on p0, p1), writing to `out`: what
-// Cluster::start_client runs, with its own folder and flags.
+// Cluster::start_client runs, with its own folder, path and flags.
 std::vector<std::string> client_argv(const ClusterOptions& o, int p0, int p1, const fs::path& out,
-                                     const std::vector<std::string>& more) {
+                                     const std::vector<std::string>& more, const std::string& path = "") {
   fs::create_directories(out);
-  std::vector<std::string> a = {bin("render_client"), "--scene", o.scene, "--path", o.path, "--out", out.string(),
+  std::vector<std::string> a = {bin("render_client"), "--scene", o.scene, "--path", path.empty() ? o.path : path,
+                                "--out", out.string(),
                                 "--connect", "127.0.0.1:" + std::to_string(p0), "--connect",
                                 "127.0.0.1:" + std::to_string(p1), "--timeout-ms", std::to_string(o.timeout_ms)};
   a.insert(a.end(), o.view.begin(), o.view.end());
@@ -49,6 +54,45 @@ void expect_equals_reference(const fs::path& reference, const fs::path& out, siz
   EXPECT_EQ(diff.code, 0) << out << ": cluster != reference\n" << diff.log;
   EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
 }
+
+// One command to link_relay's control port ("stall", "resume"); its one-line reply.
+std::string control(int port, const std::string& command) {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(uint16_t(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::string reply;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+    std::string line = command + "\n";
+    (void)!::write(fd, line.data(), line.size());
+    char c;
+    while (::read(fd, &c, 1) == 1 && c != '\n') reply += c;
+  }
+  ::close(fd);
+  return reply;
+}
+
+// The cluster's first client reaches node 1 through a link_relay, so a test can hold that client
+// mid-run (stall) while another process visits the nodes: the session cannot end meanwhile.
+struct HeldCluster {
+  Cluster c;
+  int p0 = 0, p1 = 0;
+  HeldCluster(const fs::path& out, const ClusterOptions& o) : c(out, relayed(o)) {}
+  static ClusterOptions relayed(ClusterOptions o) {
+    o.relay_node1 = true;
+    return o;
+  }
+  bool start() {
+    p0 = c.start_node0();
+    p1 = c.start_node1();
+    if (!p0 || !p1 || !c.start_relay()) return false;
+    c.start_client();
+    return true;
+  }
+  bool hold() { return control(c.control_port(), "stall").rfind("ok", 0) == 0; }
+  bool release() { return control(c.control_port(), "resume").rfind("ok", 0) == 0; }
+};
 
 // Waits (at most `timeout`) until `p`'s log contains `text`.
 bool wait_log(Proc& p, const std::string& text, std::chrono::milliseconds timeout = 60s) {
@@ -73,9 +117,12 @@ TEST(Membership, ProcessesWithoutTheKeyAreRefusedWhileTheRealClientIsServed) {
   const std::string key = write_key(dir / "cluster.key", 'a'), wrong = write_key(dir / "wrong.key", 'b');
   ClusterOptions o(kCity, "walk:60", kView);
   o.all = {"--cluster-key-file", key};
-  Cluster c(dir / "cluster", o);
+  HeldCluster h(dir / "cluster", o);
+  Cluster& c = h.c;
   const int p0 = c.start_node0(), p1 = c.start_node1();
-  ASSERT_TRUE(p0 && p1) << c.logs();
+  ASSERT_TRUE(p0 && p1 && c.start_relay()) << c.logs();
+  h.p0 = p0;
+  h.p1 = p1;
 
   // Before the real client: one without a key, one with another key. Each is refused at once,
   // saying why, and takes no slot.
@@ -88,10 +135,12 @@ TEST(Membership, ProcessesWithoutTheKeyAreRefusedWhileTheRealClientIsServed) {
   expect_one_error(other, {"cluster key mismatch: the proof of render_client 0 (\"render_client\") does not verify: another key"});
   EXPECT_EQ(frame_count(dir / "nokey") + frame_count(dir / "wrongkey"), 0u);
 
-  // The real client, and while it is served another one without the key.
+  // The real client, and while it is served (held mid-run) another one without the key.
   c.start_client();
   ASSERT_GE(wait_frames(c.stats(), 5, 60s, &c.client()), 5u) << c.logs();
+  ASSERT_TRUE(h.hold());
   const Outcome late = run_to_end(client_argv(o, p0, p1, dir / "late", {}), dir / "late.log", 60s);
+  ASSERT_TRUE(h.release());
   expect_one_error(late, {"cluster key: the peer requires one"});
 
   const ClusterRun r = c.finish();
@@ -156,16 +205,19 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   o.all = {"--cluster-key-file", key};
   // The query budget's measured costs (timings) would make the visible sets of two runs differ.
   o.node0 = o.node1 = {"--serve", "--sessions", "3", "--query-budget", "off"};
-  Cluster c(dir / "first", o);
-  const int p0 = c.start_node0(), p1 = c.start_node1();
-  ASSERT_TRUE(p0 && p1) << c.logs();
+  HeldCluster h(dir / "first", o);
+  Cluster& c = h.c;
+  ASSERT_TRUE(h.start()) << c.logs();
+  const int p0 = h.p0, p1 = h.p1;
 
-  // Client 1 is served; a second client meanwhile is told the cluster is busy, at once.
-  c.start_client();
+  // Client 1 is served; a second client meanwhile (client 1 held mid-run) is told the cluster is
+  // busy, at once.
   ASSERT_GE(wait_frames(c.stats(), 5, 60s, &c.client()), 5u) << c.logs();
+  ASSERT_TRUE(h.hold());
   auto t0 = std::chrono::steady_clock::now();
   const Outcome busy = run_to_end(client_argv(o, p0, p1, dir / "busy", {"--cluster-key-file", key}),
                                   dir / "busy.log", 60s);
+  ASSERT_TRUE(h.release());
   EXPECT_LT(seconds_since(t0), 10.0) << "refused by a timeout, not by the node";
   expect_one_error(busy, {"the cluster is busy", "switch_node 0 is serving another render client"});
   ASSERT_EQ(c.client().wait(120s), 0) << c.logs();
@@ -173,8 +225,7 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   for (Proc* n : {&c.node0(), &c.node1()}) ASSERT_TRUE(wait_log(*n, "render client 1 done; waiting")) << c.logs();
 
   // Client 2 dies mid-run (SIGKILL): the nodes end that session and go back to accepting.
-  Proc killed(client_argv(o, p0, p1, dir / "killed", {"--cluster-key-file", key, "--path", "walk:100000"}),
-              dir / "killed.log");
+  Proc killed(client_argv(o, p0, p1, dir / "killed", {"--cluster-key-file", key}, "walk:100000"), dir / "killed.log");
   ASSERT_GE(wait_frames(dir / "killed" / "stats.csv", 5, 60s, &killed), 5u) << killed.log() << c.logs();
   killed.kill_now();
   killed.wait(10s);
