@@ -40,9 +40,9 @@ case "$MODE" in
       cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DOCC_TSAN=ON >/dev/null
     fi
     cmake --build build-tsan -j"$(nproc)" --target core_test net_transport_test cluster_test hard_faults_test \
-      switch_node render_client frame_diff
+      membership_test switch_node render_client frame_diff link_relay occlusion_server
     if [ $# -eq 0 ]; then
-      set -- -R '^(CameraBuffer|Loopback|Handshake|Connect|Connection|Listener)\.|^Cluster\.CityWalkEqualsReference$|^HardFaults\.'
+      set -- -R '^(CameraBuffer|Loopback|Handshake|Connect|Connection|Listener)\.|^Cluster\.CityWalkEqualsReference$|^HardFaults\.|^Serve\.'
     fi
     ;;
   normal)
