@@ -5,7 +5,7 @@
 #   scripts/test.sh --sanitize   ASan+UBSan build in build-asan/, then the whole suite
 #   scripts/test.sh --tsan       TSan build in build-tsan/ of the threaded parts (transport, camera
 #                                buffer, the switch node's camera thread in one cluster run and the
-#                                strangers-at-the-ports test), then
+#                                strangers-at-the-ports test, the --serve nodes' busy door), then
 #                                those tests (ctest arguments replace the default selection)
 set -euo pipefail
 case "${1:-}" in  # before anything is installed or built
