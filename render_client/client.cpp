@@ -83,7 +83,12 @@ class Client {
       const net::Endpoint e = net::parse_endpoint("connect", text);
       auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
       if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
-      auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, std::nullopt}, Millis(o_.timeout_ms));
+      net::PeerExpectation expect{wire::Role::switch_node, std::nullopt};
+      expect.key = o_.key ? &*o_.key : nullptr;
+      auto hello = net::handshake(*conn, mine, expect, Millis(o_.timeout_ms));
+      if (const size_t busy = hello ? std::string::npos : hello.error().find(wire::kByeBusy); busy != std::string::npos)
+        throw std::runtime_error("the cluster is busy: the switch node at " + text + " says " +
+                                 hello.error().substr(busy + std::string_view(wire::kByeBusy).size()));
       if (!hello) throw std::runtime_error(hello.error());
       auto& slot = nodes_[hello->node_id & 1];
       if (slot) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));

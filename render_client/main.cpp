@@ -1,6 +1,9 @@
 // render_client: the RVG display client of the occlusion switch, or (--reference) the
 // single-process reference renderer.
+#include <string>
+
 #include "common/camera_path.hpp"
+
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
@@ -32,6 +35,8 @@ int main(int argc, char** argv) {
                "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
                "in flight)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
+    std::string key_file;
+    occ::add_key_option(cli, &key_file);
     cli.flag("window", &o.window,
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
              "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, O culling overlay (occlusion-culled boxes tinted), Esc quits");
@@ -50,6 +55,7 @@ int main(int argc, char** argv) {
     }
     if (o.reference) {
       if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
+      if (!key_file.empty()) throw occ::InputError("--cluster-key-file makes no sense with --reference");
       return occ::run_reference(o);
     }
     if (o.connect.empty() || o.connect.size() > 2)
@@ -57,6 +63,7 @@ int main(int argc, char** argv) {
           "give --connect twice (both switch nodes), once (an occlusion_server), or --reference (see render_client "
           "--help)");
     for (const auto& c : o.connect) occ::net::parse_endpoint("connect", c);  // fail before loading the scene
+    o.key = occ::load_cluster_key(key_file);
     return occ::run_cluster_client(o);
   });
 }

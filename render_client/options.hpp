@@ -2,6 +2,7 @@
 // no culling or frustum culling: the ground truth every cluster frame is compared with) and the
 // RVG display client of the cluster.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@ struct ClientOptions {
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
+  std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   // --window (viewer.hpp)
   bool window = false;
   std::string record;  // every camera shown, as a path CSV

@@ -28,16 +28,20 @@
 # P screenshot, O culling overlay, Esc quits). Without --path you drive from the start; with --path the path plays
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
+# Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
+# it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
+# names one to use instead.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file=""
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --scene|--path|--frames|--out|--link) occ_set "$@"; shift 2 ;;
     --netns) netns=1; shift ;;
+    --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
@@ -74,6 +78,13 @@ fi
 occ_require_bins switch_node render_client $([ -n "$link" ] && echo link_relay)
 mkdir -p "$out"
 rm -f "$out"/*.port "$out"/frame_*.png
+if [ -z "$key_file" ]; then  # a fresh random key per run, readable by this user only
+  key_file=$out/cluster.key
+  rm -f "$key_file"
+  (umask 077 && head -c 32 /dev/urandom | od -An -tx1 -v | tr -d ' \n' >"$key_file") ||
+    occ_die "cannot write the cluster key $key_file"
+fi
+common+=(--cluster-key-file "$key_file")
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 pids=()

@@ -1,6 +1,7 @@
 #include "switch_node/node.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <optional>
 #include <cstdio>
@@ -42,13 +43,34 @@ class SwitchNode {
 
   int run() {
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
-    if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
-    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
-    step_.emplace(*g_.renderables, o_.config, o_.height);
     g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
-    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
+    mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
+                       g_.hierarchy().params(), o_.config, who_);
+    listener_.emplace(open_listener(who_, o_.listen));
+    if (!o_.serve) return session();
+    // --serve: one render client after the other, each in a session of its own (both nodes
+    // start it from scratch: new connections, including the link between the nodes, and fresh
+    // per-client state), until --sessions clients have been served (0: forever).
+    int failed = 0;
+    for (int n = 1;; ++n) {
+      const int code = session();
+      failed += code != 0;
+      if (o_.sessions > 0 && n >= o_.sessions) {
+        std::cerr << who_ << ": served " << n << " render clients (" << failed << " failed), as --sessions asked\n";
+        return failed ? 1 : 0;
+      }
+      std::cerr << who_ << ": render client " << n << (code ? " failed" : " done")
+                << "; waiting for the next one (--serve)\n";
+    }
+  }
+
+ private:
+  // One render client, from the connections to the summary. Returns 0 after the client's Bye.
+  int session() {
+    reset_client_state();
     connect();
-    cameras_in_.emplace(*rvg_, cameras_, Viewport{o_.width, o_.height});
+    door_.start(*this);  // from now on, a second render client is told the cluster is busy
+    cameras_in_.emplace(*rvg_, *cameras_, Viewport{o_.width, o_.height});
     int code = 0;
     try {
       loop();
@@ -73,44 +95,140 @@ class SwitchNode {
     }
     rvg_->close(code ? "failed" : wire::kByeDone);
     cameras_in_->join();
+    door_.stop();
     print_summary();
     return code;
   }
 
- private:
-  void connect() {
-    net::Listener listener = open_listener(who_, o_.listen);
+  // Everything that belongs to one render client starts afresh: connections, cameras, the query
+  // history of adaptive queries, the measured query budget, statistics. (The visible set, the
+  // fronts and the diff streams live in loop().)
+  void reset_client_state() {
+    cameras_in_.reset();
+    peer_.reset();
+    rvg_.reset();
+    cameras_.emplace();
+    skipper_.reset();
+    budget_.reset();
+    if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
+    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
+    step_.emplace(*g_.renderables, o_.config, o_.height);
+    querier_.reset();
+    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
+    peer_ended_cleanly_ = false;
+    or_triangles_ = 0;
+    ms_per_query_ = ms_per_triangle_ = 0;
+    tail_cpu0_ = hc_cpu0_ = 0;
+    or_cpu_us_ = or_tail_cpu_us_ = or_tail_us_ = 0;
+    whole_ = frames_ = queries_ = skipped_ = pixel_stops_ = hlods_ = assumed_visible_ = 0;
+  }
+
+  net::PeerExpectation expect(std::optional<wire::Role> role, std::optional<uint8_t> node_id) const {
+    net::PeerExpectation e{role, node_id};
+    e.key = o_.key ? &*o_.key : nullptr;
+    return e;
+  }
+
+  // Why this node turns away a connector whose slot is taken (nullopt: it may have the slot).
+  std::optional<std::string> busy_reason(const wire::Hello& h) const {
+    const bool is_node1 = o_.id == 0 && h.role == wire::Role::switch_node && h.node_id == 1;
+    const bool is_rvg = h.role == wire::Role::render_client;
+    if (!is_node1 && !is_rvg)
+      return "unexpected peer: " + std::string(wire::role_name(h.role)) + " " + std::to_string(h.node_id);
+    const auto& slot = is_node1 ? peer_ : rvg_;
+    if (!slot || !slot->is_open()) return std::nullopt;
+    return std::string(wire::kByeBusy) + who_ + " is serving " +
+           (is_rvg ? "another render client (" + rvg_->peer() + ")" : "switch node 1 (" + peer_->peer() + ")") +
+           "; try again when it has finished";
+  }
+
+  // Waits for a peer on the listener: for --timeout-ms, or (--serve) as long as it takes.
+  net::Peer accept(const net::PeerExpectation& e, const std::string& what) {
+    for (;;) {
+      auto p = listener_->accept_peer(mine_, e, Millis(o_.timeout_ms));
+      if (p) return std::move(*p);
+      if (!o_.serve) throw std::runtime_error(who_ + ": " + what + ": " + p.error());
+      if (p.error().find("no valid peer") == std::string::npos) {  // not a timeout: do not spin
+        std::cerr << who_ << ": " << what << ": " << p.error() << "\n";
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+    }
+  }
+
+  // Node 1: the link to node 0. Node 0 may still be finishing its last client (--serve): it says
+  // "busy" until then, and this retries.
+  void connect_peer() {
     const Millis timeout(o_.timeout_ms);
-    const wire::Hello mine = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height},
-                                        g_.fingerprint(), g_.hierarchy().params(), o_.config, who_);
-    if (o_.id == 1) {
-      const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
+    const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
+    const auto deadline = Clock::now() + timeout;
+    for (;;) {
       auto conn = net::Connection::connect(pe.host, pe.port, timeout);
       if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
-      auto hello = net::handshake(*conn, mine, {wire::Role::switch_node, uint8_t(0)}, timeout);
-      if (!hello) throw std::runtime_error(who_ + ": " + hello.error());
-      peer_ = std::make_unique<net::Connection>(std::move(*conn));
-      auto rvg = listener.accept_peer(mine, {wire::Role::render_client, std::nullopt}, timeout);
-      if (!rvg) throw std::runtime_error(who_ + ": no render client: " + rvg.error());
-      rvg_ = std::make_unique<net::Connection>(std::move(rvg->connection));
+      auto hello = net::handshake(*conn, mine_, expect(wire::Role::switch_node, uint8_t(0)), timeout);
+      if (hello) {
+        peer_ = std::make_unique<net::Connection>(std::move(*conn));
+        return;
+      }
+      if (hello.error().find(wire::kByeBusy) == std::string::npos || Clock::now() > deadline)
+        throw std::runtime_error(who_ + ": " + hello.error());
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+
+  void connect() {
+    if (o_.id == 1) {
+      connect_peer();
+      net::Peer rvg = accept(expect(wire::Role::render_client, std::nullopt), "no render client");
+      rvg_ = std::make_unique<net::Connection>(std::move(rvg.connection));
+      if (!peer_->is_open()) {  // node 0 went away while this node waited for the client (--serve)
+        std::cerr << who_ << ": the link to switch node 0 ended while waiting for the render client; reconnecting\n";
+        connect_peer();
+      }
     } else {
-      // Node 0 accepts both the render client and switch node 1, in whatever order they come.
-      while (!peer_ || !rvg_) {
-        auto p = listener.accept_peer(mine, {}, timeout);
-        if (!p) throw std::runtime_error(who_ + ": waiting for peers: " + p.error());
-        const bool is_node1 = p->hello.role == wire::Role::switch_node && p->hello.node_id == 1;
-        const bool is_rvg = p->hello.role == wire::Role::render_client;
-        auto& slot = is_node1 ? peer_ : rvg_;
-        if ((!is_node1 && !is_rvg) || slot) {
-          p->connection.close_with_error("unexpected peer: " + std::string(wire::role_name(p->hello.role)) + " " +
-                                         std::to_string(p->hello.node_id));
-          continue;
-        }
-        slot = std::make_unique<net::Connection>(std::move(p->connection));
+      // Node 0 accepts both the render client and switch node 1, in whatever order they come; a
+      // second of either (while the first is connected) is refused in the handshake.
+      net::PeerExpectation e = expect(std::nullopt, std::nullopt);
+      e.refuse = [this](const wire::Hello& h) { return busy_reason(h); };
+      while (!peer_ || !rvg_ || !peer_->is_open() || !rvg_->is_open()) {
+        net::Peer p = accept(e, "waiting for peers");
+        const bool is_node1 = p.hello.role == wire::Role::switch_node;
+        (is_node1 ? peer_ : rvg_) = std::make_unique<net::Connection>(std::move(p.connection));
       }
     }
     std::cerr << who_ << ": connected: peer " << peer_->peer() << ", render client " << rvg_->peer() << "\n";
   }
+
+  // While a client is served, the listener stays open and every connector gets Bye("busy: ...")
+  // in its handshake (after its hello and key were checked): a second render client learns at
+  // once that the cluster is busy, node 1 coming back early for the next client retries.
+  class Door {
+   public:
+    ~Door() { stop(); }
+    void start(SwitchNode& node) {
+      stop();
+      stop_ = false;
+      thread_ = std::thread([this, &node] {
+        net::PeerExpectation e = node.expect(std::nullopt, std::nullopt);
+        e.refuse = [&node](const wire::Hello& h) {
+          auto why = node.busy_reason(h);
+          return why ? why : std::optional<std::string>(std::string(wire::kByeBusy) + node.who_ + " is serving a render client; try again when it has finished");
+        };
+        while (!stop_) {
+          auto conn = node.listener_->accept(Millis(100));
+          if (!conn) continue;
+          (void)net::handshake(*conn, node.mine_, e, Millis(2000));  // refused (and logged) in every case
+        }
+      });
+    }
+    void stop() {
+      stop_ = true;
+      if (thread_.joinable()) thread_.join();
+    }
+
+   private:
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+  };
 
   void send_both(const wire::Message& m) {
     if (auto err = rvg_->send(m)) throw NodeFailure("sending to the render client: " + *err);
@@ -148,8 +266,8 @@ class SwitchNode {
       }
       std::optional<NumberedCamera> cam =
           o_.config.camera_mode == CameraMode::lockstep
-              ? cameras_.take(frame, timeout, &why)
-              : cameras_.take_latest(min_camera, timeout, &why);
+              ? cameras_->take(frame, timeout, &why)
+              : cameras_->take_latest(min_camera, timeout, &why);
       if (!cam) {
         if (cameras_in_->client_said_bye()) {  // the render client finished (or gave up: its reason says which)
           std::cerr << who_ << ": " << why << "\n";
@@ -343,9 +461,11 @@ class SwitchNode {
   const NodeOptions& o_;
   std::string who_;
   SceneGl g_;
+  wire::Hello mine_;
+  std::optional<net::Listener> listener_;
   std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
-  CameraBuffer cameras_;
+  std::optional<CameraBuffer> cameras_;
   std::optional<CameraReceiver> cameras_in_;
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
@@ -360,6 +480,7 @@ class SwitchNode {
   Clock::time_point tail_t0_;
   uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
+  Door door_;  // last: stopped first (it reads the connections above)
 };
 
 }  // namespace

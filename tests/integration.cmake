@@ -14,3 +14,6 @@ add_dependencies(link_faults_test switch_node render_client link_relay frame_dif
 # glTF materials end to end: cluster == reference exactly with glass, masks, single-sided walls
 occ_test(material_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_material_test.cpp)
 add_dependencies(material_cluster_test switch_node render_client frame_diff)
+# issue 18: cluster key (membership) and switch_node --serve (successive clients)
+occ_test(membership_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_membership_test.cpp)
+add_dependencies(membership_test switch_node render_client frame_diff occlusion_server link_relay)

@@ -131,4 +131,17 @@ net::Listener open_listener(const std::string& who, const ListenOptions& o) {
   return std::move(*listener);
 }
 
+void add_key_option(Cli& cli, std::string* file) {
+  cli.option("cluster-key-file", file, "FILE",
+             "a secret shared by every process of the cluster (at least 32 bytes, e.g. `openssl rand -hex 32`): "
+             "peers must prove it in the handshake (HMAC-SHA256); without it, anyone who can connect may join");
+}
+
+std::optional<net::ClusterKey> load_cluster_key(const std::string& file) {
+  if (file.empty()) return std::nullopt;
+  auto key = net::ClusterKey::load(file);
+  if (!key) throw InputError("--cluster-key-file: " + key.error());
+  return std::move(*key);
+}
+
 }  // namespace occ

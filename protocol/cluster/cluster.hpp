@@ -14,6 +14,7 @@
 #include "common/camera.hpp"
 #include "common/culling.hpp"
 #include "common/hierarchy.hpp"
+#include "protocol/net/auth.hpp"
 #include "protocol/net/endpoint.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/wire.hpp"
@@ -83,6 +84,12 @@ net::Endpoint resolve_listen(ListenOptions& o);
 // Opens the listening socket (after resolve_listen), writes --port-file and prints
 // "<who>: listening on ADDR:PORT". Throws naming the address.
 net::Listener open_listener(const std::string& who, const ListenOptions& o);
+
+// --cluster-key-file FILE: membership by a shared key (docs/security.md), on every process.
+void add_key_option(Cli& cli, std::string* file);
+// The key of --cluster-key-file, or none when no file was given. Throws InputError naming the
+// file when it is missing, unreadable, empty or too short.
+std::optional<net::ClusterKey> load_cluster_key(const std::string& file);
 
 inline uint32_t hc_node_of_frame(uint32_t frame) { return frame % 2; }
 
