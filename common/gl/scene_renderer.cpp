@@ -9,6 +9,7 @@
 #include <string>
 
 #include <errno.h>
+#include <malloc.h>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "common/gl/shader.hpp"
@@ -184,10 +185,54 @@ uint32_t pack_rgba8(glm::vec4 c) {
   return rgba;
 }
 
+// Streams an array into a GL buffer (GL_DYNAMIC_STORAGE_BIT) through a staging vector of at
+// most `bytes`: push, and flush() at the end.
+template <class T>
+class Stager {
+ public:
+  Stager(const GlApi& gl, GLuint buf, size_t bytes) : gl_(gl), buf_(buf), cap_(std::max<size_t>(1, bytes / sizeof(T))) {
+    if (buf_) stage_.reserve(cap_);
+  }
+  void push(const T& v) {
+    stage_.push_back(v);
+    if (stage_.size() == cap_) flush();
+  }
+  void push(const std::vector<T>& v) {
+    for (size_t i = 0; i < v.size();) {
+      const size_t n = std::min(cap_ - stage_.size(), v.size() - i);
+      stage_.insert(stage_.end(), v.begin() + ptrdiff_t(i), v.begin() + ptrdiff_t(i + n));
+      i += n;
+      if (stage_.size() == cap_) flush();
+    }
+  }
+  void flush() {
+    if (stage_.empty()) return;
+    gl_.NamedBufferSubData(buf_, GLintptr(flushed_ * sizeof(T)), GLsizeiptr(stage_.size() * sizeof(T)), stage_.data());
+    flushed_ += stage_.size();
+    stage_.clear();
+  }
+  uint64_t written() const { return flushed_ + stage_.size(); }
+
+ private:
+  const GlApi& gl_;
+  GLuint buf_;
+  size_t cap_;
+  std::vector<T> stage_;
+  uint64_t flushed_ = 0;
+};
+
 }  // namespace
 
+// Without Upload::release nothing is written through these pointers.
 SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod)
+    : SceneRenderer(ctx, const_cast<Scene&>(scene), hierarchy, const_cast<LodData*>(lod), Upload{}) {}
+
+SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* release_lod,
+                             const Upload& upload)
     : gl_(ctx.gl()), hierarchy_(hierarchy) {
+  const LodData* lod = release_lod;
+  if (scene.geometry_released())
+    throw std::logic_error("SceneRenderer: the geometry of " + scene.source + " was released after an upload");
   struct Vertex {
     glm::vec3 position, normal;
     uint32_t color;  // RGBA8
@@ -246,56 +291,100 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
       any_textured = true;
     }
 
-  std::vector<Vertex> vertices;
-  std::vector<glm::vec2> uvs;
-  std::vector<uint32_t> indices;
+  // Geometry goes to the GL buffers through bounded staging (Upload::staging_bytes per array):
+  // sizes first, buffers allocated once, then filled chunk by chunk. With Upload::release, each
+  // mesh's CPU arrays are freed as soon as they are staged, so at no time are both the CPU
+  // geometry and the driver's copy whole (plant:40: 6.5 GB a process before, see docs/scale.md).
+  uint64_t total_vertices = 0, total_indices = 0;
+  for (const Mesh& mesh : scene.meshes) {
+    total_vertices += mesh.positions.size();
+    total_indices += mesh.indices.size();
+  }
+  std::vector<const LodMesh*> lod_meshes;  // upload order: cluster LODs, then HLODs by node id
+  std::vector<uint32_t> lod_node;          // per entry of lod_meshes: its node (HLODs) or kNoNode
+  if (lod) {
+    for (const LodMesh& m : lod->cluster_lods()) {
+      lod_meshes.push_back(&m);
+      lod_node.push_back(kNoNode);
+    }
+    for (uint32_t id = 0; id < hierarchy.size(); ++id)
+      if (const LodMesh* m = lod->hlod(id)) {
+        lod_meshes.push_back(m);
+        lod_node.push_back(id);
+      }
+    for (const LodMesh* m : lod_meshes) {
+      if (m->released) throw std::logic_error("SceneRenderer: the LOD data's geometry was released");
+      total_vertices += m->positions.size();
+      total_indices += m->indices.size();
+    }
+  }
+  if (total_vertices > uint64_t(INT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
+  if (total_indices > uint64_t(UINT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^32 indices");
+  auto create = [&](GLuint* buf, uint64_t bytes) {
+    gl_.CreateBuffers(1, buf);
+    gl_.NamedBufferStorage(*buf, GLsizeiptr(std::max<uint64_t>(1, bytes)), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  };
+  create(&vertex_buf_, total_vertices * sizeof(Vertex));
+  create(&index_buf_, total_indices * sizeof(uint32_t));
+  if (any_textured) create(&uv_buf_, total_vertices * sizeof(glm::vec2));
+  const size_t staging = std::max<size_t>(upload.staging_bytes, 4096);
+  Stager<Vertex> vertex_stage(gl_, vertex_buf_, staging);
+  Stager<uint32_t> index_stage(gl_, index_buf_, staging);
+  Stager<glm::vec2> uv_stage(gl_, uv_buf_, staging);
+  uint64_t freed_since_trim = 0;
+  auto released = [&](uint64_t bytes) {  // give freed heap pages back to the system now and then
+    freed_since_trim += bytes;
+    if (freed_since_trim >= (uint64_t(64) << 20)) {
+      ::malloc_trim(0);
+      freed_since_trim = 0;
+    }
+  };
+
   std::vector<int32_t> base_vertex(scene.meshes.size());
   std::vector<uint32_t> first_index(scene.meshes.size());
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
-    const Mesh& mesh = scene.meshes[m];
-    if (vertices.size() + mesh.positions.size() > size_t(INT32_MAX))
-      throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
-    base_vertex[m] = int32_t(vertices.size());
-    first_index[m] = uint32_t(indices.size());
+    Mesh& mesh = scene.meshes[m];
+    base_vertex[m] = int32_t(vertex_stage.written());
+    first_index[m] = uint32_t(index_stage.written());
     const bool colored = mesh.colors.size() == mesh.positions.size();
     for (size_t v = 0; v < mesh.positions.size(); ++v)
-      vertices.push_back({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1),
-                          colored ? mesh.colors[v] : 0xffffffffu});
+      vertex_stage.push({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1),
+                         colored ? mesh.colors[v] : 0xffffffffu});
     if (any_textured) {
-      if (mesh_textured[m] && mesh.uvs.size() == mesh.positions.size())
-        uvs.insert(uvs.end(), mesh.uvs.begin(), mesh.uvs.end());
-      else
-        uvs.resize(vertices.size(), glm::vec2(0.0f));
+      const bool with_uv = mesh_textured[m] && mesh.uvs.size() == mesh.positions.size();
+      for (size_t v = 0; v < mesh.positions.size(); ++v) uv_stage.push(with_uv ? mesh.uvs[v] : glm::vec2(0.0f));
     }
-    indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
+    index_stage.push(mesh.indices);
+    if (upload.release) {
+      const uint64_t bytes = mesh.positions.capacity() * 24 + mesh.indices.capacity() * 4 +
+                             mesh.uvs.capacity() * 8 + mesh.colors.capacity() * 4;
+      mesh.release_geometry();
+      released(bytes);
+    }
   }
   if (lod) {
-    auto upload = [&](const LodMesh& m) {
-      if (vertices.size() + m.positions.size() > size_t(INT32_MAX))
-        throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
-      ItemDraw d{uint32_t(m.indices.size()), uint32_t(indices.size()), int32_t(vertices.size()), 0};
+    hlod_of_node_.assign(hierarchy.size(), kNoNode);
+    for (size_t k = 0; k < lod_meshes.size(); ++k) {
+      const LodMesh& m = *lod_meshes[k];
+      ItemDraw d{uint32_t(m.indices.size()), uint32_t(index_stage.written()), int32_t(vertex_stage.written()), 0};
       for (size_t v = 0; v < m.positions.size(); ++v) {
         uint32_t rgba = 0xffffffffu;  // leaf LODs: the object's colour
         if (!m.objects.empty()) {     // HLODs: each vertex its source object's colour
           const uint32_t o = m.objects[v];
           rgba = pack_rgba8(o < looks_.size() ? glm::vec4(glm::vec3(looks_[o].color), 1.0f) : object_color(o));
         }
-        vertices.push_back({m.positions[v], m.normals[v], rgba});
+        vertex_stage.push({m.positions[v], m.normals[v], rgba});
+        if (any_textured) uv_stage.push(glm::vec2(0.0f));
       }
-      if (any_textured) uvs.resize(vertices.size(), glm::vec2(0.0f));
-      indices.insert(indices.end(), m.indices.begin(), m.indices.end());
-      return d;
-    };
-    for (const LodMesh& m : lod->cluster_lods()) lod_draws_.push_back(upload(m));
-    item_slot_ = lod->item_slots();
-    hlod_of_node_.assign(hierarchy.size(), kNoNode);
-    for (uint32_t id = 0; id < hierarchy.size(); ++id)
-      if (const LodMesh* m = lod->hlod(id)) {
+      index_stage.push(m.indices);
+      if (lod_node[k] == kNoNode) {
+        lod_draws_.push_back(d);
+      } else {
+        const uint32_t id = lod_node[k];
         hlod_of_node_[id] = uint32_t(hlod_draws_.size());
-        ItemDraw d = upload(*m);
         d.object = uint32_t(transforms_.size());  // pseudo-object: translation to the origin
         glm::dmat4 t(1.0);
-        t[3] = glm::dvec4(m->origin, 1.0);
+        t[3] = glm::dvec4(m.origin, 1.0);
         transforms_.push_back(t);
         ObjectLook hlod_look;  // opaque, lit, double-sided, white x vertex colours
         hlod_look.bits = kVertexColor;
@@ -303,7 +392,18 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
         object_box.push_back(hierarchy.node(id).box);
         hlod_draws_.push_back(d);
       }
+      if (upload.release) {
+        const uint64_t bytes = m.positions.capacity() * 24 + m.objects.capacity() * 4 + m.indices.capacity() * 4;
+        release_lod->release(m);
+        released(bytes);
+      }
+    }
+    item_slot_ = lod->item_slots();
   }
+  vertex_stage.flush();
+  index_stage.flush();
+  uv_stage.flush();
+  if (upload.release) ::malloc_trim(0);
   item_draws_.reserve(hierarchy.items().size());
   for (const Item& it : hierarchy.items()) {
     const uint32_t mesh = scene.objects[it.object].mesh;
@@ -359,13 +459,6 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
                  counts[0], counts[1], counts[2], textured, single, scene.images.size(), variants_.c_str());
   });
 
-  gl_.CreateBuffers(1, &vertex_buf_);
-  gl_.NamedBufferStorage(vertex_buf_, GLsizeiptr(std::max<size_t>(1, vertices.size() * sizeof(Vertex))),
-                         vertices.empty() ? nullptr : vertices.data(), 0);
-  gl_.CreateBuffers(1, &index_buf_);
-  gl_.NamedBufferStorage(index_buf_, GLsizeiptr(std::max<size_t>(1, indices.size() * sizeof(uint32_t))),
-                         indices.empty() ? nullptr : indices.data(), 0);
-
   gl_.CreateVertexArrays(1, &vao_);
   gl_.VertexArrayVertexBuffer(vao_, 0, vertex_buf_, 0, sizeof(Vertex));
   gl_.VertexArrayAttribFormat(vao_, 0, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, position));
@@ -385,9 +478,6 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
     gl_.EnableVertexArrayAttrib(vao_, a);
   }
   if (any_textured) {
-    gl_.CreateBuffers(1, &uv_buf_);
-    gl_.NamedBufferStorage(uv_buf_, GLsizeiptr(std::max<size_t>(1, uvs.size() * sizeof(glm::vec2))),
-                           uvs.empty() ? nullptr : uvs.data(), 0);
     gl_.VertexArrayVertexBuffer(vao_, 2, uv_buf_, 0, sizeof(glm::vec2));
     gl_.VertexArrayAttribFormat(vao_, 12, 2, GL_FLOAT, GL_FALSE, 0);
     gl_.VertexArrayAttribBinding(vao_, 12, 2);

@@ -54,7 +54,7 @@
 // Contracts: the GlContext is current on the calling thread for every call; the context and the
 // hierarchy outlive the renderer; `scene` is the one the hierarchy was built from (its clusters)
 // and is only read in the constructor (meshes, materials and images go to the GPU, transforms
-// are copied). Invalid item or node ids throw std::out_of_range.
+// are copied) unless Upload::release frees its geometry there. Invalid item or node ids throw std::out_of_range.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -93,6 +93,17 @@ class SceneRenderer {
   // With `lod`, its leaf LODs and HLODs are uploaded too (draw_renderables); it must outlive
   // nothing (only read here).
   SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod = nullptr);
+  // How the geometry reaches the GL buffers: through staging arrays of at most staging_bytes
+  // each (vertices, indices, uvs), never the whole scene at once. With release, every mesh's CPU
+  // arrays (scene meshes and LOD/HLOD meshes) are freed as soon as they are staged
+  // (Mesh::release_geometry, LodData::release): the driver's copy is then the only one, and
+  // what stays on the CPU is what culling needs (objects, clusters and their boxes, triangle
+  // counts, the LOD errors and tables). start_scene_gl does this for the processes.
+  struct Upload {
+    size_t staging_bytes = size_t(16) << 20;
+    bool release = false;
+  };
+  SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* lod, const Upload& upload);
   ~SceneRenderer();
   SceneRenderer(const SceneRenderer&) = delete;
   SceneRenderer& operator=(const SceneRenderer&) = delete;
