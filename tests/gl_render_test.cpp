@@ -255,7 +255,7 @@ TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
   q.end();
 }
 
-// Issue 16: the geometry streams to GL through small staging buffers and, with Upload::release,
+// Issue 16: the geometry goes to GL in small segments (hundreds here) and, with Upload::release,
 // the CPU arrays are freed as they go. The frames (full detail, leaf LODs, HLODs, item ids) must
 // be those of the default upload, and what culling needs must survive the release.
 TEST(SceneRenderer, StreamedUploadWithReleaseDrawsTheSameFramesAndFreesTheArrays) {
@@ -266,7 +266,7 @@ TEST(SceneRenderer, StreamedUploadWithReleaseDrawsTheSameFramesAndFreesTheArrays
   LodData freed_lod = kept_lod;
   auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
   SceneRenderer a(*ctx, kept, h, &kept_lod);
-  SceneRenderer b(*ctx, freed, h, &freed_lod, SceneRenderer::Upload{.staging_bytes = 4096, .release = true});
+  SceneRenderer b(*ctx, freed, h, &freed_lod, SceneRenderer::Upload{.segment_bytes = 4096, .release = true});
 
   for (const Mesh& m : freed.meshes) {
     EXPECT_TRUE(m.released);

@@ -185,42 +185,6 @@ uint32_t pack_rgba8(glm::vec4 c) {
   return rgba;
 }
 
-// Streams an array into a GL buffer (GL_DYNAMIC_STORAGE_BIT) through a staging vector of at
-// most `bytes`: push, and flush() at the end.
-template <class T>
-class Stager {
- public:
-  Stager(const GlApi& gl, GLuint buf, size_t bytes) : gl_(gl), buf_(buf), cap_(std::max<size_t>(1, bytes / sizeof(T))) {
-    if (buf_) stage_.reserve(cap_);
-  }
-  void push(const T& v) {
-    stage_.push_back(v);
-    if (stage_.size() == cap_) flush();
-  }
-  void push(const std::vector<T>& v) {
-    for (size_t i = 0; i < v.size();) {
-      const size_t n = std::min(cap_ - stage_.size(), v.size() - i);
-      stage_.insert(stage_.end(), v.begin() + ptrdiff_t(i), v.begin() + ptrdiff_t(i + n));
-      i += n;
-      if (stage_.size() == cap_) flush();
-    }
-  }
-  void flush() {
-    if (stage_.empty()) return;
-    gl_.NamedBufferSubData(buf_, GLintptr(flushed_ * sizeof(T)), GLsizeiptr(stage_.size() * sizeof(T)), stage_.data());
-    flushed_ += stage_.size();
-    stage_.clear();
-  }
-  uint64_t written() const { return flushed_ + stage_.size(); }
-
- private:
-  const GlApi& gl_;
-  GLuint buf_;
-  size_t cap_;
-  std::vector<T> stage_;
-  uint64_t flushed_ = 0;
-};
-
 }  // namespace
 
 // Without Upload::release nothing is written through these pointers.
@@ -291,15 +255,10 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
       any_textured = true;
     }
 
-  // Geometry goes to the GL buffers through bounded staging (Upload::staging_bytes per array):
-  // sizes first, buffers allocated once, then filled chunk by chunk. With Upload::release, each
-  // mesh's CPU arrays are freed as soon as they are staged, so at no time are both the CPU
-  // geometry and the driver's copy whole (plant:40: 6.5 GB a process before, see docs/scale.md).
-  uint64_t total_vertices = 0, total_indices = 0;
-  for (const Mesh& mesh : scene.meshes) {
-    total_vertices += mesh.positions.size();
-    total_indices += mesh.indices.size();
-  }
+  // Geometry goes to GL in segments (Upload): a segment is staged on the CPU until it holds about
+  // segment_bytes, then becomes its own vertex/index/uv buffers. With Upload::release each mesh's
+  // CPU arrays are freed as soon as they are staged, so the CPU geometry shrinks as the driver's
+  // copy grows (plant:40: 6.5 GB a process with one buffer and kept arrays, see docs/scale.md).
   std::vector<const LodMesh*> lod_meshes;  // upload order: cluster LODs, then HLODs by node id
   std::vector<uint32_t> lod_node;          // per entry of lod_meshes: its node (HLODs) or kNoNode
   if (lod) {
@@ -312,25 +271,34 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
         lod_meshes.push_back(m);
         lod_node.push_back(id);
       }
-    for (const LodMesh* m : lod_meshes) {
+    for (const LodMesh* m : lod_meshes)
       if (m->released) throw std::logic_error("SceneRenderer: the LOD data's geometry was released");
-      total_vertices += m->positions.size();
-      total_indices += m->indices.size();
-    }
   }
-  if (total_vertices > uint64_t(INT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
-  if (total_indices > uint64_t(UINT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^32 indices");
-  auto create = [&](GLuint* buf, uint64_t bytes) {
-    gl_.CreateBuffers(1, buf);
-    gl_.NamedBufferStorage(*buf, GLsizeiptr(std::max<uint64_t>(1, bytes)), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  const size_t limit = std::max<size_t>(upload.segment_bytes, 4096);
+  std::vector<Vertex> vstage;
+  std::vector<uint32_t> istage;
+  std::vector<glm::vec2> uvstage;
+  auto flush_segment = [&] {
+    Segment sg;
+    auto create = [&](GLuint* buf, const void* data, size_t bytes) {
+      gl_.CreateBuffers(1, buf);
+      gl_.NamedBufferStorage(*buf, GLsizeiptr(std::max<size_t>(1, bytes)), bytes ? data : nullptr, 0);
+    };
+    create(&sg.vertices, vstage.data(), vstage.size() * sizeof(Vertex));
+    create(&sg.indices, istage.data(), istage.size() * sizeof(uint32_t));
+    if (any_textured) create(&sg.uvs, uvstage.data(), uvstage.size() * sizeof(glm::vec2));
+    segments_.push_back(sg);
+    vstage.clear();
+    istage.clear();
+    uvstage.clear();
   };
-  create(&vertex_buf_, total_vertices * sizeof(Vertex));
-  create(&index_buf_, total_indices * sizeof(uint32_t));
-  if (any_textured) create(&uv_buf_, total_vertices * sizeof(glm::vec2));
-  const size_t staging = std::max<size_t>(upload.staging_bytes, 4096);
-  Stager<Vertex> vertex_stage(gl_, vertex_buf_, staging);
-  Stager<uint32_t> index_stage(gl_, index_buf_, staging);
-  Stager<glm::vec2> uv_stage(gl_, uv_buf_, staging);
+  // Starts a new segment unless nv vertices and ni indices still fit the current one.
+  auto make_room = [&](size_t nv, size_t ni) {
+    if ((!vstage.empty() || !istage.empty()) &&
+        (vstage.size() + nv) * sizeof(Vertex) + (istage.size() + ni) * sizeof(uint32_t) > limit)
+      flush_segment();
+    if (vstage.size() + nv > size_t(INT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^31 vertices in a mesh");
+  };
   uint64_t freed_since_trim = 0;
   auto released = [&](uint64_t bytes) {  // give freed heap pages back to the system now and then
     freed_since_trim += bytes;
@@ -341,20 +309,22 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
   };
 
   std::vector<int32_t> base_vertex(scene.meshes.size());
-  std::vector<uint32_t> first_index(scene.meshes.size());
+  std::vector<uint32_t> first_index(scene.meshes.size()), mesh_segment(scene.meshes.size());
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
     Mesh& mesh = scene.meshes[m];
-    base_vertex[m] = int32_t(vertex_stage.written());
-    first_index[m] = uint32_t(index_stage.written());
+    make_room(mesh.positions.size(), mesh.indices.size());
+    base_vertex[m] = int32_t(vstage.size());
+    first_index[m] = uint32_t(istage.size());
+    mesh_segment[m] = uint32_t(segments_.size());
     const bool colored = mesh.colors.size() == mesh.positions.size();
     for (size_t v = 0; v < mesh.positions.size(); ++v)
-      vertex_stage.push({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1),
-                         colored ? mesh.colors[v] : 0xffffffffu});
+      vstage.push_back({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1),
+                        colored ? mesh.colors[v] : 0xffffffffu});
     if (any_textured) {
       const bool with_uv = mesh_textured[m] && mesh.uvs.size() == mesh.positions.size();
-      for (size_t v = 0; v < mesh.positions.size(); ++v) uv_stage.push(with_uv ? mesh.uvs[v] : glm::vec2(0.0f));
+      for (size_t v = 0; v < mesh.positions.size(); ++v) uvstage.push_back(with_uv ? mesh.uvs[v] : glm::vec2(0.0f));
     }
-    index_stage.push(mesh.indices);
+    istage.insert(istage.end(), mesh.indices.begin(), mesh.indices.end());
     if (upload.release) {
       const uint64_t bytes = mesh.positions.capacity() * 24 + mesh.indices.capacity() * 4 +
                              mesh.uvs.capacity() * 8 + mesh.colors.capacity() * 4;
@@ -366,17 +336,19 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
     hlod_of_node_.assign(hierarchy.size(), kNoNode);
     for (size_t k = 0; k < lod_meshes.size(); ++k) {
       const LodMesh& m = *lod_meshes[k];
-      ItemDraw d{uint32_t(m.indices.size()), uint32_t(index_stage.written()), int32_t(vertex_stage.written()), 0};
+      make_room(m.positions.size(), m.indices.size());
+      ItemDraw d{uint32_t(m.indices.size()), uint32_t(istage.size()), int32_t(vstage.size()), 0,
+                 uint32_t(segments_.size())};
       for (size_t v = 0; v < m.positions.size(); ++v) {
         uint32_t rgba = 0xffffffffu;  // leaf LODs: the object's colour
         if (!m.objects.empty()) {     // HLODs: each vertex its source object's colour
           const uint32_t o = m.objects[v];
           rgba = pack_rgba8(o < looks_.size() ? glm::vec4(glm::vec3(looks_[o].color), 1.0f) : object_color(o));
         }
-        vertex_stage.push({m.positions[v], m.normals[v], rgba});
-        if (any_textured) uv_stage.push(glm::vec2(0.0f));
+        vstage.push_back({m.positions[v], m.normals[v], rgba});
+        if (any_textured) uvstage.push_back(glm::vec2(0.0f));
       }
-      index_stage.push(m.indices);
+      istage.insert(istage.end(), m.indices.begin(), m.indices.end());
       if (lod_node[k] == kNoNode) {
         lod_draws_.push_back(d);
       } else {
@@ -400,15 +372,17 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
     }
     item_slot_ = lod->item_slots();
   }
-  vertex_stage.flush();
-  index_stage.flush();
-  uv_stage.flush();
+  if (!vstage.empty() || !istage.empty() || segments_.empty()) flush_segment();
+  std::vector<Vertex>().swap(vstage);
+  std::vector<uint32_t>().swap(istage);
+  std::vector<glm::vec2>().swap(uvstage);
   if (upload.release) ::malloc_trim(0);
   item_draws_.reserve(hierarchy.items().size());
   for (const Item& it : hierarchy.items()) {
     const uint32_t mesh = scene.objects[it.object].mesh;
     const MeshCluster& cl = scene.meshes[mesh].clusters[it.cluster];
-    item_draws_.push_back({cl.index_count, first_index[mesh] + cl.first_index, base_vertex[mesh], it.object});
+    item_draws_.push_back(
+        {cl.index_count, first_index[mesh] + cl.first_index, base_vertex[mesh], it.object, mesh_segment[mesh]});
   }
   object_frame_.assign(transforms_.size(), 0);
   object_matrices_.resize(transforms_.size());
@@ -460,7 +434,6 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
   });
 
   gl_.CreateVertexArrays(1, &vao_);
-  gl_.VertexArrayVertexBuffer(vao_, 0, vertex_buf_, 0, sizeof(Vertex));
   gl_.VertexArrayAttribFormat(vao_, 0, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, position));
   gl_.VertexArrayAttribFormat(vao_, 1, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, normal));
   gl_.VertexArrayAttribFormat(vao_, 10, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(Vertex, color));
@@ -478,13 +451,19 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
     gl_.EnableVertexArrayAttrib(vao_, a);
   }
   if (any_textured) {
-    gl_.VertexArrayVertexBuffer(vao_, 2, uv_buf_, 0, sizeof(glm::vec2));
     gl_.VertexArrayAttribFormat(vao_, 12, 2, GL_FLOAT, GL_FALSE, 0);
     gl_.VertexArrayAttribBinding(vao_, 12, 2);
     gl_.EnableVertexArrayAttrib(vao_, 12);
     upload_textures(scene, used_texture);
   }
-  gl_.VertexArrayElementBuffer(vao_, index_buf_);
+  bind_segment(0);
+}
+
+void SceneRenderer::bind_segment(uint32_t s) {
+  const Segment& sg = segments_.at(s);
+  gl_.VertexArrayVertexBuffer(vao_, 0, sg.vertices, 0, 28);
+  gl_.VertexArrayElementBuffer(vao_, sg.indices);
+  if (sg.uvs) gl_.VertexArrayVertexBuffer(vao_, 2, sg.uvs, 0, sizeof(glm::vec2));
 }
 
 void SceneRenderer::upload_textures(const Scene& scene, const std::vector<uint8_t>& used_texture) {
@@ -533,9 +512,12 @@ SceneRenderer::~SceneRenderer() {
     for (const Program& p : mode)
       if (p.id) gl_.DeleteProgram(p.id);
   gl_.DeleteVertexArrays(1, &vao_);
-  const GLuint buffers[] = {vertex_buf_, index_buf_, record_buf_, indirect_buf_, uv_buf_};
+  const GLuint buffers[] = {record_buf_, indirect_buf_};
   for (GLuint b : buffers)
     if (b) gl_.DeleteBuffers(1, &b);
+  for (const Segment& sg : segments_)
+    for (GLuint b : {sg.vertices, sg.indices, sg.uvs})
+      if (b) gl_.DeleteBuffers(1, &b);
   for (GLuint t : textures_)
     if (t) gl_.DeleteTextures(1, &t);
   for (GLuint s : samplers_)
@@ -790,9 +772,15 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
   unsigned bound_bits = ~0u;
   int64_t bound_texture = -1;
   int bound_cull = -1;
+  uint32_t bound_segment = segments_.size() > 1 ? ~0u : 0;  // bound at construction
   for (size_t b = 0; b < draws.size();) {
     size_t e = b + 1;
-    while (e < draws.size() && draws[e].key == draws[b].key) ++e;
+    const uint32_t segment = draws[b].draw.segment;
+    while (e < draws.size() && draws[e].key == draws[b].key && draws[e].draw.segment == segment) ++e;
+    if (segment != bound_segment) {
+      bind_segment(segment);
+      bound_segment = segment;
+    }
     const uint64_t key = draws[b].key;
     const unsigned bits = unsigned(key >> 40) & (kVariants - 1);
     const int64_t texture = int64_t((key >> 8) & 0xffffffffu) - 1;
