@@ -14,9 +14,6 @@
 
 namespace occ {
 
-// Reads and writes the private parts of a Hierarchy (a friend of it).
-struct SceneCacheIo;
-
 namespace {
 
 constexpr uint32_t kSceneCacheVersion = 1;
@@ -108,7 +105,7 @@ class In {
   size_t off_;
 };
 
-void write_payload(Out& o, const Scene& s, const Hierarchy& h, const BuildParams& p, uint32_t depth, uint64_t fp,
+void write_payload(Out& o, const Scene& s, const BuildParams& p, uint32_t depth, uint64_t fp,
                    const std::vector<HNode>& nodes, const std::vector<Item>& items) {
   o.str(s.source);
   o.pod(uint64_t(s.meshes.size()));
@@ -151,11 +148,11 @@ void write_payload(Out& o, const Scene& s, const Hierarchy& h, const BuildParams
   o.pod(fp);
   o.vec(nodes);
   o.vec(items);
-  (void)h;
 }
 
 }  // namespace
 
+// Reads and writes the private parts of a Hierarchy (a friend of it).
 struct SceneCacheIo {
   static std::optional<std::string> save(const std::string& path, uint64_t key, const Scene& scene,
                                          const Hierarchy& h) {
@@ -169,7 +166,7 @@ struct SceneCacheIo {
     uint8_t head[kHead] = {};
     bool ok = std::fwrite(head, 1, kHead, f) == kHead;  // placeholder, rewritten below
     Out o(f);
-    write_payload(o, scene, h, h.params_, h.depth_, h.fingerprint_, h.nodes_, h.items_);
+    write_payload(o, scene, h.params_, h.depth_, h.fingerprint_, h.nodes_, h.items_);
     o.flush();
     ok &= o.ok();
     size_t at = 0;
