@@ -42,7 +42,12 @@ struct LodMesh {
   std::vector<uint32_t> objects;        // HLOD: source object of each vertex (its colour); leaf: empty
   std::vector<uint32_t> indices;        // triangle list
   double error = 0;                     // object-space error (leaf LOD: mesh space; HLOD: world)
-  uint64_t triangles() const { return indices.size() / 3; }
+  // After release_geometry() (the GL driver holds the only copy) the arrays are empty; the
+  // triangle count stays.
+  bool released = false;
+  uint64_t released_triangles = 0;
+  uint64_t triangles() const { return released ? released_triangles : indices.size() / 3; }
+  void release_geometry();  // frees positions, normals, objects and indices; idempotent
 };
 
 class LodData {
@@ -90,6 +95,10 @@ class LodData {
   const std::vector<uint32_t>& item_slots() const { return item_slot_; }
   const std::vector<LodMesh>& hlods() const { return hlods_; }
   uint64_t bytes() const;            // memory held by the meshes
+  // Frees the arrays of one of this data's meshes (cluster_lods() or hlods()) once uploaded.
+  // save() and the simplifier need them: a LodData with released meshes cannot be saved.
+  void release(const LodMesh& m);
+  bool geometry_released() const;
   uint64_t total_triangles() const;  // in all LODs and HLODs
 
  private:
