@@ -9,7 +9,8 @@
 # --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N) and node-only ones
-# (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion), which go where they belong. OCC_BIN overrides the binaries' folder;
+# (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --query-budget,
+# --visibility-hold), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
@@ -31,7 +32,7 @@ while [ $# -gt 0 ]; do
     --netns) netns=1; shift ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --lookahead) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--visibility-hold) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
     --*) occ_need_value "$@"; common+=("$1" "$2"); shift 2 ;;

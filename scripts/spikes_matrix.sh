@@ -9,6 +9,7 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 out=$1; shift
 export LP_NUM_THREADS=1
+BIN=${OCC_BIN:-build/bin}
 mkdir -p "$out" out/sp
 python3 scripts/street_walk.py --city 45x45:4 --frames 300 --out out/sp/street45.csv
 python3 scripts/street_walk.py --city 20x20:4 --frames 300 --out out/sp/street20.csv
@@ -24,13 +25,13 @@ for p in "${paths[@]}"; do
     if [ -z "${SKIP_EXACT:-}" ] && [ ! -s "$ex/stats.csv" ]; then
       mkdir -p "$ex"
       # The camera path as CSV: the reference writes it before it renders; stop it once written.
-      build/bin/render_client --reference --scene "$scene" --path "$path" --width $size --height $size \
+      "$BIN"/render_client --reference --scene "$scene" --path "$path" --width $size --height $size \
         --no-images --out "$ex/full" --save-path "$ex/path.csv" --cull frustum >/dev/null 2>&1 &
       rp=$!
       while kill -0 $rp 2>/dev/null && ! grep -q '^299,' "$ex/path.csv" 2>/dev/null; do sleep 0.2; done
       sleep 0.5; kill $rp 2>/dev/null; wait $rp 2>/dev/null
       awk -F, 'NR == 1 { print; next } (NR - 2) % 10 == 0 { $1 = (NR - 2) / 10; print }' OFS=, "$ex/path.csv" >"$ex/sub.csv" &&
-        build/bin/render_client --reference --scene "$scene" --path "$ex/sub.csv" --width $size --height $size \
+        "$BIN"/render_client --reference --scene "$scene" --path "$ex/sub.csv" --width $size --height $size \
           --no-images --exact --cull frustum --out "$ex" >"$ex/log" 2>&1 || echo "exact $label $size failed" >&2
     fi
     for tau in 0 1; do

@@ -99,6 +99,8 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "accept a subtree without queries where its queries cost more (measured) than they saved"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
+  cli.option("visibility-hold", &c.visibility_hold, 0, 255,
+             "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {

@@ -56,8 +56,9 @@ struct HcChoices {
   HcOrder order = HcOrder::near_first;
   bool occluder_fusion = true;     // draw what each batch found visible before the next batch
   bool query_budget = true;        // accept subtrees whole where measured costs say queries do not pay
+  int visibility_hold = 0;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
 };
-// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget.
+// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
