@@ -365,6 +365,11 @@ TEST(VisibilityHold, TwoNodesKeepFlickeringNodesConservativelyAndSendFewerIds) {
       VisibleSet visible(r.count()), received(r.count());
       std::vector<wire::Message> stream;
       DiffSender out(64, false, [&](const wire::Message& m) { stream.push_back(m); });
+      // The same frames as full sets (--full-sets): every id of V_f, held ones included.
+      std::vector<wire::Message> full_stream;
+      DiffSender full_out(64, true, [&](const wire::Message& m) { full_stream.push_back(m); });
+      VisibleSet full_visible(r.count());
+      std::vector<VisibilityHold> full_holds = holds;
       DiffReceiver in;
       const Aabb box = h.node(0).box;
       Camera cam = random_camera(rng, box);
@@ -384,6 +389,20 @@ TEST(VisibilityHold, TwoNodesKeepFlickeringNodesConservativelyAndSendFewerIds) {
         VisibleSet before = visible;
         step.coarsen(before, cam);
         const HcFrame hc = step.hc(f, visible, cam, q, {.hold = &holds[k]}, out);
+        full_stream.clear();
+        VisibleSet full_before = full_visible;
+        const HcFrame full_hc = step.hc(f, full_visible, cam, q, {.hold = &full_holds[k]}, full_out);
+        VisibleSet full_received(r.count());  // a full-sets receiver starts each frame empty
+        DiffReceiver full_in;
+        for (const wire::Message& m : full_stream) {
+          const auto& d = std::get<wire::NodeDiff>(m);
+          ASSERT_FALSE(full_in.on_diff(full_received, d));
+          for (uint32_t id : d.added)  // as switch_node: only ids new to V' were found
+            if (!full_before.contains(id)) full_holds[1 - k].seen(r.node_of(id), f);
+        }
+        ASSERT_FALSE(full_in.on_end_of_frame(full_received, full_hc.eof)) << "full sets, frame " << f;
+        EXPECT_TRUE(full_received == full_visible);
+        EXPECT_TRUE(full_visible == visible) << "full sets keep the same set, frame " << f;
         ids_sent[with_hold] += hc.eof.total_added + hc.eof.total_removed;
         for (const wire::Message& m : stream)
           for (uint32_t id : std::get<wire::NodeDiff>(m).added) holds[1 - k].seen(r.node_of(id), f);

@@ -55,8 +55,11 @@ struct HcChoices {
   bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
   HcOrder order = HcOrder::near_first;
   bool occluder_fusion = true;     // draw what each batch found visible before the next batch
-  bool query_budget = true;        // accept subtrees whole where measured costs say queries do not pay
-  int visibility_hold = 0;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
+  // Accept subtrees whole where measured costs say queries do not pay. Off by default (issue 15,
+  // docs/spikes.md): each node's choices follow its own timings, so the two nodes disagree and V
+  // alternates between a subtree's leaves and its visible ones: the main source of id churn.
+  bool query_budget = false;
+  int visibility_hold = 2;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold.
 void add_hc_options(Cli& cli, HcChoices& c);

@@ -62,7 +62,10 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
   if (local.hold) {
     for (uint32_t id : found) local.hold->seen(r_.node_of(id), frame);
     held = local.hold->held(r_, cam, sorted(visible), found, frame);
-    for (uint32_t id : held) cur.insert(id);
+    for (uint32_t id : held) {
+      cur.insert(id);
+      out.visible(id);  // in V' already: nothing to send, except in full-sets mode (every id)
+    }
     result.held = uint32_t(held.size());
   }
   result.eof = out.end(cur);
