@@ -163,13 +163,10 @@ TEST(ClusterMaterials, GlassFenceAndBackFacingWallsEqualTheReferenceExactly) {
     EXPECT_GT(pixels_near(img, 255, 0, 255), 20u) << "frame " << f;
   }
   // The opaque wall hides the 8 yellow boxes: from frame 2 on (occluders = the previous frame's
-  // visible set) they are culled, and the switch nodes' visibility hold (default 2 frames,
-  // --visibility-hold) keeps what frame 0 saw through frame 2, so from frame 3 on V has at most
-  // 8 of the 16 leaves (the back-facing wall passes its query).
+  // visible set) they are culled. 16 leaves in all (the back-facing wall passes its query).
   auto stats = read_csv(dir / "cluster" / "stats.csv");
   ASSERT_EQ(stats["visible"].size(), 24u);
-  constexpr size_t kHold = 2;
-  for (size_t f = 2 + kHold - 1; f < 24; ++f) EXPECT_LE(stats["visible"][f], 8.0) << "frame " << f;
+  for (size_t f = 2; f < 24; ++f) EXPECT_LE(stats["visible"][f], 8.0) << "frame " << f;
 }
 
 TEST(ClusterMaterials, DuplexWithSingleSidedMaterialsAndGlassEqualsTheReferenceExactly) {

@@ -327,11 +327,26 @@ TEST(VisibilityHold, KeepsRecentlySeenNodesInTheFrustumAndNeverOverlapsFound) {
   EXPECT_TRUE(hold.held(r, all, prev, {}, 1).empty()) << "never seen: not held";
   hold.seen(leaf, 3);
   hold.seen(sibling, 3);
-  EXPECT_EQ(hold.held(r, all, prev, {}, 7), prev) << "seen in frame 3, K = 4: kept through frame 7";
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 4).empty()) << "seen in one frame only: not held";
+  hold.seen(leaf, 1);  // an older sighting changes nothing
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 4).empty());
+  hold.seen(leaf, 3);
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 4).empty()) << "the same frame twice is one sighting";
+  VisibilityHold late(h.size(), 4);
+  late.seen(leaf, 1);
+  late.seen(leaf, 20);
+  EXPECT_TRUE(late.held(r, all, prev, {}, 21).empty()) << "the sighting before was 19 frames earlier (> 4 K)";
+  hold = VisibilityHold(h.size(), 4);
+  for (uint32_t f : {1u, 3u}) {
+    hold.seen(leaf, f);
+    hold.seen(sibling, f);
+  }
+  EXPECT_EQ(hold.held(r, all, prev, {}, 7), prev) << "seen in frames 1 and 3, K = 4: kept through frame 7";
   EXPECT_TRUE(hold.held(r, all, prev, {}, 8).empty()) << "frame 8: five frames after the last sighting";
   const std::vector<uint32_t> found_leaf{leaf}, found_parent{parent};
   EXPECT_EQ(hold.held(r, all, prev, found_leaf, 5), std::vector<uint32_t>{sibling}) << "found ids are not held twice";
   EXPECT_TRUE(hold.held(r, all, prev, found_parent, 5).empty()) << "the parent's HLOD replaces its children";
+  hold.seen(parent, 4);
   hold.seen(parent, 5);
   EXPECT_TRUE(hold.held(r, all, found_parent, found_leaf, 6).empty()) << "a child found: its ancestor is not held";
   // Looking away from the node: outside the frustum, not held.
@@ -339,6 +354,7 @@ TEST(VisibilityHold, KeepsRecentlySeenNodesInTheFrustumAndNeverOverlapsFound) {
   const Camera away = Camera::look_at(c + glm::dvec3(0, 0, 50), c + glm::dvec3(0, 0, 100), {0, 1, 0}, 60, 1, 0.1, 1e4);
   EXPECT_TRUE(hold.held(r, away, std::vector<uint32_t>{leaf}, {}, 6).empty());
   VisibilityHold off(h.size(), 0);
+  off.seen(leaf, 2);
   off.seen(leaf, 3);
   EXPECT_TRUE(off.held(r, all, prev, {}, 3).empty()) << "K = 0 is off";
 }
