@@ -110,8 +110,10 @@ class SwitchNode {
     cameras_.emplace();
     skipper_.reset();
     budget_.reset();
+    hold_.reset();
     if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
     if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
+    if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
     step_.emplace(*g_.renderables, o_.config, o_.height);
     querier_.reset();
     querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
@@ -333,13 +335,18 @@ class SwitchNode {
   bool receive_stream(uint32_t frame, VisibleSet& visible, DiffReceiver& stream, std::vector<uint8_t>& drawn,
                       Clock::duration& waited, const std::optional<wire::Camera>& early) {
     bool cleared = false;  // full-sets mode: the frame's first message replaces the set
+    std::vector<uint32_t> before;  // full-sets mode with a hold: V' (sorted)
     bool have_camera = false;
     uint64_t expected_front = 0;
     auto start_frame = [&] {
       if (!have_camera)
         throw NodeFailure("frame " + std::to_string(frame) + ": switch node " + std::to_string(1 - o_.id) +
                           " sent its diff before its camera");
-      if (o_.config.full_sets && !cleared) visible.clear();
+      if (o_.config.full_sets && !cleared) {
+        // Full sets resend every id: only those not in V' were found visible (for the hold).
+        if (hold_) before.assign(visible.ids().begin(), visible.ids().end()), std::sort(before.begin(), before.end());
+        visible.clear();
+      }
       cleared = true;
     };
     for (bool first = true;; first = false) {
@@ -365,6 +372,10 @@ class SwitchNode {
         start_frame();
         if (!d->added.empty()) mark_tail();  // the last chunk with additions starts the OR tail
         if (auto err = stream.on_diff(visible, *d)) throw NodeFailure("desync: " + *err);
+        if (hold_)  // the other node found these visible in `frame` (added to V')
+          for (uint32_t id : d->added)
+            if (!o_.config.full_sets || !std::binary_search(before.begin(), before.end(), id))
+              hold_->seen(g_.renderables->node_of(id), frame);
         std::vector<uint32_t> fresh;
         for (uint32_t id : d->added)
           if (!drawn[id]) {
@@ -391,7 +402,8 @@ class SwitchNode {
 
   void hc_frame(uint32_t frame, const Camera& cam, VisibleSet& visible, uint32_t or_us, Clock::time_point hc_start) {
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_both(m); });
-    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr};
+    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
+                  hold_ ? &*hold_ : nullptr};
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
@@ -423,6 +435,7 @@ class SwitchNode {
     hlods_ += hc.stats.hlods;
     skipped_ += hc.tests_above_fronts;
     whole_ += hc.stats.whole;
+    held_ += hc.held;
   }
 
   // The query budget's prices, measured on this node (moving averages): a query = HC time per
@@ -448,7 +461,8 @@ class SwitchNode {
     auto r = rvg_->stats(), p = peer_->stats();
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
               << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
-              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us), sent " << r.sent.bytes
+              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << held_
+              << " renderables kept by the visibility hold), sent " << r.sent.bytes
               << " B to the render client and " << p.sent.bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
@@ -480,6 +494,8 @@ class SwitchNode {
   Clock::time_point tail_t0_;
   uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
+  std::optional<VisibilityHold> hold_;
+  uint64_t held_ = 0;  // renderables kept in V by the hold (summed over HC frames)
   Door door_;  // last: stopped first (it reads the connections above)
 };
 

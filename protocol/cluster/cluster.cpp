@@ -102,6 +102,8 @@ void add_hc_options(Cli& cli, HcChoices& c) {
   cli.option("occluder-pixels-per-triangle", &c.occluder_pixels_per_triangle, 0.0, 1e9,
              "OR and occluder fusion skip objects whose projected bounding sphere covers fewer pixels per "
              "triangle than this (dense small parts cost more to draw than they hide; 0: draw every one)");
+  cli.option("visibility-hold", &c.visibility_hold, 0, 255,
+             "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {

@@ -56,12 +56,17 @@ struct HcChoices {
   bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
   HcOrder order = HcOrder::near_first;
   bool occluder_fusion = true;     // draw what each batch found visible before the next batch
-  bool query_budget = true;        // accept subtrees whole where measured costs say queries do not pay
+  // Accept subtrees whole where measured costs say queries do not pay. Off by default (issue 15,
+  // docs/spikes.md): each node's choices follow its own timings, so the two nodes disagree and V
+  // alternates between a subtree's leaves and its visible ones: the main source of id churn.
+  bool query_budget = false;
+  int visibility_hold = 2;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
   // OR and fusion draw an object as an occluder only if it covers at least this many pixels per
   // triangle (OccluderSelection in common/culling.hpp; 0: every visible object).
   double occluder_pixels_per_triangle = 1.0;
 };
-// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --occluder-pixels-per-triangle.
+// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
+// --occluder-pixels-per-triangle.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
