@@ -288,8 +288,8 @@ class Client {
 
   const ClientOptions& o_;
   std::unique_ptr<Viewer> viewer_;  // --window
-  std::unique_ptr<BoxOverlay> overlay_;  // --window, O
   SceneGl g_;
+  std::unique_ptr<BoxOverlay> overlay_;  // --window, O; after g_: its GL objects go before the context
   std::vector<Camera> path_;
   std::unique_ptr<net::Connection> nodes_[2];
   std::map<uint32_t, Clock::time_point> sent_at_;
