@@ -38,6 +38,18 @@ std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullSt
   return out;
 }
 
+std::vector<uint32_t> occluded_leaves(const Hierarchy& h, const Camera& cam, std::span<const uint32_t> drawn_nodes) {
+  std::vector<uint8_t> drawn(h.size(), 0);
+  for (uint32_t n : drawn_nodes) drawn.at(n) = 1;
+  std::vector<uint32_t> out;
+  for (uint32_t leaf : frustum_cull(h, cam)) {
+    bool covered = false;
+    for (uint32_t n = leaf; n != kNoNode && !covered; n = h.node(n).parent) covered = drawn[n];
+    if (!covered) out.push_back(leaf);
+  }
+  return out;
+}
+
 std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, OcclusionQueries& q,
                                     const std::function<void(uint32_t)>& on_visible, CullStats* stats) {
   // With tau = 0 every accepted node is a leaf at full detail (LOD data, if any, is never used):
@@ -139,7 +151,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       } else if (sel.satisfies(id)) {
         r = id;
         ++st.hlods;
-      } else if (few_pixels) {
+      } else if (few_pixels && sel.hlod_allowed(id)) {
         r = id;
         ++st.hlods;
         ++st.pixel_stops;
@@ -174,6 +186,28 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
     if (o.occluders && !accepted.empty()) o.occluders(accepted);
   }
   if (o.budget) o.budget->end_traversal();
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<uint32_t> VisibilityHold::held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
+                                           std::span<const uint32_t> found, uint32_t frame) const {
+  std::vector<uint32_t> out;
+  if (frames_ == 0 || prev.empty()) return out;
+  const Hierarchy& h = r.hierarchy();
+  // 1: a node of found; 2: a strict ancestor of one.
+  std::vector<uint8_t> mark(h.size(), 0);
+  for (uint32_t id : found) mark[r.node_of(id)] = 1;
+  for (uint32_t id : found)
+    for (uint32_t p = h.node(r.node_of(id)).parent; p != kNoNode && mark[p] == 0; p = h.node(p).parent) mark[p] = 2;
+  const Frustum fr = cam.frustum();
+  for (uint32_t id : prev) {
+    const uint32_t n = r.node_of(id);
+    if (mark[n] != 0 || !recent(n, frame) || fr.classify(h.node(n).box) == Containment::Outside) continue;
+    bool under_found = false;
+    for (uint32_t p = h.node(n).parent; p != kNoNode && !under_found; p = h.node(p).parent) under_found = mark[p] == 1;
+    if (!under_found) out.push_back(id);
+  }
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -265,6 +299,26 @@ std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_
   std::sort(items.begin(), items.end());
   items.erase(std::unique(items.begin(), items.end()), items.end());
   return items;
+}
+
+bool OccluderSelection::worth(const Aabb& box, uint64_t triangles, const Camera& cam,
+                              double viewport_height_px) const {
+  if (!(min_pixels_per_triangle > 0) || triangles == 0) return true;
+  const double radius_px =
+      projected_error_px(0.5 * box.diagonal(), std::sqrt(box.distance2(cam.eye)), viewport_height_px, cam.fovy_rad);
+  if (!std::isfinite(radius_px)) return true;  // eye in or on the box
+  const double viewport_px = viewport_height_px * viewport_height_px * cam.aspect;
+  const double area_px = std::min(3.14159265358979 * radius_px * radius_px, viewport_px);
+  return area_px >= min_pixels_per_triangle * double(triangles);
+}
+
+void OccluderSelection::filter(std::vector<uint32_t>& ids, const Renderables& r, const Camera& cam,
+                               double viewport_height_px) const {
+  if (!(min_pixels_per_triangle > 0)) return;
+  const Hierarchy& h = r.hierarchy();
+  std::erase_if(ids, [&](uint32_t id) {
+    return !worth(h.node(r.node_of(id)).box, r.triangles(id), cam, viewport_height_px);
+  });
 }
 
 }  // namespace occ

@@ -107,8 +107,51 @@ class QueryBudget {
   double ms_per_query_ = 0, ms_per_triangle_ = 0;
 };
 
+// Hysteresis for the visible set (issue 15): a node HC found visible (in two frames, see recent())
+// stays in V for up to `frames` frames after the last frame it was seen, while it stays in the
+// frustum. Leaves that
+// flicker in and out of V between frames (a query that passes in one node's depth buffer and not
+// in the other's, a leaf seen through a gap every other frame) then cost no ids on the wire and
+// no re-draws at the edges of their visibility. Keeping more than is visible is conservative:
+// frames never change. Node-local state: each switch node records what its own HC found and the
+// additions it receives from the other node (an added id was found visible); what it cannot
+// know (the other node's kept ids) only shortens the hold.
+class VisibilityHold {
+ public:
+  VisibilityHold(size_t nodes, uint32_t frames) : frames_(frames), last_(nodes, 0), prev_(nodes, 0) {}
+  uint32_t frames() const { return frames_; }
+  // `node` was found visible in `frame`.
+  void seen(uint32_t node, uint32_t frame) {
+    if (frame + 1 <= last_.at(node)) return;
+    prev_[node] = last_[node];
+    last_[node] = frame + 1;
+  }
+  // Seen in one of the `frames` frames before `frame` (or in it), and once more before that within
+  // 4 x `frames` frames. A node seen in one frame only is not held: a set that exploded for one
+  // frame (start-up, the eye leaving a closed room) is not carried into the next frames.
+  bool recent(uint32_t node, uint32_t frame) const {
+    const uint32_t l = last_.at(node), p = prev_[node];
+    return l != 0 && l - 1 + frames_ >= frame && p != 0 && p - 1 + 4 * frames_ >= frame;
+  }
+  // The renderables of `prev` (V_{f-1}, front-tracking coarsened) to keep in V_f beside `found`
+  // (HC's result, ascending): recently seen, box not outside the frustum, and neither the same
+  // node as, an ancestor of, nor a descendant of a node in `found` (V_f stays an antichain: one
+  // representation per part of the scene). Ascending.
+  std::vector<uint32_t> held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
+                             std::span<const uint32_t> found, uint32_t frame) const;
+
+ private:
+  uint32_t frames_;
+  std::vector<uint32_t> last_, prev_;  // per node: last / previous frame seen + 1 (0: never)
+};
+
 // Leaves whose boxes are not outside the frustum, in ascending id order.
 std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats = nullptr);
+
+// What occlusion culling removed (render_client --window's O overlay): the non-empty leaves
+// frustum_cull keeps for `cam` that neither are nor descend from any of `drawn_nodes` (the
+// hierarchy nodes of a visible set: leaves, or interior nodes drawn at their HLOD). Ascending.
+std::vector<uint32_t> occluded_leaves(const Hierarchy& h, const Camera& cam, std::span<const uint32_t> drawn_nodes);
 
 // HardwareCull: breadth-first, one level at a time. For every node of a level: frustum test,
 // then either visible_without_query() or an occlusion query; all queries of the level are issued
@@ -166,6 +209,20 @@ struct HcOptions {
 // returns exactly hardware_cull's leaves.
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, const HcOptions& o = {});
+
+// Occluder selection, for the OR pass and occluder fusion: drawing an object as an occluder costs
+// its triangles, and what it can hide is bounded by the pixels it covers. An object is drawn as
+// an occluder when its projected bounding sphere (radius: half the box diagonal, at the box's
+// nearest point) covers at least min_pixels_per_triangle pixels per triangle; dense small
+// geometry (bolts, pipe runs far away) costs the OR more than it can hide. The eye in or on the
+// box always keeps it. Drawing fewer occluders leaves depth farther, so queries find more
+// visible, never less: conservative. 0 keeps every object.
+struct OccluderSelection {
+  double min_pixels_per_triangle = 0;
+  bool worth(const Aabb& box, uint64_t triangles, const Camera& cam, double viewport_height_px) const;
+  // Removes from `ids` (renderable ids) the objects not worth drawing as occluders.
+  void filter(std::vector<uint32_t>& ids, const Renderables& r, const Camera& cam, double viewport_height_px) const;
+};
 
 // The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
 // identically in every renderer).

@@ -61,6 +61,7 @@ class Hierarchy {
   uint64_t fingerprint() const { return fingerprint_; }
 
  private:
+  friend struct SceneCacheIo;  // scene_cache.cpp: saves and restores a built hierarchy
   std::vector<HNode> nodes_;
   std::vector<Item> items_;
   BuildParams params_;

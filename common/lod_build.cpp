@@ -2,10 +2,14 @@
 // A change to what it builds needs kCacheVersion (lod_cache.cpp) bumped.
 #include "common/lod_data.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <exception>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <unordered_map>
 
@@ -73,9 +77,20 @@ struct LodBuilder {
     std::atomic<size_t> finished{0};  // slots and HLODs built, by both threads
     const double t0 = now_ms();
     double last_print = -1e9;
+    double last_line = t0;
+    const bool tty = isatty(STDERR_FILENO);
     auto tick = [&](const char* phase) {
       const size_t done = finished.load();
       const double t = now_ms();
+      // In a log file (no terminal): a plain line every 10 s, so a long first build shows it is
+      // alive and how far it got.
+      if (!label.empty() && !tty && t - last_line >= 10000 && done != total) {
+        last_line = t;
+        const double frac = double(done) / double(std::max<size_t>(total, 1));
+        std::fprintf(stderr, "%s: building LODs: %zu/%zu nodes (%s, %.0f %%), %.0f s, ETA %.0f s\n", label.c_str(),
+                     done, total, phase, 100.0 * frac, (t - t0) / 1000.0,
+                     frac > 0 ? (t - t0) * (1 - frac) / frac / 1000.0 : 0.0);
+      }
       if (label.empty() || (t - last_print < 200 && done != total)) return;
       last_print = t;
       const double frac = double(done) / double(std::max<size_t>(total, 1));
@@ -210,6 +225,33 @@ uint64_t LodData::bytes() const {
   for (const auto& m : cluster_lods_) mesh(m);
   for (const auto& m : hlods_) mesh(m);
   return b + item_slot_.size() * 4 + hlod_of_node_.size() * 4 + errors_.size() * sizeof(errors_[0]);
+}
+
+void LodMesh::release_geometry() {
+  if (released) return;
+  released_triangles = indices.size() / 3;
+  released = true;
+  std::vector<glm::vec3>().swap(positions);
+  std::vector<glm::vec3>().swap(normals);
+  std::vector<uint32_t>().swap(objects);
+  std::vector<uint32_t>().swap(indices);
+}
+
+void LodData::release(const LodMesh& m) {
+  auto owns = [&](const std::vector<LodMesh>& v) { return !v.empty() && &m >= v.data() && &m < v.data() + v.size(); };
+  if (owns(cluster_lods_))
+    cluster_lods_[size_t(&m - cluster_lods_.data())].release_geometry();
+  else if (owns(hlods_))
+    hlods_[size_t(&m - hlods_.data())].release_geometry();
+  else
+    throw std::logic_error("LodData::release: not one of this LodData's meshes");
+}
+
+bool LodData::geometry_released() const {
+  auto any = [](const std::vector<LodMesh>& v) {
+    return std::any_of(v.begin(), v.end(), [](const LodMesh& m) { return m.released; });
+  };
+  return any(cluster_lods_) || any(hlods_);
 }
 
 uint64_t LodData::total_triangles() const {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/hash.hpp"
+#include "common/mapped_file.hpp"
 #include "common/progress.hpp"
 
 namespace occ {
@@ -64,6 +65,7 @@ class Reader {
     return true;
   }
   bool done() const { return off_ == n_; }
+  size_t offset() const { return off_; }
 
  private:
   const uint8_t* p_;
@@ -133,6 +135,7 @@ void LodData::finish_hash() {
 }
 
 std::optional<std::string> LodData::save(const std::string& path) const {
+  if (geometry_released()) return "its meshes were released after upload";
   std::vector<uint8_t> payload = serialize(cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
   Writer head;
   head.pod(kCacheMagic);
@@ -168,19 +171,17 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
     if (why) *why = w;
     return std::nullopt;
   };
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return fail("missing");
-  // One read of the whole file into a buffer of its size (not byte by byte into a growing
-  // vector: at plant:40 that took a minute and twice the file in memory); parsed in place.
-  const std::streamoff file_size = in.tellg();
-  if (file_size < 0) return fail("cannot read");
-  std::vector<uint8_t> bytes(static_cast<size_t>(file_size));
-  in.seekg(0);
-  if (!bytes.empty() && !in.read(reinterpret_cast<char*>(bytes.data()), file_size)) return fail("cannot read");
+  std::string ignored;
+  // Parsed straight from a read-only mapping; the pages already hashed or parsed are dropped as
+  // it goes (mapped_file.hpp), so loading costs about the LOD data, not the data plus the file.
+  MappedFile file;
+  if (!file.open(path, why ? why : &ignored)) return std::nullopt;
+  const uint8_t* const bytes = file.data();
+  const size_t file_size = file.size();
   constexpr size_t kHead = 8 + 4 + 8 + 8 + 8;
-  if (bytes.size() < kHead) return fail("truncated header (" + std::to_string(bytes.size()) + " bytes)");
-  if (std::memcmp(bytes.data(), kCacheMagic, 8) != 0) return fail("bad magic (not an occswitch LOD cache)");
-  Reader head(bytes.data() + 8, kHead - 8);
+  if (file_size < kHead) return fail("truncated header (" + std::to_string(file_size) + " bytes)");
+  if (std::memcmp(bytes, kCacheMagic, 8) != 0) return fail("bad magic (not an occswitch LOD cache)");
+  Reader head(bytes + 8, kHead - 8);
   uint32_t version = 0;
   uint64_t key = 0, size = 0, hash = 0;
   head.pod(version);
@@ -190,27 +191,45 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   if (version != kCacheVersion)
     return fail("format version " + std::to_string(version) + ", expected " + std::to_string(kCacheVersion));
   if (key != expected_key) return fail("stale (built for another scene, hierarchy or LOD parameters)");
-  if (size != bytes.size() - kHead)
-    return fail("truncated or padded payload (" + std::to_string(bytes.size() - kHead) + " bytes, header says " +
+  if (size != file_size - kHead)
+    return fail("truncated or padded payload (" + std::to_string(file_size - kHead) + " bytes, header says " +
                 std::to_string(size) + ")");
-  const uint8_t* const payload = bytes.data() + kHead;
-  const size_t payload_size = bytes.size() - kHead;
-  if (payload_hash(payload, payload_size) != hash) return fail("checksum mismatch (corrupt)");
+  const uint8_t* const payload = bytes + kHead;
+  const size_t payload_size = file_size - kHead;
+  {  // = payload_hash(payload, payload_size) (Hasher::bytes), in steps that drop what they read
+    Hasher hs;
+    hs.u64(payload_size);
+    size_t off = 0;
+    for (; payload_size - off >= 8; off += 8) {
+      uint64_t w;
+      std::memcpy(&w, payload + off, 8);
+      hs.u64(w);
+      if ((off & ((size_t(32) << 20) - 1)) == 0) file.drop_before(kHead + off, 0);
+    }
+    uint64_t tail = 0;
+    if (payload_size > off) std::memcpy(&tail, payload + off, payload_size - off);
+    hs.u64(tail);
+    if (hs.value() != hash) return fail("checksum mismatch (corrupt)");
+  }
   LodData d;
   d.key_ = key;
   Reader r(payload, payload_size);
   uint64_t nc = 0, nh = 0;
   if (!r.pod(nc) || nc > payload_size) return fail("corrupt cluster LOD count");
   d.cluster_lods_.resize(nc);
-  for (auto& m : d.cluster_lods_)
+  for (auto& m : d.cluster_lods_) {
     if (!read_mesh(r, m, scene.objects.size())) return fail("corrupt cluster LOD mesh");
+    file.drop_before(kHead + r.offset());
+  }
   if (!r.vec(d.item_slot_) || d.item_slot_.size() != h.items().size()) return fail("corrupt item table");
   for (uint32_t s : d.item_slot_)
     if (uint64_t(s + 1) * kLeafLodLevels > nc) return fail("item slot out of range");
   if (!r.pod(nh) || nh > payload_size) return fail("corrupt HLOD count");
   d.hlods_.resize(nh);
-  for (auto& m : d.hlods_)
+  for (auto& m : d.hlods_) {
     if (!read_mesh(r, m, scene.objects.size())) return fail("corrupt HLOD mesh");
+    file.drop_before(kHead + r.offset());
+  }
   if (!r.vec(d.hlod_of_node_) || d.hlod_of_node_.size() != h.size()) return fail("corrupt node table");
   for (uint32_t x : d.hlod_of_node_)
     if (x != kNoNode && x >= nh) return fail("HLOD index out of range");

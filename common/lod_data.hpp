@@ -13,6 +13,7 @@
 //     it keeps normals and colours: lod_simplify.hpp.
 #pragma once
 #include <array>
+#include <limits>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -41,7 +42,12 @@ struct LodMesh {
   std::vector<uint32_t> objects;        // HLOD: source object of each vertex (its colour); leaf: empty
   std::vector<uint32_t> indices;        // triangle list
   double error = 0;                     // object-space error (leaf LOD: mesh space; HLOD: world)
-  uint64_t triangles() const { return indices.size() / 3; }
+  // After release_geometry() (the GL driver holds the only copy) the arrays are empty; the
+  // triangle count stays.
+  bool released = false;
+  uint64_t released_triangles = 0;
+  uint64_t triangles() const { return released ? released_triangles : indices.size() / 3; }
+  void release_geometry();  // frees positions, normals, objects and indices; idempotent
 };
 
 class LodData {
@@ -77,11 +83,22 @@ class LodData {
   double error(uint32_t node, uint32_t level) const { return errors_[node][level]; }
   // The coarsest representation's error (leaf level 3, interior HLOD).
   double coarsest_error(uint32_t node) const { return errors_[node][kLeafLodLevels]; }
+  // An interior node whose HLOD must never be drawn (its subtree holds BLEND items, which an
+  // opaque HLOD would turn into occluders): its error becomes infinite, so no tau accepts it and
+  // the traversal refines it. In memory only: not part of the cache or its hash (every process
+  // decides the same from the same scene).
+  void forbid_hlod(uint32_t node);
+  bool hlod_allowed(uint32_t node) const { return hlod_of_node_[node] != kNoNode && errors_[node][0] < kForbidden; }
+  static constexpr double kForbidden = std::numeric_limits<double>::infinity();
 
   const std::vector<LodMesh>& cluster_lods() const { return cluster_lods_; }
   const std::vector<uint32_t>& item_slots() const { return item_slot_; }
   const std::vector<LodMesh>& hlods() const { return hlods_; }
   uint64_t bytes() const;            // memory held by the meshes
+  // Frees the arrays of one of this data's meshes (cluster_lods() or hlods()) once uploaded.
+  // save() and the simplifier need them: a LodData with released meshes cannot be saved.
+  void release(const LodMesh& m);
+  bool geometry_released() const;
   uint64_t total_triangles() const;  // in all LODs and HLODs
 
  private:

@@ -91,4 +91,27 @@ uint32_t LodSelector::coarsest(uint32_t node) const {
   return h_.node(node).leaf() ? r_.id(node, kLeafLodLevels) : node;
 }
 
+void LodData::forbid_hlod(uint32_t node) { errors_[node].fill(kForbidden); }
+
+uint32_t forbid_blended_hlods(LodData& lod, const Scene& scene, const Hierarchy& h) {
+  std::vector<uint8_t> forbidden(h.size(), 0);
+  for (uint32_t id = 0; id < h.size(); ++id) {
+    const HNode& n = h.node(id);
+    if (!n.leaf()) continue;
+    bool blended = false;
+    for (uint32_t i = n.first_item; i < n.first_item + n.item_count && !blended; ++i) {
+      const Material* m = scene.material_of(scene.objects[h.items()[i].object].mesh);
+      blended = m && m->alpha_mode == AlphaMode::Blend;
+    }
+    for (uint32_t p = n.parent; blended && p != kNoNode && !forbidden[p]; p = h.node(p).parent) forbidden[p] = 1;
+  }
+  uint32_t count = 0;
+  for (uint32_t id = 0; id < h.size(); ++id)
+    if (forbidden[id]) {
+      lod.forbid_hlod(id);
+      ++count;
+    }
+  return count;
+}
+
 }  // namespace occ

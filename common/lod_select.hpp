@@ -37,6 +37,11 @@ struct LodBenefit {
 };
 LodBenefit lod_benefit(const LodData& lod, const Hierarchy& h);
 
+// Forbids the HLOD of every interior node whose subtree holds an item with a BLEND material (an
+// HLOD is drawn opaque and would occlude what the glass shows); returns how many. Call on
+// loaded LOD data before selecting.
+uint32_t forbid_blended_hlods(LodData& lod, const Scene& scene, const Hierarchy& h);
+
 // The renderable-id space (see the design above). Works without LodData (tau = 0): the same ids
 // exist, only level-0 leaves are ever used.
 class Renderables {
@@ -73,6 +78,8 @@ class LodSelector {
   double error_px(uint32_t node, uint32_t level) const;
   // Interior: its HLOD meets tau. Leaf: always (level 0 does).
   bool satisfies(uint32_t node) const;
+  // Whether interior node `node` may be drawn as its HLOD (has one, not forbidden).
+  bool hlod_allowed(uint32_t node) const { return r_.lod() && r_.lod()->hlod_allowed(node); }
   // Leaf: the coarsest level whose error meets tau (0 when tau = 0 or no LOD data).
   uint32_t leaf_level(uint32_t node) const;
   // The renderable a visible accepted node is drawn as (interior: its HLOD; leaf: leaf_level).

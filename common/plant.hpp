@@ -23,6 +23,9 @@ constexpr double kLevelHeight = 6.0;   // floor to floor
 constexpr int kLevels = 4;             // levels (the roof is at kLevels * kLevelHeight)
 constexpr double kMinMillions = 0.01;  // limits of M (millions of triangles)
 constexpr double kMaxMillions = 200.0;
+// Goes into the scene cache key (scene_cache.hpp): bump it whenever generate_plant's output
+// changes, or a cache written by the old generator would be used.
+constexpr uint32_t kGeneratorVersion = 1;
 
 struct PlantParams {
   double millions = 1.0;  // target triangle count / 1e6 (the result is within a few %)

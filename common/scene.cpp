@@ -2,15 +2,34 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 #include "common/hash.hpp"
 
 namespace occ {
 
 Aabb Mesh::box() const {
+  if (released) return released_box;
   Aabb b;
   for (uint32_t i : indices) b.grow(glm::dvec3(positions[i]));
   return b;
+}
+
+void Mesh::release_geometry() {
+  if (released) return;
+  released_box = box();
+  released_triangles = indices.size() / 3;
+  released_vertices = positions.size();
+  released = true;
+  std::vector<glm::vec3>().swap(positions);
+  std::vector<glm::vec3>().swap(normals);
+  std::vector<uint32_t>().swap(indices);
+  std::vector<glm::vec2>().swap(uvs);
+  std::vector<uint32_t>().swap(colors);
+}
+
+bool Scene::geometry_released() const {
+  return std::any_of(meshes.begin(), meshes.end(), [](const Mesh& m) { return m.released; });
 }
 
 Aabb Scene::bounds() const {
@@ -37,6 +56,8 @@ const char* alpha_mode_name(AlphaMode m) {
 }
 
 uint64_t Scene::content_hash() const {
+  if (geometry_released())
+    throw std::logic_error("Scene::content_hash: the geometry of " + source + " was released after its upload");
   Hasher h;
   h.u64(meshes.size());
   for (const Mesh& m : meshes) {

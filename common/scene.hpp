@@ -72,8 +72,18 @@ struct Mesh {
                                    // (r in the low byte); multiplies the base colour
   uint32_t material = kNoMaterial; // index into Scene::materials
 
-  uint64_t triangle_count() const { return indices.size() / 3; }
+  // After release_geometry() the vertex and index arrays are gone (the GL driver holds the only
+  // copy); the counts, the box and the clusters stay.
+  bool released = false;
+  uint64_t released_triangles = 0, released_vertices = 0;
+  Aabb released_box;
+
+  uint64_t triangle_count() const { return released ? released_triangles : indices.size() / 3; }
+  uint64_t vertex_count() const { return released ? released_vertices : positions.size(); }
   Aabb box() const;  // mesh-space bounds of the referenced vertices
+  // Frees positions, normals, indices, uvs and colours (their memory, not just their size),
+  // keeping triangle_count(), vertex_count(), box() and clusters. Idempotent.
+  void release_geometry();
 };
 
 // One placed instance of a mesh.
@@ -94,8 +104,10 @@ struct Scene {
   Aabb bounds() const;               // world bounds of all objects
   uint64_t triangle_count() const;   // drawn triangles, counting every instance
   // Geometry, transforms and materials (what the renderers draw, also what decides occluders:
-  // BLEND objects never occlude), deterministic.
+  // BLEND objects never occlude), deterministic. Throws std::logic_error once a mesh's geometry
+  // has been released (the hierarchy fingerprint holds the hash from before).
   uint64_t content_hash() const;
+  bool geometry_released() const;  // any mesh released
   // The material of mesh m's primitive, or nullptr for kNoMaterial.
   const Material* material_of(uint32_t mesh) const {
     const uint32_t k = meshes[mesh].material;

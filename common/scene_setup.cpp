@@ -2,9 +2,12 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <optional>
 #include <iostream>
 
 #include "common/hash.hpp"
+#include "common/scene_cache.hpp"
 #include "common/scene_io.hpp"
 
 namespace occ {
@@ -18,25 +21,60 @@ void add_scene_options(Cli& cli, SceneOptions& o) {
   cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,
              "hierarchy: meshes above this many triangles are split into spatial clusters");
   cli.option("lod-cache", &o.lod_cache, "DIR",
-             "LOD/HLOD cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
+             "LOD/HLOD and scene cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
+  cli.choice<bool>("scene-cache", &o.scene_cache, {{"on", true}, {"off", false}},
+                   "keep plant:M scenes and their hierarchy in a binary cache in the --lod-cache folder");
 }
 
 LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, bool with_lod) {
   auto t0 = std::chrono::steady_clock::now();
-  LoadedScene ls{load_scene(opts.spec), {}};
-  auto t1 = std::chrono::steady_clock::now();
-  ls.hierarchy = Hierarchy::build(ls.scene, opts.build);
-  auto t2 = std::chrono::steady_clock::now();
+  LoadedScene ls;
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
-  char buf[512];
+  char buf[768];
+  const bool use_cache = opts.scene_cache && scene_cache_applies(opts.spec);
+  const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
+  const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build) : 0;
+  std::optional<CachedScene> cached;
+  if (use_cache) {
+    std::string why;
+    cached = load_scene_cache(cache_path, cache_key, &why);
+    if (!cached && why != "missing")
+      std::cerr << who << ": scene cache " << cache_path << " is unusable (" << why << "): rebuilding it\n";
+  }
+  auto t1 = t0, t2 = t0;
+  const bool from_cache = cached.has_value();
+  if (from_cache) {
+    ls.scene = std::move(cached->scene);
+    ls.hierarchy = std::move(cached->hierarchy);
+    cached.reset();
+    t1 = t2 = std::chrono::steady_clock::now();
+  } else {
+    ls.scene = load_scene(opts.spec);
+    t1 = std::chrono::steady_clock::now();
+    ls.hierarchy = Hierarchy::build(ls.scene, opts.build);
+    t2 = std::chrono::steady_clock::now();
+  }
   std::snprintf(buf, sizeof buf,
                 "%s: scene %s: %zu objects, %zu meshes, %.3f M triangles, %zu items, %zu nodes, depth %u, "
-                "fingerprint %016llx (load %.0f ms, build %.0f ms)",
+                "fingerprint %016llx (%s %.0f ms, build %.0f ms)",
                 who.c_str(), opts.spec.c_str(), ls.scene.objects.size(), ls.scene.meshes.size(),
                 ls.scene.triangle_count() / 1e6, ls.hierarchy.items().size(), ls.hierarchy.size(),
-                ls.hierarchy.depth(), static_cast<unsigned long long>(ls.hierarchy.fingerprint()), ms(t0, t1),
+                ls.hierarchy.depth(), static_cast<unsigned long long>(ls.hierarchy.fingerprint()),
+                from_cache ? ("read from scene cache " + cache_path + " in").c_str() : "load", ms(t0, t1),
                 ms(t1, t2));
   std::cerr << buf << "\n";
+  if (use_cache && !from_cache) {
+    const auto t3 = std::chrono::steady_clock::now();
+    if (auto err = save_scene_cache(cache_path, cache_key, ls.scene, ls.hierarchy)) {
+      std::cerr << who << ": warning: scene cache not written: " << *err << "\n";
+    } else {
+      std::error_code ec;
+      const auto bytes = std::filesystem::file_size(cache_path, ec);
+      std::snprintf(buf, sizeof buf, "%s: wrote scene cache %s (%.1f MB in %.0f ms)", who.c_str(), cache_path.c_str(),
+                    ec ? 0.0 : double(bytes) / 1e6, ms(t3, std::chrono::steady_clock::now()));
+      std::cerr << buf << "\n";
+    }
+  }
   ls.fingerprint = ls.hierarchy.fingerprint();
   if (with_lod) {
     ls.lod = std::make_unique<LodData>(
@@ -62,6 +100,9 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
                     static_cast<unsigned long long>(LodBenefit::kMinSavedTriangles));
       std::cerr << buf << "\n";
       ls.lod.reset();
+    } else if (const uint32_t n = forbid_blended_hlods(*ls.lod, ls.scene, ls.hierarchy)) {
+      std::cerr << who << ": " << n << " HLODs not used: their subtrees hold BLEND (transparent) objects, "
+                << "which an HLOD would draw opaque\n";
     }
   }
   return ls;

@@ -16,6 +16,7 @@ struct SceneOptions {
   BuildParams build;
   LodParams lod;
   std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod_cache.hpp)
+  bool scene_cache = true;  // --scene-cache on|off: plant:M scenes + hierarchy (scene_cache.hpp)
 };
 
 void add_scene_options(Cli& cli, SceneOptions& opts);
@@ -29,7 +30,9 @@ struct LoadedScene {
   uint64_t fingerprint = 0;
 };
 
-// Loads/generates the scene and builds the hierarchy; prints one summary line to stderr
+// Loads/generates the scene and builds the hierarchy, or reads both from the scene cache
+// (scene_cache.hpp: plant:M specs; a missing, stale or unusable cache is rebuilt and rewritten,
+// saying why); prints one summary line to stderr
 // prefixed by `who` ("scene: city: 6400 objects, 2.1M triangles, ..."). With `with_lod`, also
 // loads the LOD cache or builds it (progress bar on a terminal, a summary line). Throws InputError.
 LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, bool with_lod = false);

@@ -1,6 +1,7 @@
 #include "protocol/wire.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -26,6 +27,11 @@ std::string num(T v) {
 }
 
 // ---- little-endian writer / reader ----
+
+template <class T>
+struct is_byte_array : std::false_type {};
+template <size_t N>
+struct is_byte_array<std::array<uint8_t, N>> : std::true_type {};
 
 class Writer {
  public:
@@ -53,7 +59,7 @@ class Writer {
   void field(const T& v) {
     if constexpr (std::is_enum_v<T>)
       field(static_cast<std::underlying_type_t<T>>(v));
-    else if constexpr (std::is_array_v<T>)
+    else if constexpr (std::is_array_v<T> || is_byte_array<T>::value)
       for (const auto& e : v) field(e);
     else if constexpr (std::is_same_v<T, double>)
       f64(v);
@@ -103,7 +109,7 @@ class Reader {
       std::underlying_type_t<T> u;
       field(u);
       v = static_cast<T>(u);
-    } else if constexpr (std::is_array_v<T>) {
+    } else if constexpr (std::is_array_v<T> || is_byte_array<T>::value) {
       for (auto& e : v) field(e);
     } else if constexpr (std::is_same_v<T, double>) {
       v = f64();
@@ -118,11 +124,12 @@ class Reader {
 
 // ---- sizes ----
 
-constexpr uint32_t kHelloFixedBytes = 46;
+constexpr uint32_t kHelloFixedBytes = 79;
 constexpr uint32_t kCameraBytes = 100;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
 constexpr uint32_t kEndOfFrameBytes = 68;
 constexpr uint32_t kByeFixedBytes = 2;
+constexpr uint32_t kProofPayloadBytes = uint32_t(kProofBytes);
 constexpr uint32_t kResyncBytes = 12;
 
 // ---- field lists: the fixed-width fields of a message in wire order (the tables in wire.hpp).
@@ -132,7 +139,7 @@ constexpr uint32_t kResyncBytes = 12;
 // Hello between version and name_bytes.
 constexpr void hello_fields(auto& io, auto& m) {
   io(m.role, m.node_id, m.viewport_width_px, m.viewport_height_px, m.scene_fingerprint, m.arity,
-     m.leaf_items, m.cluster_triangles, m.config_hash);
+     m.leaf_items, m.cluster_triangles, m.config_hash, m.auth, m.nonce);
 }
 constexpr void camera_fields(auto& io, auto& m) {
   io(m.frame, m.eye, m.orientation, m.fovy_rad, m.aspect, m.near_dist, m.far_dist,
@@ -174,6 +181,7 @@ Bounds payload_bounds(Type t) {
     case Type::node_diff: return {kNodeDiffFixedBytes, kMaxPayloadBytes};
     case Type::end_of_frame: return {kEndOfFrameBytes, kEndOfFrameBytes};
     case Type::bye: return {kByeFixedBytes, kByeFixedBytes + uint32_t(kMaxReasonBytes)};
+    case Type::proof: return {kProofPayloadBytes, kProofPayloadBytes};
     case Type::resync: return {kResyncBytes, kResyncBytes};
   }
   return {0, 0};
@@ -245,6 +253,9 @@ std::optional<std::string> check(const Hello& m) {
   if (static_cast<uint8_t>(m.role) > static_cast<uint8_t>(Role::tool))
     return "unknown role " + num(static_cast<uint8_t>(m.role));
   if (auto e = viewport_error(m.viewport_width_px, m.viewport_height_px, 0)) return e;
+  if (static_cast<uint8_t>(m.auth) > static_cast<uint8_t>(Auth::cluster_key))
+    return "unknown auth " + num(static_cast<uint8_t>(m.auth));
+  if (m.auth == Auth::none && m.nonce != Nonce{}) return std::string("nonce without auth");
   return text_error("name", m.name, kMaxNameBytes);
 }
 
@@ -293,6 +304,7 @@ std::optional<std::string> check(const Bye& m) {
   return text_error("reason", m.reason, kMaxReasonBytes);
 }
 
+std::optional<std::string> check(const Proof&) { return std::nullopt; }
 std::optional<std::string> check(const Resync& m) {
   if (m.nodes != 1 && m.nodes != 2) return "frame " + num(m.frame) + ": nodes " + num(m.nodes) + ", expected 1 or 2";
   if (m.epoch == 0) return "frame " + num(m.frame) + ": epoch 0 (epochs start at 1)";
@@ -322,6 +334,7 @@ void put(Writer& w, const EndOfFrame& m) { end_of_frame_fields(w, m); }
 
 void put(Writer& w, const Bye& m) { w.str(m.reason); }
 
+void put(Writer& w, const Proof& m) { w(m.mac); }
 void put(Writer& w, const Resync& m) { resync_fields(w, m); }
 
 // Reads a u16-prefixed string; the caller has checked the fixed part.
@@ -376,6 +389,12 @@ Result<Message> get_bye(Reader& r) {
   return Message{Bye{std::move(*reason)}};
 }
 
+Result<Message> get_proof(Reader& r) {
+  Proof m;
+  r(m.mac);
+  return Message{m};
+}
+
 }  // namespace
 
 std::string_view type_name(Type t) {
@@ -385,6 +404,7 @@ std::string_view type_name(Type t) {
     case Type::node_diff: return "node_diff";
     case Type::end_of_frame: return "end_of_frame";
     case Type::bye: return "bye";
+    case Type::proof: return "proof";
     case Type::resync: return "resync";
   }
   return "unknown";
@@ -441,6 +461,7 @@ Result<Message> decode_payload(Type type, std::span<const uint8_t> payload) {
       case Type::node_diff: return get_node_diff(r);
       case Type::end_of_frame: return get_fields<EndOfFrame>(r, end_of_frame_fields);
       case Type::bye: return get_bye(r);
+      case Type::proof: return get_proof(r);
       case Type::resync: return get_fields<Resync>(r, resync_fields);
     }
     return Error{"unreachable"};
@@ -462,6 +483,15 @@ Result<Message> decode(std::span<const uint8_t> frame) {
     return Error{"trailing bytes: " + num(have - h->payload_bytes) + " after a " +
                  num(h->payload_bytes) + "-byte " + what};
   return decode_payload(h->type, frame.subspan(kHeaderBytes));
+}
+
+std::vector<uint8_t> proof_input(ProofDirection d, const Hello& prover, const Hello& verifier) {
+  const std::string_view label =
+      d == ProofDirection::connector ? "occswitch proof v1 connector" : "occswitch proof v1 acceptor";
+  std::vector<uint8_t> out(label.begin(), label.end());
+  Writer w(out);
+  w(prover.role, prover.node_id, verifier.role, verifier.node_id, verifier.nonce, prover.nonce);
+  return out;
 }
 
 std::vector<NodeDiff> chunk_node_diff(uint32_t frame, std::span<const uint32_t> added,

@@ -9,10 +9,11 @@
 //
 // Frame header (6 bytes)
 //   off size field
-//     0  u16  type            1 hello, 2 camera, 3 node_diff, 4 end_of_frame, 5 bye, 6 resync
+//     0  u16  type            1 hello, 2 camera, 3 node_diff, 4 end_of_frame, 5 bye, 6 proof,
+//                             7 resync
 //     2  u32  payload_bytes   <= kMaxPayloadBytes and within the type's size bounds below
 //
-// Hello (46 + name_bytes; 46..110) — first message on every connection, in both directions
+// Hello (79 + name_bytes; 79..143) — first message on every connection, in both directions
 //     0  u32  magic           kMagic 0x5753434F (bytes "OCSW")
 //     4  u16  version         kProtocolVersion
 //     6  u8   role            0 switch_node, 1 render_client, 2 tool
@@ -24,8 +25,10 @@
 //    28  u32  leaf_items
 //    32  u32  cluster_triangles
 //    36  u64  config_hash          ... and a hash of every other setting that must agree
-//    44  u16  name_bytes           <= kMaxNameBytes
-//    46  u8[] name                 for logs
+//    44  u8   auth                 0 none, 1 cluster key (HMAC-SHA256 challenge-response, below)
+//    45  u8[32] nonce              auth 1: fresh random bytes for this connection; auth 0: all zero
+//    77  u16  name_bytes           <= kMaxNameBytes
+//    79  u8[] name                 for logs
 //
 // Camera (100) — camera -> world rotation, camera looks down -Z, +Y up
 //     0  u32  frame
@@ -71,6 +74,9 @@
 //     0  u16  reason_bytes      <= kMaxReasonBytes
 //     2  u8[] reason
 //
+// Proof (32) — the cluster key proven (docs/security.md); only in the handshake, only with auth 1
+//     0  u8[32] mac             HMAC-SHA256(key, proof_input(direction, prover hello, verifier hello))
+//
 // Resync (12) — render client -> switch node, and back (the node's acknowledgement). The cluster
 // starts over at frame `frame` with empty visible sets (V_{frame-1} = V_{frame-2} = empty, fronts
 // from the root), as at frame 0: with nodes = 2 as the switch (node frame % 2 does HC(frame)), with
@@ -80,7 +86,20 @@
 //     0  u32  frame
 //     4  u32  epoch             >= 1
 //     8  u32  nodes             1 or 2
+//
+// Handshake (protocol/net/transport.hpp handshake()). C = the side that connected, A = the side
+// that accepted. C sends its Hello first; A answers with its Hello once it has C's (so a refusal,
+// e.g. "busy", can take the place of A's last message). With auth 0 on both sides that is all.
+// With auth 1 on both: C sends Proof(connector), A verifies it and answers Proof(acceptor) (or
+// Bye(reason) when it refuses C), C verifies that. A key on one side only is refused on both
+// sides. proof_input() (below) is the MAC'd message: a direction label, the prover's and the
+// verifier's role and node id, the verifier's nonce (the challenge) and the prover's own nonce:
+//     "occswitch proof v1 connector" (28 bytes) or "occswitch proof v1 acceptor" (27), ASCII
+//     u8 prover role, u8 prover node_id, u8 verifier role, u8 verifier node_id,
+//     u8[32] verifier nonce, u8[32] prover nonce
+// A's proof is sent only after C's verified, so A never MACs for a process without the key.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -95,7 +114,7 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 3;  // 2: EndOfFrame carries CPU times; 3: Resync
+constexpr uint16_t kProtocolVersion = 4;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
@@ -103,14 +122,21 @@ constexpr size_t kMaxReasonBytes = 1024;
 constexpr uint32_t kMaxViewportPx = 16384;
 constexpr uint32_t kDefaultDiffChunkIds = 100;  // the paper's buffer size b
 constexpr uint32_t kMaxDiffIds = (kMaxPayloadBytes - 12) / 4;  // ids in one NodeDiff
+constexpr size_t kNonceBytes = 32;
+constexpr size_t kProofBytes = 32;  // HMAC-SHA256
 
-enum class Type : uint16_t { hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5, resync = 6 };
-constexpr size_t kTypeCount = 6;
+enum class Type : uint16_t {
+  hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5, proof = 6, resync = 7
+};
+constexpr size_t kTypeCount = 7;
 constexpr size_t type_index(Type t) { return static_cast<size_t>(t) - 1; }  // 0..kTypeCount-1
 std::string_view type_name(Type t);  // "hello", ...; "unknown" for values outside the enum
 
 enum class Role : uint8_t { switch_node = 0, render_client = 1, tool = 2 };
 std::string_view role_name(Role r);  // "switch_node", ...; "unknown" outside the enum
+
+enum class Auth : uint8_t { none = 0, cluster_key = 1 };
+using Nonce = std::array<uint8_t, kNonceBytes>;
 
 struct Hello {
   Role role = Role::tool;
@@ -122,6 +148,8 @@ struct Hello {
   uint32_t leaf_items = 0;
   uint32_t cluster_triangles = 0;
   uint64_t config_hash = 0;
+  Auth auth = Auth::none;
+  Nonce nonce{};  // auth none: all zero
   std::string name;
   bool operator==(const Hello&) const = default;
 };
@@ -171,6 +199,15 @@ struct Bye {
   bool operator==(const Bye&) const = default;
 };
 
+struct Proof {
+  std::array<uint8_t, kProofBytes> mac{};
+  bool operator==(const Proof&) const = default;
+};
+
+// A refusal of a connector that is otherwise welcome, because the acceptor already serves its
+// slot: the Bye reason starts with this (switch node 1 retries on it; a render client gives up).
+inline constexpr const char* kByeBusy = "busy: ";
+
 struct Resync {
   uint32_t frame = 0;
   uint32_t epoch = 1;
@@ -178,7 +215,7 @@ struct Resync {
   bool operator==(const Resync&) const = default;
 };
 
-using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye, Resync>;
+using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye, Proof, Resync>;
 Type type_of(const Message& m);
 
 // The rules a decoded message must satisfy beyond its layout (finite camera values, unit
@@ -208,6 +245,12 @@ Result<Message> decode_payload(Type type, std::span<const uint8_t> payload);
 
 // Decodes exactly one whole frame (header + payload, no more, no less).
 Result<Message> decode(std::span<const uint8_t> frame);
+
+// The bytes a Proof's MAC covers (layout in the header comment): who proves (the side that
+// connected or the one that accepted), the prover's Hello and the verifier's Hello (their role,
+// node id and nonce are used).
+enum class ProofDirection : uint8_t { connector = 0, acceptor = 1 };
+std::vector<uint8_t> proof_input(ProofDirection d, const Hello& prover, const Hello& verifier);
 
 // Splits one frame's diff into NodeDiff messages of at most max_ids ids each (added first, then
 // removed; input order kept). No ids -> no messages. Throws std::invalid_argument unless

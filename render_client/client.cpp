@@ -19,6 +19,7 @@
 #include "common/error.hpp"
 #include "common/hash.hpp"
 #include "common/memory.hpp"
+#include "common/gl/box_overlay.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/startup.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -118,7 +119,12 @@ class Client {
       const net::Endpoint e = net::parse_endpoint("connect", text);
       auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
       if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
-      auto hello = net::handshake(*conn, mine_, {wire::Role::switch_node, std::nullopt}, Millis(o_.timeout_ms));
+      net::PeerExpectation expect{wire::Role::switch_node, std::nullopt};
+      expect.key = o_.key ? &*o_.key : nullptr;
+      auto hello = net::handshake(*conn, mine_, expect, Millis(o_.timeout_ms));
+      if (const size_t busy = hello ? std::string::npos : hello.error().find(wire::kByeBusy); busy != std::string::npos)
+        throw std::runtime_error("the cluster is busy: the switch node at " + text + " says " +
+                                 hello.error().substr(busy + std::string_view(wire::kByeBusy).size()));
       if (!hello) throw std::runtime_error(hello.error());
       NodeLink& slot = nodes_[hello->node_id & 1];
       if (slot.conn) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));
@@ -212,7 +218,9 @@ class Client {
         const net::Endpoint e = net::parse_endpoint("connect", address);
         auto conn = net::Connection::connect(e.host, e.port, Millis(20));
         if (!conn) continue;  // nothing listens there (yet)
-        auto hello = net::handshake(*conn, mine_, {wire::Role::switch_node, uint8_t(k)}, Millis(std::min(o_.timeout_ms, 5000)));
+        net::PeerExpectation expect{wire::Role::switch_node, uint8_t(k)};
+        expect.key = o_.key ? &*o_.key : nullptr;  // a keyed cluster takes back only a node with the key
+        auto hello = net::handshake(*conn, mine_, expect, Millis(std::min(o_.timeout_ms, 5000)));
         if (!hello) {  // logged by the connection; a stranger there is not asked again at once
           next_try[k] = Clock::now() + backoff[k];
           backoff[k] = std::min(backoff[k] * 2, Millis(5000));
@@ -308,6 +316,9 @@ class Client {
     if (wcam->frame >= path_.size() || !sent_at_.count(wcam->frame))
       throw fault("used camera " + std::to_string(wcam->frame) + " that was never sent");
     if (lockstep && wcam->frame != frame) throw fault("used camera " + std::to_string(wcam->frame) + " (lockstep)");
+    if (prev_camera_ && wcam->frame <= *prev_camera_)
+      throw fault("used camera " + std::to_string(wcam->frame) + ", not newer than frame " + std::to_string(frame - 1) +
+                  "'s camera " + std::to_string(*prev_camera_));
     if (auto err = viewport_mismatch(*wcam, {o_.width, o_.height})) throw fault("sent " + *err);
     Served s{*wcam, {}, r.wire_bytes};  // this frame's messages only (the io thread may read ahead)
     // Front tracking (switch_step.hpp): coarsen V_{f-1} for camera f exactly as the switch
@@ -341,15 +352,14 @@ class Client {
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
                      "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms",
-                     "mode"});
+                     "camera_gap", "mode"});
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes, or one of them alone after a failure): a
     // single occlusion_server sends plain diffs.
     const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), switch_ && o_.config.tracks_fronts());
-    if (lockstep)
-      while (next_camera_ < uint32_t(o_.lookahead) && have_camera(next_camera_)) send_camera(next_camera_++);
-    else if (have_camera(next_camera_))
-      send_camera(next_camera_++);
+    // `lookahead` cameras ahead, then one per frame received. Latest mode: the nodes take the
+    // newest camera after the previous frame's, so at most `lookahead` frames are ever in flight.
+    while (next_camera_ < uint32_t(o_.lookahead) && have_camera(next_camera_)) send_camera(next_camera_++);
     if (next_camera_ == 0) return;  // --window: the user quit before the first frame
     start_ = Clock::now();
     cpu_start_ = process_cpu_us();
@@ -371,15 +381,15 @@ class Client {
       if (served) {
         mode = resync_frame_ == frame ? Mode::resync : members() == 2 ? Mode::switch_ : Mode::single;
         cam_number = served->wcam.frame;
-        // Keep the nodes busy: the next camera goes out before this frame is rendered.
-        if (have_camera(next_camera_)) send_camera(next_camera_++);
-      } else if (lockstep) {  // camera `frame` was sent (lookahead >= 2); the next one goes out
-        cam_number = frame;
-        if (have_camera(next_camera_)) send_camera(next_camera_++);
-      } else {  // latest: the newest camera
-        if (have_camera(next_camera_)) send_camera(next_camera_++);
-        cam_number = next_camera_ - 1;
+      } else {  // lockstep: camera `frame` (sent: lookahead >= 1); latest: the newest camera sent
+        cam_number = lockstep ? frame : next_camera_ - 1;
       }
+      prev_camera_ = cam_number;
+      // Cameras newer than this frame's that were already sent (latest mode: what a slow
+      // render client lets pile up; lockstep: lookahead - 1).
+      const uint32_t camera_gap = next_camera_ - 1 - cam_number;
+      // Keep the nodes busy: the next camera goes out before this frame is rendered.
+      if (have_camera(next_camera_)) send_camera(next_camera_++);
       const Camera cam = served ? from_wire(served->wcam) : path_[cam_number];
       // 3. Render V_f (or the frustum set) with the camera of frame f.
       const Clock::time_point r0 = Clock::now();
@@ -397,13 +407,18 @@ class Client {
       const double latency_ms = ms_between(sent_at_[cam_number], shown);
       Image image;
       if (out.writes_images() || viewer_) image = g_.ctx->read_rgba();
-      if (out.writes_images()) out.write_frame(frame, image);
-      if (viewer_)
-        viewer_->show(cam, std::move(image),
-                      {latency_ms, ids.size(), leaf_count_, st.triangles, o_.config.pixel_error,
-                       mode == Mode::single    ? "degraded: one switch node"
-                       : mode == Mode::frustum ? "degraded: frustum culling"
-                                               : mode_name(mode)});
+      if (out.writes_images()) out.write_frame(frame, image);  // the frame itself, never the overlay
+      if (viewer_) {
+        HudStats hud{latency_ms, ids.size(), leaf_count_, st.triangles, o_.config.pixel_error, -1,
+                     mode == Mode::single    ? "degraded: one switch node"
+                     : mode == Mode::frustum ? "degraded: frustum culling"
+                                             : mode_name(mode)};
+        if (viewer_->overlay()) {
+          hud.occluded = long(draw_overlay(cam, ids));
+          image = g_.ctx->read_rgba();
+        }
+        viewer_->show(cam, std::move(image), hud);
+      }
       const wire::EndOfFrame eof = served ? served->eof : wire::EndOfFrame{};
       const uint64_t bytes = served ? served->bytes : 0;
       out.write_row({double(frame), double(cam_number), double(served ? k : -1), double(ids.size()),
@@ -412,7 +427,7 @@ class Client {
                      ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown), eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
                      (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
-                     eof.or_tail_us / 1000.0},
+                     eof.or_tail_us / 1000.0, double(camera_gap)},
                     {mode_name(mode)});
       ++mode_frames_[int(mode)];
       cpu_prev_shown_ = cpu_shown;
@@ -421,6 +436,7 @@ class Client {
       bytes_sum_ += bytes;
       tri_sum_ += st.triangles;
       latency_.push_back(latency_ms);
+      camera_gap_max_ = std::max(camera_gap_max_, camera_gap);
       hc_ms_ += eof.hc_us / 1000.0;
       or_ms_ += eof.or_us / 1000.0;
       rvg_ms_ += ms_between(r0, shown);
@@ -432,6 +448,19 @@ class Client {
       }
     }
     progress_done();
+  }
+
+  // The O overlay: tints the boxes of the leaves in the frustum that occlusion culling removed
+  // over the frame just drawn; returns how many.
+  size_t draw_overlay(const Camera& cam, const std::vector<uint32_t>& visible_ids) {
+    if (!overlay_) overlay_ = std::make_unique<BoxOverlay>(*g_.ctx);
+    std::vector<uint32_t> nodes;
+    for (uint32_t r : visible_ids) nodes.push_back(g_.renderables->node_of(r));
+    std::vector<Aabb> boxes;
+    for (uint32_t leaf : occluded_leaves(g_.hierarchy(), cam, nodes)) boxes.push_back(g_.hierarchy().node(leaf).box);
+    overlay_->draw(cam, boxes);
+    g_.ctx->gl().Finish();
+    return boxes.size();
   }
 
   void summary() const {
@@ -451,12 +480,14 @@ class Client {
     std::printf(
         "summary: frames=%zu mean_fps=%.2f median_fps=%.2f mean_bytes_per_frame=%.0f mean_visible=%.1f "
         "leaves=%zu culled_pct=%.1f mean_triangles=%.0f triangles_culled_pct=%.1f latency_ms_mean=%.1f "
-        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f peak_rss_mb=%ld\n",
+        "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f peak_rss_mb=%ld latency_frames=%.2f "
+        "camera_gap_max=%u\n",
         frames, 1000.0 * frames / wall_ms, 1000.0 / sorted_iv[frames / 2], double(bytes_sum_) / frames, mean_v,
         leaf_count_, 100.0 * (1.0 - mean_v / std::max<size_t>(leaf_count_, 1)), double(tri_sum_) / frames,
         100.0 * (1.0 - double(tri_sum_) / frames / std::max<uint64_t>(total_triangles_, 1)),
         std::accumulate(lat.begin(), lat.end(), 0.0) / frames, lat[std::min(frames - 1, frames * 95 / 100)],
-        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb());
+        hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb(),
+        std::accumulate(lat.begin(), lat.end(), 0.0) / wall_ms, camera_gap_max_);
     if (frames != mode_frames_[int(Mode::switch_)])
       std::printf("modes: switch=%zu resync=%zu single=%zu frustum=%zu resyncs=%u\n", mode_frames_[0],
                   mode_frames_[1], mode_frames_[2], mode_frames_[3], resyncs_);
@@ -465,6 +496,7 @@ class Client {
   const ClientOptions& o_;
   std::unique_ptr<Viewer> viewer_;  // --window
   SceneGl g_;
+  std::unique_ptr<BoxOverlay> overlay_;  // --window, O; after g_: its GL objects go before the context
   std::vector<Camera> path_;
   wire::Hello mine_;
   NodeLink nodes_[2];
@@ -474,6 +506,7 @@ class Client {
   bool need_resync_ = false;  // the nodes that are up start over at the next frame
   uint32_t epoch_ = 0, resyncs_ = 0, next_camera_ = 0;
   std::optional<uint32_t> resync_frame_;  // the frame of the last resync
+  std::optional<uint32_t> prev_camera_;   // the camera of the previous frame (cameras strictly increase)
   size_t mode_frames_[4] = {0, 0, 0, 0};
   // The rejoiner thread (rejoin_loop) and what it shares with the renderer thread.
   std::thread rejoiner_;
@@ -490,6 +523,7 @@ class Client {
   size_t leaf_count_ = 0;
   uint64_t total_triangles_ = 0, visible_sum_ = 0, bytes_sum_ = 0, tri_sum_ = 0;
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
+  uint32_t camera_gap_max_ = 0;
 };
 
 }  // namespace

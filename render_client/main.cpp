@@ -1,5 +1,9 @@
 // render_client: the RVG display client of the occlusion switch, or (--reference) the
 // single-process reference renderer.
+#include <string>
+
+#include "common/camera_path.hpp"
+
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
@@ -27,15 +31,19 @@ int main(int argc, char** argv) {
                "reference renderer: also write the scene as glTF (FILE.gltf + FILE.bin, geometry only)");
     cli.multi("connect", &o.connect, "HOST:PORT", "a switch node (give both, any order) or one occlusion_server");
     occ::add_cluster_options(cli, o.config);
-    cli.option("lookahead", &o.lookahead, 2, 64, "lockstep: cameras sent ahead of the displayed frame");
+    cli.option("lookahead", &o.lookahead, 1, 64,
+               "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
+               "in flight)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "
                      "restarted) or exit (status 1, naming node and frame: benchmarks)");
+    std::string key_file;
+    occ::add_key_option(cli, &key_file);
     cli.flag("window", &o.window,
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
-             "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, Esc quits");
+             "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, O culling overlay (occlusion-culled boxes tinted), Esc quits");
     cli.option("record", &o.record, "FILE.csv", "--window: write every camera shown as a --path CSV (replays the flight)");
     cli.option("save-path", &o.save_path, "FILE.csv", "write the camera path (e.g. a generated walk:N) as a --path CSV");
     if (!cli.parse(argc, argv)) return 0;
@@ -43,8 +51,15 @@ int main(int argc, char** argv) {
     if (o.path.empty()) o.path = o.window ? "interactive" : "walk:60";
     if (o.path == "interactive" && !o.window) throw occ::InputError("--path interactive needs --window");
     if (!o.record.empty() && !o.window) throw occ::InputError("--record needs --window");
+    if (o.path != "interactive") {  // a bad --path fails now, not after the scene has loaded
+      occ::Aabb unit;
+      unit.grow(glm::dvec3(0.0));
+      unit.grow(glm::dvec3(1.0));
+      occ::load_camera_path(o.path, unit, {o.width, o.height});
+    }
     if (o.reference) {
       if (!o.connect.empty()) throw occ::InputError("--connect makes no sense with --reference");
+      if (!key_file.empty()) throw occ::InputError("--cluster-key-file makes no sense with --reference");
       return occ::run_reference(o);
     }
     if (o.connect.empty() || o.connect.size() > 2)
@@ -52,6 +67,7 @@ int main(int argc, char** argv) {
           "give --connect twice (both switch nodes), once (an occlusion_server), or --reference (see render_client "
           "--help)");
     for (const auto& c : o.connect) occ::net::parse_endpoint("connect", c);  // fail before loading the scene
+    o.key = occ::load_cluster_key(key_file);
     return occ::run_cluster_client(o);
   });
 }

@@ -2,6 +2,7 @@
 // no culling or frustum culling: the ground truth every cluster frame is compared with) and the
 // RVG display client of the cluster.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,10 @@ struct ClientOptions {
   std::string save_scene;  // write the loaded scene as glTF (ditto, generated scenes included)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
-  int lookahead = 3;                 // lockstep: cameras sent ahead of the displayed frame
+  int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
   bool degrade = true;  // --on-node-failure degrade|exit (client.cpp)
+  std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   // --window (viewer.hpp)
   bool window = false;
   std::string record;  // every camera shown, as a path CSV

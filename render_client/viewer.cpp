@@ -75,7 +75,7 @@ void Viewer::start(const Aabb& bounds, const Viewport& vp) {
   nav_ = std::make_unique<Navigator>(home, bounds);
   std::cerr << "render_client: window open (" << (interactive_ ? "you drive" : "playing the path; any movement key takes over")
             << "): W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset, "
-               "P screenshot, Esc quits\n";
+               "P screenshot, O culling overlay, Esc quits\n";
   thread_ = std::thread([this] { run_window(); });
 }
 
@@ -121,6 +121,11 @@ bool Viewer::quit() const {
   return quit_;
 }
 
+bool Viewer::overlay() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return overlay_;
+}
+
 std::string Viewer::hud_line(const HudStats& h) const {
   const double fps = show_times_ms_.size() > 1
                          ? 1000.0 * double(show_times_ms_.size() - 1) / (show_times_ms_.back() - show_times_ms_.front())
@@ -131,6 +136,7 @@ std::string Viewer::hud_line(const HudStats& h) const {
                 h.latency_ms, h.visible, culled, double(h.triangles) / 1e6, h.tau, nav_->walking() ? "walk" : "fly",
                 interactive_ || taken_over_ ? "" : "  (path)");
   std::string s = buf;
+  if (h.occluded >= 0) s += "  overlay: " + std::to_string(h.occluded) + " occluded";
   if (!h.mode.empty() && h.mode != "switch") s = "[" + h.mode + "]  " + s;
   if (!message_.empty() && now_ms() < message_until_ms_) s = message_ + "  " + s;
   return s;
@@ -174,7 +180,10 @@ void Viewer::handle(const WindowEvent& ev) {
         screenshot_ = true;
       } else if (ev.key == WinKey::o) {
         overlay_ = !overlay_;
-        say("culling overlay: not implemented yet");
+        std::cerr << "render_client: culling overlay " << (overlay_ ? "on" : "off") << "\n";
+        say(!overlay_ ? "culling overlay off"
+                      : o_.reference ? "culling overlay: the reference renderer culls no occluded boxes"
+                                     : "culling overlay: occlusion-culled boxes in orange");
       }
       break;
     case T::key_up:

@@ -5,7 +5,8 @@
 //
 // Keys: W/A/S/D/Q/E move, arrows (or a left-button drag) look, Shift faster, wheel speed, F walk/fly,
 // R reset, P screenshot (OUT/screenshot_NNNN.png, NNNN = the frame's number in the recording and
-// in --out), O culling overlay (not implemented yet: says so), Esc or the close button quits.
+// in --out), O culling overlay (cluster: the boxes of the leaves in the frustum that occlusion
+// culling removed, tinted orange over the frame; the HUD counts them), Esc or the close button quits.
 // With a --path the path plays; any movement key, drag or R takes over (the run then goes on
 // until the user quits). With no --path (or --path interactive) the user drives from the start
 // of walk:1. While nothing moves, the reference renderer draws a new frame at most every 100 ms;
@@ -34,6 +35,7 @@ struct HudStats {
   size_t leaves = 0;       // leaves in the scene (culled % = 1 - visible / leaves)
   uint64_t triangles = 0;
   double tau = 0;          // pixel error
+  long occluded = -1;      // culling overlay on: leaves tinted (in the frustum, occlusion-culled); -1 off
   // Cluster: how this frame was culled (client.cpp: switch, resync, single, frustum); shown in
   // front of the line unless it is the normal "switch". Empty for the reference renderer.
   std::string mode;
@@ -58,6 +60,8 @@ class Viewer {
   // A frame was rendered with `cam`: show it, record the camera.
   void show(const Camera& cam, Image img, const HudStats& hud);
   bool quit() const;
+  // The culling overlay is on (O): tint the occlusion-culled boxes into the image given to show().
+  bool overlay() const;
   // Stops the window thread and writes --record. Throws InputError when the file cannot be written.
   void finish();
 

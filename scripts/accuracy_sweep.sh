@@ -14,7 +14,7 @@
 # (the error), so PNG writing does not count as frame time. The LOD cache goes to OUT/lod-cache.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
-scene="" path="walk" frames=150 width=640 height=480 out="out/accuracy"
+scene="" path="walk" frames=150 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/accuracy"
 taus="0 0.5 1 2 5 10 20"
 extra=()
 while [ $# -gt 0 ]; do

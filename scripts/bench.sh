@@ -22,20 +22,24 @@
 # stats.csv, logs and wrong.txt in OUT/<method>/; frames are deleted after the comparison unless
 # --keep-frames. Prints figures; asserts nothing about speed.
 #
-#   scripts/bench.sh --scene S [--path P] [--width W --height H] [--out DIR] [--model-delay-ms D]
-#                    [--keep-frames]
+#   scripts/bench.sh --scene S [--path P] [--frames N] [--width W --height H] [--out DIR]
+#                    [--model-delay-ms D] [--keep-frames]
+#
+# --path walk|orbit|fly gets --frames frames (default walk, 200); the viewport defaults to 512x512 as
+# everywhere.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
-scene="" path="walk:200" width=640 height=480 out="out/bench" model_delay_ms=0 keep_frames=0
+scene="" path="walk" frames=200 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/bench" model_delay_ms=0 keep_frames=0
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene|--path|--width|--height|--out|--model-delay-ms) occ_set "$@"; shift 2 ;;
+    --scene|--path|--frames|--width|--height|--out|--model-delay-ms) occ_set "$@"; shift 2 ;;
     --keep-frames) keep_frames=1; shift ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_unexpected "$1" ;;
   esac
 done
 [ -n "$scene" ] || occ_die "--scene is required"
+path=$(occ_frames_path "$path" "$frames")
 occ_require_bins render_client switch_node occlusion_server frame_diff
 mkdir -p "$out"
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}

@@ -112,7 +112,7 @@ def pvs_exact_ratio(nodes, exact):
                            else nodes[i] / max(exact[i]["exact_visible"], 1) for i in range(n))
 
 
-def summarize(out, delay_ms=0.0, gbit=1.0, lookahead=3):
+def summarize(out, delay_ms=0.0, gbit=1.0, lookahead=2):
     """One dict per method present in OUT, in table order."""
     exact = read_rows(f"{out}/none/stats.csv")
     results = []
@@ -311,7 +311,7 @@ def main(argv=None):
         c.add_argument("--check-model", dest="run_dir", required=True)
         c.add_argument("--model-delay-ms", type=float, default=0.0)
         c.add_argument("--model-gbit", type=float, default=1.0)
-        c.add_argument("--lookahead", type=int, default=3)
+        c.add_argument("--lookahead", type=int, default=2)
         a = c.parse_args(argv)
         return check_model(a.run_dir, a.model_delay_ms, a.model_gbit, a.lookahead)
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -322,7 +322,7 @@ def main(argv=None):
     p.add_argument("height")
     p.add_argument("--model-delay-ms", type=float, default=0.0, help="one-way delay per link for the model")
     p.add_argument("--model-gbit", type=float, default=1.0, help="link rate for the model, Gbit/s")
-    p.add_argument("--lookahead", type=int, default=3, help="the render client's camera lookahead (lockstep)")
+    p.add_argument("--lookahead", type=int, default=2, help="the render client's camera lookahead (lockstep)")
     a = p.parse_args(argv)
     if a.lookahead < 2:
         p.error("--lookahead must be at least 2")

@@ -2,14 +2,18 @@
 # Runs the occlusion-switch cluster on this machine: switch nodes 0 and 1 and the render client
 # on 127.0.0.1 with ephemeral ports (port files, no fixed ports). Prints the render client's
 # summary, keeps every process's log in the output folder, and exits non-zero if any process
-# failed or hung (bounded waits). Ctrl-C stops all three.
+# failed or hung (bounded waits): the first process to fail is named with its own error line and
+# the others are stopped at once. Ctrl-C stops all three.
 #
 #   scripts/cluster.sh --scene S [--path P] [--frames N] [--out DIR] [extra args]
 #
-# --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file.
+# --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file (a missing
+# file or an unknown kind is refused before anything starts). --lookahead N (render client,
+# default 2): cameras sent ahead, docs/latency.md.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P) and node-only ones
-# (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion), which go where they belong. OCC_BIN overrides the binaries' folder;
+# (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --query-budget,
+# --occluder-pixels-per-triangle, --visibility-hold), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
@@ -21,24 +25,28 @@
 # Ctrl-C or failure.
 # --window shows the frames in an X11 window ($DISPLAY) and lets you drive (render_client --help;
 # keys: W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset,
-# P screenshot, Esc quits). Without --path you drive from the start; with --path the path plays
+# P screenshot, O culling overlay, Esc quits). Without --path you drive from the start; with --path the path plays
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
+# Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
+# it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
+# names one to use instead.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file=""
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --scene|--path|--frames|--out|--link) occ_set "$@"; shift 2 ;;
     --netns) netns=1; shift ;;
+    --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --lookahead|--on-node-failure) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
     --*) occ_need_value "$@"; common+=("$1" "$2"); shift 2 ;;
@@ -53,6 +61,13 @@ if [ $window = 1 ]; then
 fi
 [ -n "$path" ] || path=walk
 path=$(occ_frames_path "$path" "$frames")
+# A missing path file or an unknown kind fails now, not after both nodes have loaded the scene
+# (the render client checks the file's contents as soon as it starts).
+case "$path" in
+  interactive|orbit:*|walk:*|fly:*) ;;
+  *:*) [ -e "$path" ] || occ_die "--path '$path': unknown kind '${path%%:*}' (expected orbit:N, walk:N, fly:N or a CSV file)" ;;
+  *) [ -r "$path" ] || occ_die "--path '$path': cannot open camera path file" ;;
+esac
 relay_args=()
 if [ -n "$link" ]; then
   IFS=: read -r l_delay l_rate l_jitter <<<"$link"
@@ -63,6 +78,13 @@ fi
 occ_require_bins switch_node render_client $([ -n "$link" ] && echo link_relay)
 mkdir -p "$out"
 rm -f "$out"/*.port "$out"/frame_*.png
+if [ -z "$key_file" ]; then  # a fresh random key per run, readable by this user only
+  key_file=$out/cluster.key
+  rm -f "$key_file"
+  (umask 077 && head -c 32 /dev/urandom | od -An -tx1 -v | tr -d ' \n' >"$key_file") ||
+    occ_die "cannot write the cluster key $key_file"
+fi
+common+=(--cluster-key-file "$key_file")
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 pids=()
@@ -106,10 +128,21 @@ if [ $netns = 1 ]; then
   [ -n "$link" ] && relay_args=(--delay-ms "$l_delay" --jitter-ms "${l_jitter:-0}")
 fi
 
+# The process's own error lines (its log's "error:" lines, else its last line) and where its log is.
+report_failure() {  # name why
+  local lines
+  lines=$(grep -m 3 '^error' "$out/$1.log" 2>/dev/null) || lines=$(tail -n 1 "$out/$1.log" 2>/dev/null)
+  echo "cluster: $1 $2 (log: $out/$1.log):" >&2
+  [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
+}
+
 wait_port() {  # file pid name (OCC_PORT_WAIT_S, default 60: big scenes load and build LODs first)
   for _ in $(seq 1 $((${OCC_PORT_WAIT_S:-60} * 10))); do
     [ -s "$1" ] && { cat "$1"; return 0; }
-    kill -0 "$2" 2>/dev/null || { echo "error: $3 exited before listening (see $out/$3.log)" >&2; return 1; }
+    if ! kill -0 "$2" 2>/dev/null; then
+      report_failure "$3" "exited before listening"
+      return 1
+    fi
     sleep 0.1
   done
   echo "error: $3 did not write its port file within ${OCC_PORT_WAIT_S:-60} s (set OCC_PORT_WAIT_S)" >&2; return 1
@@ -151,24 +184,39 @@ fi
 rvg_pid=$!
 pids+=($rvg_pid)
 
-# Bounded wait for all three (the relays are stopped afterwards).
+# Bounded wait for all three (the relays are stopped afterwards). The first process to fail is
+# reported with its own error line and the others are stopped at once (they would otherwise wait
+# for it until their --timeout-ms); once the render client is done the nodes get 30 s to finish.
 status=0
 deadline=$((SECONDS + MAX_SECONDS))
-for entry in "render_client:$rvg_pid" "node0:$node0_pid" "node1:$node1_pid"; do
-  name=${entry%%:*} pid=${entry##*:}
-  while kill -0 "$pid" 2>/dev/null && [ $SECONDS -lt $deadline ]; do sleep 0.2; done
-  if kill -0 "$pid" 2>/dev/null; then
-    echo "error: $name still running after its deadline: killed" >&2
+declare -A running=([render_client]=$rvg_pid [node0]=$node0_pid [node1]=$node1_pid)
+while [ ${#running[@]} -gt 0 ]; do
+  for name in render_client node0 node1; do
+    pid=${running[$name]:-}
+    [ -n "$pid" ] && ! kill -0 "$pid" 2>/dev/null || continue
+    wait "$pid"; rc=$?
+    unset "running[$name]"
+    [ "$name" = render_client ] && [ $deadline -gt $((SECONDS + 30)) ] && deadline=$((SECONDS + 30))
+    if [ $rc -ne 0 ]; then
+      report_failure "$name" "exited with status $rc"
+      status=1
+      if [ ${#running[@]} -gt 0 ]; then
+        echo "cluster: stopping$(for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done)" >&2
+        cleanup
+        for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
+        running=()
+      fi
+      break
+    fi
+  done
+  [ ${#running[@]} -gt 0 ] || break
+  if [ $SECONDS -ge $deadline ]; then
+    echo "error:$(for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done) still running after the deadline: killed" >&2
     cleanup; status=1
+    for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
+    break
   fi
-  wait "$pid"; rc=$?
-  if [ $rc -ne 0 ]; then
-    echo "cluster: $name exited with status $rc; last lines of $out/$name.log:" >&2
-    tail -n 5 "$out/$name.log" | sed 's/^/  /' >&2
-    status=1
-  fi
-  # Once the render client is done, give the nodes a short grace period.
-  [ "$name" = render_client ] && deadline=$((SECONDS + 30))
+  sleep 0.1
 done
 cleanup
 grep -h "^summary:" "$out/render_client.log" || true

@@ -44,6 +44,9 @@ occ_require_bins() {
   for b; do [ -x "$BIN/$b" ] || occ_die "$BIN/$b not built (run scripts/build.sh)"; done
 }
 
+# The one default viewport of every binary and script (the binaries' --width/--height defaults).
+OCC_WIDTH=512 OCC_HEIGHT=512
+
 # occ_frames_path PATH FRAMES: walk|orbit|fly get FRAMES frames (walk:FRAMES), other paths stay.
 occ_frames_path() {
   case "$1" in walk|orbit|fly) echo "$1:$2" ;; *) echo "$1" ;; esac

@@ -13,5 +13,5 @@ cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
 OUT=${OUT:-out/run}
-scripts/cluster.sh --scene city --path walk --frames 120 --width 640 --height 480 --out "$OUT" "$@"
+scripts/cluster.sh --scene city --path walk --frames 120 --out "$OUT" "$@"
 echo "run: frames, stats.csv and logs in $OUT"

@@ -12,6 +12,7 @@ PKGS=(
   libegl-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev libgl-dev   # headless GL: EGL + OSMesa (Mesa llvmpipe)
   libglm-dev                                               # vector math
   libboost-dev libboost-system-dev                         # Boost.Asio transport
+  libssl-dev                                               # cluster key: HMAC-SHA256 (OpenSSL libcrypto)
   libtinygltf-dev nlohmann-json3-dev libstb-dev            # glTF 2.0 loading (+ PNG via stb)
   libmeshoptimizer-dev                                     # simplifier for LOD/HLOD
   libgtest-dev libgmock-dev                                # tests

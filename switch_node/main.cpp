@@ -1,4 +1,6 @@
 // switch_node: one half of the occlusion switch. Run two (--id 0 and --id 1) and a render_client.
+#include <string>
+
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
@@ -20,11 +22,19 @@ int main(int argc, char** argv) {
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
     occ::add_hc_options(cli, o.hc);
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer or a message (for the next camera: twice this)");
+    std::string key_file;
+    occ::add_key_option(cli, &key_file);
+    cli.flag("serve", &o.serve,
+             "stay up for successive render clients, one at a time (both nodes need it); a second client while "
+             "one is served is told the cluster is busy");
+    cli.option("sessions", &o.sessions, 0, 1000000, "with --serve: exit after this many render clients (0 = never)");
     if (!cli.parse(argc, argv)) return 0;
+    if (o.sessions > 0 && !o.serve) throw occ::InputError("--sessions needs --serve");
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
     if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");
     occ::resolve_listen(o.listen);  // fail before loading the scene
     if (!o.peer.empty()) occ::net::parse_endpoint("peer", o.peer);
+    o.key = occ::load_cluster_key(key_file);
     return occ::run_switch_node(o);
   });
 }

@@ -1,7 +1,9 @@
 #include "switch_node/node.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <mutex>
 #include <optional>
 #include <cstdio>
 #include <iostream>
@@ -47,14 +49,36 @@ class SwitchNode {
 
   int run() {
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
-    if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
-    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
-    step_.emplace(*g_.renderables, o_.config, o_.height);
     g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
-    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
-    visible_ = VisibleSet(g_.renderables->count());
+    mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
+                       g_.hierarchy().params(), o_.config, who_);
+    // Both nodes keep their listener for the whole run: node 0 takes a restarted node 1 through it
+    // (the Door hands it over), and it tells a second render client the cluster is busy.
+    listener_.emplace(open_listener(who_, o_.listen));
+    if (!o_.serve) return session();
+    // --serve: one render client after the other, each in a session of its own (both nodes
+    // start it from scratch: new connections, including the link between the nodes, and fresh
+    // per-client state), until --sessions clients have been served (0: forever).
+    int failed = 0;
+    for (int n = 1;; ++n) {
+      const int code = session();
+      failed += code != 0;
+      if (o_.sessions > 0 && n >= o_.sessions) {
+        std::cerr << who_ << ": served " << n << " render clients (" << failed << " failed), as --sessions asked\n";
+        return failed ? 1 : 0;
+      }
+      std::cerr << who_ << ": render client " << n << (code ? " failed" : " done")
+                << "; waiting for the next one (--serve)\n";
+    }
+  }
+
+ private:
+  // One render client, from the connections to the summary. Returns 0 after the client's Bye.
+  int session() {
+    reset_client_state();
     connect();
-    cameras_in_.emplace(*rvg_, cameras_, Viewport{o_.width, o_.height});
+    door_.start(*this);  // from now on, a second render client is told the cluster is busy
+    cameras_in_.emplace(*rvg_, *cameras_, Viewport{o_.width, o_.height});
     int code = 0;
     try {
       loop();
@@ -75,36 +99,171 @@ class SwitchNode {
     if (code == 0 && peer_) peer_->close(wire::kByeDone);
     rvg_->close(code ? "failed" : wire::kByeDone);
     cameras_in_->join();
+    door_.stop();
+    {
+      std::lock_guard<std::mutex> lock(link_mu_);
+      if (rejoined_peer_) rejoined_peer_->close_with_error(who_ + ": the render client is gone");
+    }
     print_summary();
     return code;
   }
 
- private:
-  void connect() {
-    listener_.emplace(open_listener(who_, o_.listen));
+  // Everything that belongs to one render client starts afresh: connections, cameras, sets and
+  // diff streams, the query history of adaptive queries, the measured query budget, the
+  // visibility hold, statistics.
+  void reset_client_state() {
+    cameras_in_.reset();
+    set_peer(nullptr);
+    rvg_.reset();
+    {
+      std::lock_guard<std::mutex> lock(link_mu_);
+      rejoined_peer_.reset();
+    }
+    dropped_.clear();
+    cameras_.emplace();
+    skipper_.reset();
+    budget_.reset();
+    hold_.reset();
+    if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
+    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
+    if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
+    step_.emplace(*g_.renderables, o_.config, o_.height);
+    querier_.reset();
+    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
+    visible_ = VisibleSet(g_.renderables->count());
+    stream_ = DiffReceiver{};
+    last_camera_.reset();
+    peer_addr_.clear();
+    peer_fresh_ = single_ = false;
+    peer_lost_.clear();
+    next_poll_ = Clock::time_point{};
+    peer_sent_bytes_ = resyncs_ = single_frames_ = 0;
+    or_triangles_ = 0;
+    ms_per_query_ = ms_per_triangle_ = 0;
+    tail_cpu0_ = hc_cpu0_ = 0;
+    or_us_ = or_cpu_us_ = or_tail_cpu_us_ = or_tail_us_ = 0;
+    whole_ = frames_ = queries_ = skipped_ = pixel_stops_ = hlods_ = assumed_visible_ = held_ = 0;
+  }
+
+  net::PeerExpectation expect(std::optional<wire::Role> role, std::optional<uint8_t> node_id) const {
+    net::PeerExpectation e{role, node_id};
+    e.key = o_.key ? &*o_.key : nullptr;
+    return e;
+  }
+
+  // Why this node turns away a connector whose slot is taken (nullopt: it may have the slot).
+  std::optional<std::string> busy_reason(const wire::Hello& h) {
+    const bool is_node1 = o_.id == 0 && h.role == wire::Role::switch_node && h.node_id == 1;
+    const bool is_rvg = h.role == wire::Role::render_client;
+    if (!is_node1 && !is_rvg)
+      return "unexpected peer: " + std::string(wire::role_name(h.role)) + " " + std::to_string(h.node_id);
+    std::lock_guard<std::mutex> lock(link_mu_);  // peer_ changes during a session (rejoin)
+    const auto& slot = is_node1 ? peer_ : rvg_;
+    if (!slot || !slot->is_open()) return std::nullopt;
+    return std::string(wire::kByeBusy) + who_ + " is serving " +
+           (is_rvg ? "another render client (" + rvg_->peer() + ")" : "switch node 1 (" + peer_->peer() + ")") +
+           "; try again when it has finished";
+  }
+
+  // What the Door says to a connector during a session; nullopt only for a switch node 1 coming
+  // back (restarted) to node 0 while node 0's link to its peer is down: the session takes it over
+  // (poll_for_peer, follow) and the render client's Resync puts it back into the switch.
+  std::optional<std::string> door_reason(const wire::Hello& h) {
+    if (o_.id == 0 && h.role == wire::Role::switch_node && h.node_id == 1) {
+      std::lock_guard<std::mutex> lock(link_mu_);
+      if (!peer_ || !peer_->is_open()) {
+        if (!rejoined_peer_ || !rejoined_peer_->is_open()) return std::nullopt;
+        return std::string(wire::kByeBusy) + who_ + ": a restarted switch node 1 (" + rejoined_peer_->peer() +
+               ") is already waiting to rejoin";
+      }
+    }
+    auto why = busy_reason(h);
+    return why ? why
+               : std::optional<std::string>(std::string(wire::kByeBusy) + who_ +
+                                            " is serving a render client; try again when it has finished");
+  }
+
+  // The Door's handshake passed: a restarted switch node 1 (door_reason); the session takes it.
+  void hand_over_peer(net::Connection conn) {
+    auto c = std::make_unique<net::Connection>(std::move(conn));
+    std::cerr << who_ << ": " << other_ << " (" << c->peer() << ") is back; waiting for the render client's resync\n";
+    std::unique_ptr<net::Connection> stale;
+    std::lock_guard<std::mutex> lock(link_mu_);
+    stale = std::move(rejoined_peer_);  // closed (door_reason): destroyed after the lock
+    rejoined_peer_ = std::move(c);
+  }
+
+  std::unique_ptr<net::Connection> take_rejoined_peer() {
+    std::lock_guard<std::mutex> lock(link_mu_);
+    return std::move(rejoined_peer_);
+  }
+
+  // peer_ is written only by the session thread; the Door reads it under link_mu_.
+  void set_peer(std::unique_ptr<net::Connection> c) {
+    std::unique_ptr<net::Connection> old;
+    std::lock_guard<std::mutex> lock(link_mu_);
+    old = std::move(peer_);
+    peer_ = std::move(c);
+    if (old) dropped_.push_back(std::move(old));  // destroyed at the end: closing lingers up to 1.5 s
+  }
+
+  // Waits for a peer on the listener: for --timeout-ms, or (--serve) as long as it takes.
+  net::Peer accept(const net::PeerExpectation& e, const std::string& what) {
+    for (;;) {
+      auto p = listener_->accept_peer(mine_, e, Millis(o_.timeout_ms));
+      if (p) return std::move(*p);
+      if (!o_.serve) throw std::runtime_error(who_ + ": " + what + ": " + p.error());
+      if (p.error().find("no valid peer") == std::string::npos) {  // not a timeout: do not spin
+        std::cerr << who_ << ": " << what << ": " << p.error() << "\n";
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+    }
+  }
+
+  // Node 1: the link to node 0 (at start, and when a resync asks for the switch again). Node 0
+  // may still be finishing its last client (--serve), or not have noticed yet that its old link is
+  // gone: it says "busy" until then, and this retries for --timeout-ms.
+  void connect_peer() {
     const Millis timeout(o_.timeout_ms);
-    mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
-                       g_.hierarchy().params(), o_.config, who_);
+    const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
+    const auto deadline = Clock::now() + timeout;
+    for (;;) {
+      auto conn = net::Connection::connect(pe.host, pe.port, timeout);
+      if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
+      auto hello = net::handshake(*conn, mine_, expect(wire::Role::switch_node, uint8_t(0)), timeout);
+      if (hello) {
+        set_peer(std::make_unique<net::Connection>(std::move(*conn)));
+        peer_fresh_ = true;
+        peer_addr_ = peer_->peer();
+        return;
+      }
+      if (hello.error().find(wire::kByeBusy) == std::string::npos || Clock::now() > deadline)
+        throw std::runtime_error(who_ + ": " + hello.error());
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+
+  void connect() {
     if (o_.id == 1) {
-      connect_peer(timeout);
-      auto rvg = listener_->accept_peer(mine_, {wire::Role::render_client, std::nullopt}, timeout);
-      if (!rvg) throw std::runtime_error(who_ + ": no render client: " + rvg.error());
-      rvg_ = std::make_unique<net::Connection>(std::move(rvg->connection));
-      listener_.reset();  // node 1 connects to its peer; only node 0 takes a new one (rejoin)
+      connect_peer();
+      net::Peer rvg = accept(expect(wire::Role::render_client, std::nullopt), "no render client");
+      rvg_ = std::make_unique<net::Connection>(std::move(rvg.connection));
+      if (!peer_->is_open()) {  // node 0 went away while this node waited for the client (--serve)
+        std::cerr << who_ << ": the link to switch node 0 ended while waiting for the render client; reconnecting\n";
+        connect_peer();
+      }
     } else {
-      // Node 0 accepts both the render client and switch node 1, in whatever order they come.
-      while (!peer_ || !rvg_) {
-        auto p = listener_->accept_peer(mine_, {}, timeout);
-        if (!p) throw std::runtime_error(who_ + ": waiting for peers: " + p.error());
-        const bool is_node1 = p->hello.role == wire::Role::switch_node && p->hello.node_id == 1;
-        const bool is_rvg = p->hello.role == wire::Role::render_client;
-        auto& slot = is_node1 ? peer_ : rvg_;
-        if ((!is_node1 && !is_rvg) || slot) {
-          p->connection.close_with_error("unexpected peer: " + std::string(wire::role_name(p->hello.role)) + " " +
-                                         std::to_string(p->hello.node_id));
-          continue;
-        }
-        slot = std::make_unique<net::Connection>(std::move(p->connection));
+      // Node 0 accepts both the render client and switch node 1, in whatever order they come; a
+      // second of either (while the first is connected) is refused in the handshake.
+      net::PeerExpectation e = expect(std::nullopt, std::nullopt);
+      e.refuse = [this](const wire::Hello& h) { return busy_reason(h); };
+      while (!peer_ || !rvg_ || !peer_->is_open() || !rvg_->is_open()) {
+        net::Peer p = accept(e, "waiting for peers");
+        auto c = std::make_unique<net::Connection>(std::move(p.connection));
+        if (p.hello.role == wire::Role::switch_node)
+          set_peer(std::move(c));
+        else
+          rvg_ = std::move(c);
       }
       peer_fresh_ = true;
     }
@@ -112,33 +271,52 @@ class SwitchNode {
     std::cerr << who_ << ": connected: peer " << peer_->peer() << ", render client " << rvg_->peer() << "\n";
   }
 
-  // Node 1: connects to node 0 (--peer) and shakes hands.
-  void connect_peer(Millis timeout) {
-    const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
-    auto conn = net::Connection::connect(pe.host, pe.port, timeout);
-    if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
-    auto hello = net::handshake(*conn, mine_, {wire::Role::switch_node, uint8_t(0)}, timeout);
-    if (!hello) throw std::runtime_error(who_ + ": " + hello.error());
-    peer_ = std::make_unique<net::Connection>(std::move(*conn));
-    peer_fresh_ = true;
-    peer_addr_ = peer_->peer();
-  }
+  // While a client is served, the listener stays open and every connector gets Bye("busy: ...")
+  // in its handshake (after its hello and key were checked): a second render client learns at
+  // once that the cluster is busy, node 1 coming back early for the next client retries. The one
+  // exception (door_reason): node 0 whose link to node 1 is down takes a restarted node 1.
+  class Door {
+   public:
+    ~Door() { stop(); }
+    void start(SwitchNode& node) {
+      stop();
+      stop_ = false;
+      thread_ = std::thread([this, &node] {
+        net::PeerExpectation e = node.expect(std::nullopt, std::nullopt);
+        e.refuse = [&node](const wire::Hello& h) { return node.door_reason(h); };
+        while (!stop_) {
+          auto conn = node.listener_->accept(Millis(100));
+          if (!conn) continue;
+          // Refused (and logged) unless door_reason let a restarted node 1 in.
+          if (auto hello = net::handshake(*conn, node.mine_, e, Millis(2000)))
+            node.hand_over_peer(std::move(*conn));
+        }
+      });
+    }
+    void stop() {
+      stop_ = true;
+      if (thread_.joinable()) thread_.join();
+    }
 
-  // Node 0 without a working peer: takes a switch node 1 that is waiting at the listening port
-  // (a restarted node 1 connects to node 0 before it accepts the render client), at most every
+   private:
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+  };
+
+  // Node 0 without a working peer: takes a switch node 1 that came back through the Door (a
+  // restarted node 1 connects to node 0 before it accepts the render client), at most every
   // 100 ms. It serves once the render client's Resync says so.
   void poll_for_peer() {
-    if (o_.id != 0 || !listener_ || (peer_ && peer_->is_open())) return;
+    if (o_.id != 0 || (peer_ && peer_->is_open())) return;
     const Clock::time_point now = Clock::now();
     if (now < next_poll_) return;
     next_poll_ = now + std::chrono::milliseconds(100);
-    auto p = listener_->accept_peer(mine_, {wire::Role::switch_node, uint8_t(1)}, Millis(5));
-    if (!p) return;
+    std::unique_ptr<net::Connection> c = take_rejoined_peer();
+    if (!c) return;
     drop_peer("replaced");
-    peer_ = std::make_unique<net::Connection>(std::move(p->connection));
+    set_peer(std::move(c));
     peer_fresh_ = true;
     peer_addr_ = peer_->peer();
-    std::cerr << who_ << ": " << other_ << " (" << peer_addr_ << ") connected; waiting for the render client's resync\n";
   }
 
   void drop_peer(const std::string& why) {
@@ -146,7 +324,7 @@ class SwitchNode {
     const auto st = peer_->stats();
     peer_sent_bytes_ += st.sent.bytes;
     peer_->close_with_error(why);
-    dropped_.push_back(std::move(peer_));  // destroyed at the end: closing lingers up to 1.5 s
+    set_peer(nullptr);
   }
 
   // The render client's instruction: start over at r.frame with empty sets, as the switch (2) or
@@ -157,18 +335,25 @@ class SwitchNode {
     stream_ = DiffReceiver{};
     last_camera_.reset();
     peer_lost_.clear();
+    // The visibility hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
+    if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
     if (r.nodes == 1) {
       drop_peer("the render client dropped " + other_ + " (" + who_ + " serves alone from frame " +
                 std::to_string(r.frame) + ")");
     } else if (!peer_ || !peer_->is_open() || !peer_fresh_) {
       drop_peer("resync at frame " + std::to_string(r.frame) + ": a new connection to " + other_);
-      const Millis timeout(o_.timeout_ms);
       if (o_.id == 1) {
-        connect_peer(timeout);
-      } else {
-        auto p = listener_->accept_peer(mine_, {wire::Role::switch_node, uint8_t(1)}, timeout);
-        if (!p) throw NodeFailure("resync at frame " + std::to_string(r.frame) + ": no " + other_ + ": " + p.error());
-        peer_ = std::make_unique<net::Connection>(std::move(p->connection));
+        connect_peer();
+      } else {  // the Door hands over the node 1 that connects
+        const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
+        std::unique_ptr<net::Connection> c;
+        while (!(c = take_rejoined_peer())) {
+          if (Clock::now() >= deadline)
+            throw NodeFailure("resync at frame " + std::to_string(r.frame) + ": no " + other_ + " within " +
+                              std::to_string(o_.timeout_ms) + " ms");
+          std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        set_peer(std::move(c));
         peer_addr_ = peer_->peer();
       }
     }
@@ -195,17 +380,16 @@ class SwitchNode {
     }
   }
 
-  // The camera of `frame` (lockstep) or the newest (latest); nullopt when the render client is done.
-  // Waits up to twice --timeout-ms: the render client may itself be waiting out its timeout on
-  // the other node before it drops that one and sends this one a Resync.
-  std::optional<NumberedCamera> take_camera(uint32_t frame) {
+  // The camera of `frame` (lockstep) or the newest from `min_camera` on (latest); nullopt when the
+  // render client is done. Waits up to twice --timeout-ms: the render client may itself be waiting
+  // out its timeout on the other node before it drops that one and sends this one a Resync.
+  std::optional<NumberedCamera> take_camera(uint32_t frame, uint32_t min_camera) {
     const Millis timeout(2 * int64_t(o_.timeout_ms));
     for (;;) {
       std::string why;
-      std::optional<NumberedCamera> cam =
-          o_.config.camera_mode == CameraMode::lockstep
-              ? cameras_.take(frame, timeout, &why)
-              : cameras_.take_latest(last_camera_ ? *last_camera_ + 1 : 0, timeout, &why);
+      std::optional<NumberedCamera> cam = o_.config.camera_mode == CameraMode::lockstep
+                                              ? cameras_->take(frame, timeout, &why)
+                                              : cameras_->take_latest(min_camera, timeout, &why);
       if (cam) {
         last_camera_ = cam->number;
         return cam;
@@ -252,30 +436,51 @@ class SwitchNode {
     if (auto err = peer_->send(m)) peer_lost_ = "cannot be sent to: " + *err;
   }
 
-  // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera.
+  // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera,
+  // the occluders that cover enough pixels (occluder selection).
   void draw_occluders(const Camera& cam) {
     g_.renderer->begin_frame(cam, false);
     drawn_.assign(g_.renderables->count(), 0);
     std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
     std::sort(ids.begin(), ids.end());
     for (uint32_t id : ids) drawn_[id] = 1;
+    or_camera_ = cam;
+    select_.filter(ids, *g_.renderables, or_camera_, o_.height);
     or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
   }
 
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
   void run_switch(uint32_t first) {
     single_ = false;
+    const bool latest = o_.config.camera_mode == CameraMode::latest;
     for (uint32_t frame = first + (first % 2 != uint32_t(o_.id));; frame += 2) {
       // ---- OR(frame): camera, clear depth, draw V_{frame-2} then V_{frame-1}'s additions.
-      std::optional<NumberedCamera> cam = take_camera(frame);
+      // Latest mode: the newest camera after the one the other node used for frame-1 (the first
+      // message of its stream), so no two frames share a camera and the nodes never run ahead of
+      // the cameras the render client sent (it sends one per frame received: bounded latency).
+      Clock::duration waited{0};  // for the other node's stream: not OR work
+      std::optional<wire::Camera> peer_camera;
+      uint32_t min_camera = last_camera_ ? *last_camera_ + 1 : 0;
+      if (latest && frame > first) {
+        const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
+        std::optional<net::Received> r = next_from_peer(frame - 1, deadline, waited);
+        if (!r) return await_instruction(frame, peer_lost_);
+        auto* c = std::get_if<wire::Camera>(&r->message);
+        if (!c)
+          return await_instruction(frame, "frame " + std::to_string(frame - 1) + ": sent " +
+                                              std::string(wire::type_name(wire::type_of(r->message))) +
+                                              " before its camera");
+        peer_camera = *c;
+        min_camera = std::max(min_camera, c->frame + 1);
+      }
+      std::optional<NumberedCamera> cam = take_camera(frame, min_camera);
       if (!cam) return;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
       tail_t0_ = or_start;
       draw_occluders(cam->camera);
-      Clock::duration waited{0};  // for the other node's stream: not OR work
-      if (frame > first && !receive_stream(frame - 1, waited)) return await_instruction(frame, peer_lost_);
+      if (frame > first && !receive_stream(frame - 1, waited, peer_camera)) return await_instruction(frame, peer_lost_);
       finish_or(or_start, or_cpu0, waited);
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
@@ -295,7 +500,7 @@ class SwitchNode {
     single_ = true;
     for (uint32_t frame = first;; ++frame) {
       poll_for_peer();
-      std::optional<NumberedCamera> cam = take_camera(frame);
+      std::optional<NumberedCamera> cam = take_camera(frame, last_camera_ ? *last_camera_ + 1 : 0);
       if (!cam) return;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
@@ -318,11 +523,35 @@ class SwitchNode {
     or_us_ = micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
   }
 
+  // The next message of the other node's stream of `frame`, waiting until `deadline`. nullopt,
+  // with peer_lost_ saying why, when the other node is gone or stalls, or the render client
+  // finished meanwhile; throws Interrupted when the render client sent a Resync.
+  std::optional<net::Received> next_from_peer(uint32_t frame, Clock::time_point deadline, Clock::duration& waited) {
+    const std::string f = "frame " + std::to_string(frame) + ": ";
+    for (;;) {
+      if (cameras_in_->resync_pending()) throw Interrupted{};
+      const Clock::time_point t0 = Clock::now();
+      net::Received r = peer_->receive(Millis(50));
+      waited += Clock::now() - t0;
+      if (r.ok()) return r;
+      if (r.status == net::Received::Status::timeout) {
+        if (cameras_in_->done()) peer_lost_ = f + "did not finish its stream before the render client ended";
+        else if (Clock::now() >= deadline) peer_lost_ = f + "sent nothing for " + std::to_string(o_.timeout_ms) + " ms";
+        else continue;
+      } else {
+        peer_lost_ = r.status == net::Received::Status::closed ? f + "ended: " + r.reason : f + r.reason;
+      }
+      return std::nullopt;
+    }
+  }
+
   // Applies and draws the other node's diff of `frame` until its EndOfFrame. Returns false, with
   // peer_lost_ saying why, when the other node is gone, stalls or misbehaves, or the render
   // client finished meanwhile; throws Interrupted when the render client sent a Resync.
-  bool receive_stream(uint32_t frame, Clock::duration& waited) {
+  // `early`: the stream's camera, already received (latest mode: it chose this node's camera).
+  bool receive_stream(uint32_t frame, Clock::duration& waited, const std::optional<wire::Camera>& early) {
     bool cleared = false;  // full-sets mode: the frame's first message replaces the set
+    std::vector<uint32_t> before;  // full-sets mode with a hold: V' (sorted)
     bool have_camera = false;
     uint64_t expected_front = 0;
     const std::string f = "frame " + std::to_string(frame) + ": ";
@@ -330,23 +559,25 @@ class SwitchNode {
       peer_lost_ = why;
       return false;
     };
-    const Clock::time_point wait_start = Clock::now();
-    const Clock::time_point deadline = wait_start + Millis(o_.timeout_ms);
-    for (;;) {
-      if (cameras_in_->resync_pending()) {
-        waited += Clock::now() - wait_start;
-        throw Interrupted{};
+    auto start_frame = [&] {
+      if (o_.config.full_sets && !cleared) {
+        // Full sets resend every id: only those not in V' were found visible (for the hold).
+        if (hold_) before.assign(visible_.ids().begin(), visible_.ids().end()), std::sort(before.begin(), before.end());
+        visible_.clear();
       }
-      const Clock::time_point t0 = Clock::now();
-      net::Received r = peer_->receive(Millis(50));
-      waited += Clock::now() - t0;
-      if (r.status == net::Received::Status::timeout) {
-        if (cameras_in_->done()) return lost("did not finish its stream before the render client ended");
-        if (Clock::now() >= deadline) return lost("sent nothing for " + std::to_string(o_.timeout_ms) + " ms");
-        continue;
+      cleared = true;
+    };
+    const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
+    for (bool first = true;; first = false) {
+      net::Received r;
+      if (first && early) {
+        r.status = net::Received::Status::message;
+        r.message = *early;
+      } else {
+        std::optional<net::Received> got = next_from_peer(frame, deadline, waited);
+        if (!got) return false;
+        r = std::move(*got);
       }
-      if (r.status == net::Received::Status::closed) return lost("ended: " + r.reason);
-      if (!r.ok()) return lost(r.reason);
       if (auto* c = std::get_if<wire::Camera>(&r.message)) {
         if (have_camera) return lost(f + "sent two cameras");
         have_camera = true;
@@ -354,20 +585,24 @@ class SwitchNode {
         expected_front = step_->coarsen(visible_, from_wire(*c));
       } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
-        if (o_.config.full_sets && !cleared) visible_.clear();
-        cleared = true;
+        start_frame();
         if (!d->added.empty()) mark_tail();  // the last chunk with additions starts the OR tail
         if (auto err = stream_.on_diff(visible_, *d)) return lost("desync: " + *err);
+        if (hold_)  // the other node found these visible in `frame` (added to V')
+          for (uint32_t id : d->added)
+            if (!o_.config.full_sets || !std::binary_search(before.begin(), before.end(), id))
+              hold_->seen(g_.renderables->node_of(id), frame);
         std::vector<uint32_t> fresh;
         for (uint32_t id : d->added)
           if (!drawn_[id]) {
             drawn_[id] = 1;
             fresh.push_back(id);
           }
+        select_.filter(fresh, *g_.renderables, or_camera_, o_.height);
         or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
-        if (o_.config.full_sets && !cleared) visible_.clear();
+        start_frame();
         if (!tail_cpu0_) mark_tail();
         if (e->frame != frame) return lost("ended frame " + std::to_string(e->frame) + ", expected " + std::to_string(frame));
         if (auto err = stream_.on_end_of_frame(visible_, *e)) return lost("desync: " + *err);
@@ -385,7 +620,8 @@ class SwitchNode {
     const Clock::time_point hc_start = Clock::now();
     hc_cpu0_ = process_cpu_us();
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
-    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr};
+    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
+                  hold_ ? &*hold_ : nullptr};
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
@@ -394,6 +630,7 @@ class SwitchNode {
             drawn_[id] = 1;
             fresh.push_back(id);
           }
+        select_.filter(fresh, *g_.renderables, cam, o_.height);
         if (fresh.empty()) return;
         g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
         querier_->begin(cam);  // the renderer changed the GL state the queries need
@@ -416,6 +653,7 @@ class SwitchNode {
     hlods_ += hc.stats.hlods;
     skipped_ += hc.tests_above_fronts;
     whole_ += hc.stats.whole;
+    held_ += hc.held;
   }
 
   // The query budget's prices, measured on this node (moving averages): a query = HC time per
@@ -442,7 +680,8 @@ class SwitchNode {
     const uint64_t peer_bytes = peer_sent_bytes_ + (peer_ ? peer_->stats().sent.bytes : 0);
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
               << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
-              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us), sent " << r.sent.bytes
+              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << held_
+              << " renderables kept by the visibility hold), sent " << r.sent.bytes
               << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     if (resyncs_)
       std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
@@ -458,10 +697,14 @@ class SwitchNode {
   const NodeOptions& o_;
   std::string who_, other_;
   SceneGl g_;
-  std::unique_ptr<BoxQuerier> querier_;
-  std::optional<net::Listener> listener_;  // node 0: kept for a restarted node 1
   wire::Hello mine_;
+  std::optional<net::Listener> listener_;  // the whole run; during a session only the Door uses it
+  std::unique_ptr<BoxQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
+  // peer_ (the pointer; the session thread writes it, the Door reads it) and rejoined_peer_ (a
+  // restarted node 1 the Door let in, for the session to take).
+  std::mutex link_mu_;
+  std::unique_ptr<net::Connection> rejoined_peer_;
   std::vector<std::unique_ptr<net::Connection>> dropped_;
   std::string peer_addr_;
   bool peer_fresh_ = false;  // peer_ connected since the last resync
@@ -473,10 +716,12 @@ class SwitchNode {
   std::optional<uint32_t> last_camera_;
   uint64_t peer_sent_bytes_ = 0, resyncs_ = 0, single_frames_ = 0;
   uint32_t or_us_ = 0;
-  CameraBuffer cameras_;
+  std::optional<CameraBuffer> cameras_;
   std::optional<CameraReceiver> cameras_in_;
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
+  OccluderSelection select_{o_.hc.occluder_pixels_per_triangle};
+  Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)
   std::optional<QueryBudget> budget_;
   uint64_t or_triangles_ = 0;  // drawn by the current OR
   double ms_per_query_ = 0, ms_per_triangle_ = 0;
@@ -485,6 +730,9 @@ class SwitchNode {
   Clock::time_point tail_t0_;
   uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
+  std::optional<VisibilityHold> hold_;
+  uint64_t held_ = 0;  // renderables kept in V by the hold (summed over HC frames)
+  Door door_;  // last: stopped first (it reads the connections above)
 };
 
 }  // namespace

@@ -4,6 +4,7 @@
 // streaming the visible-set diff to the render client and to the other node. The schedule is in
 // protocol/cluster/cluster.hpp, the per-frame logic in protocol/cluster/switch_step.hpp.
 #pragma once
+#include <optional>
 #include <string>
 
 #include "common/gl/context.hpp"
@@ -23,10 +24,14 @@ struct NodeOptions {
   int diff_chunk_ids = 100;
   HcChoices hc;
   int timeout_ms = 30000;
+  std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
+  bool serve = false;                  // --serve: one render client after the other
+  int sessions = 0;                    // --serve: exit after this many clients (0: never)
 };
 
 // Returns the process exit code: 0 after the render client said Bye, 1 on a failure (printed
-// as one "error:" line naming the frame and peer).
+// as one "error:" line naming the frame and peer). With serve, it returns only after `sessions`
+// clients (0 if every one of them ended with its Bye), or never.
 int run_switch_node(const NodeOptions& opts);
 
 }  // namespace occ

@@ -7,3 +7,6 @@ add_dependencies(frame_bytes_test render_client)
 find_package(Python3 COMPONENTS Interpreter REQUIRED)
 add_test(NAME BenchReport.Arithmetic COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/bench_report_test.py)
 set_tests_properties(BenchReport.Arithmetic PROPERTIES LABELS unit)
+# The README is a user guide (<= 200 lines, no paths outside the repository, links resolve).
+add_test(NAME Docs.ReadmeIsAGuideAndLinksResolve COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/docs_test.py ${PROJECT_SOURCE_DIR})
+set_tests_properties(Docs.ReadmeIsAGuideAndLinksResolve PROPERTIES LABELS unit)

@@ -2,6 +2,8 @@
 // help without installing or building, and scripts/video.sh makes an MP4 (skipped without ffmpeg).
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "integration_util.hpp"
 
 using namespace occtest;
@@ -61,4 +63,83 @@ TEST(Conventions, VideoFromFrames) {
   Proc none({"/bin/bash", script("video.sh"), dir.string()}, dir / "none.log");
   EXPECT_EQ(none.wait(30s), 2);
   EXPECT_NE(none.log().find("has no frame_NNNNN.png"), std::string::npos) << none.log();
+}
+
+// scripts/cluster.sh names the failing process with its own error line, and stops the others at
+// once instead of letting them wait for it (a bad --path took 31 s: the nodes' --timeout-ms).
+namespace {
+std::vector<std::string> cluster(const fs::path& out, std::vector<std::string> extra) {
+  std::vector<std::string> a = {"/bin/bash", script("cluster.sh"), "--out", out.string(), "--width", "64", "--height", "48"};
+  a.insert(a.end(), extra.begin(), extra.end());
+  return a;
+}
+}  // namespace
+
+TEST(Conventions, ClusterPrintsTheFailingProcessesOwnError) {
+  const fs::path dir = fresh_dir("cluster_errors");
+  {  // a missing scene: node 0's own line, naming the file
+    Proc p(cluster(dir / "a", {"--scene", (dir / "no_such_scene.gltf").string()}), dir / "a.log");
+    EXPECT_NE(p.wait(120s), 0);
+    const std::string log = p.log();
+    EXPECT_NE(log.find("cluster: node0 exited before listening"), std::string::npos) << log;
+    EXPECT_NE(log.find("  error: " + (dir / "no_such_scene.gltf").string() + ": cannot open file"), std::string::npos)
+        << log;
+  }
+  {  // a bad flag (passed to all three): node 0 says which
+    Proc p(cluster(dir / "b", {"--scene", "city:2x2:2:4:1", "--no-such-flag", "1"}), dir / "b.log");
+    EXPECT_NE(p.wait(120s), 0);
+    const std::string log = p.log();
+    EXPECT_NE(log.find("cluster: node0 exited before listening"), std::string::npos) << log;
+    EXPECT_NE(log.find("  error:"), std::string::npos) << log;
+    EXPECT_NE(log.find("--no-such-flag"), std::string::npos) << log;
+  }
+  {  // a missing --path file: said before any process starts
+    Proc p(cluster(dir / "c", {"--scene", "city:2x2:2:4:1", "--path", (dir / "no_such_path.csv").string()}),
+           dir / "c.log");
+    EXPECT_EQ(p.wait(60s), 2);
+    const std::string log = p.log();
+    EXPECT_NE(log.find("no_such_path.csv': cannot open camera path file"), std::string::npos) << log;
+    EXPECT_FALSE(fs::exists(dir / "c" / "node0.log")) << log;
+  }
+  {  // a broken --path file: the render client's own line, and the nodes are stopped at once, not
+     // left to wait for it until their --timeout-ms
+    std::ofstream(dir / "broken.csv") << "frame,eye_x\n0,1\n";
+    Proc p(cluster(dir / "d", {"--scene", "city:2x2:2:4:1", "--path", (dir / "broken.csv").string(),
+                               "--timeout-ms", "600000"}),
+           dir / "d.log");
+    EXPECT_NE(p.wait(300s), 0);
+    const std::string log = p.log();
+    EXPECT_NE(log.find("cluster: render_client exited with status 2"), std::string::npos) << log;
+    EXPECT_NE(log.find("  error: " + (dir / "broken.csv").string() + ": line 2: expected 11 or 13 columns"),
+              std::string::npos) << log;
+    EXPECT_NE(log.find("cluster: stopping node0 node1"), std::string::npos) << log;
+  }
+}
+
+TEST(Conventions, NetlabTakesCameraModeAsEverywhere) {
+  const fs::path dir = fresh_dir("netlab_flags");
+  Proc p({"/bin/bash", script("netlab.sh"), "--scene", "city", "--mode", "latest"}, dir / "mode.log");
+  EXPECT_EQ(p.wait(30s), 2);
+  EXPECT_NE(p.log().find("--mode is now --camera-mode"), std::string::npos) << p.log();
+  Proc q({"/bin/bash", script("netlab.sh"), "--scene", "city", "--camera-mode", "sometimes"}, dir / "cm.log");
+  EXPECT_EQ(q.wait(30s), 2);
+  EXPECT_NE(q.log().find("--camera-mode 'sometimes': expected latest or lockstep"), std::string::npos) << q.log();
+}
+
+// One default viewport: every script that renders defaults to the binaries' 512x512 (lib.sh), and
+// the binaries' --help says 512.
+TEST(Conventions, OneDefaultViewport) {
+  const std::string lib = read_file(script("lib.sh"));
+  EXPECT_NE(lib.find("OCC_WIDTH=512 OCC_HEIGHT=512"), std::string::npos);
+  for (const char* s : {"bench.sh", "netlab.sh", "accuracy_sweep.sh"}) {
+    const std::string text = read_file(script(s));
+    EXPECT_NE(text.find("width=$OCC_WIDTH height=$OCC_HEIGHT"), std::string::npos) << s;
+  }
+  for (const char* s : {"cluster.sh", "run.sh"}) EXPECT_EQ(read_file(script(s)).find("--width 6"), std::string::npos) << s;
+  const fs::path dir = fresh_dir("viewport");
+  for (const char* b : {"render_client", "switch_node", "occlusion_server"}) {
+    Proc p({bin(b), "--help"}, dir / (std::string(b) + ".log"));
+    EXPECT_EQ(p.wait(30s), 0) << p.log();
+    EXPECT_NE(p.log().find("512"), std::string::npos) << b << ": " << p.log();
+  }
 }

@@ -46,6 +46,31 @@ TEST(Culling, FrustumCullKeepsOnlyLeavesInView) {
   EXPECT_EQ(items_of_nodes(h, all).size(), h.items().size());
 }
 
+// The --window O overlay's boxes: frustum leaves not drawn themselves nor under a drawn node.
+TEST(Culling, OccludedLeavesAreFrustumLeavesNotCoveredByTheDrawnNodes) {
+  Scene s = cube_grid(10, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  const Camera all = overview(h.node(0).box);
+  const std::vector<uint32_t> leaves = frustum_cull(h, all);
+  ASSERT_GT(leaves.size(), 4u);
+  EXPECT_EQ(occluded_leaves(h, all, {}), leaves);             // nothing drawn: every leaf in view
+  EXPECT_TRUE(occluded_leaves(h, all, std::vector<uint32_t>{0}).empty());  // the root covers all
+  const std::vector<uint32_t> some = {leaves[0], leaves[2]};
+  std::vector<uint32_t> expected = leaves;
+  std::erase(expected, leaves[0]);
+  std::erase(expected, leaves[2]);
+  EXPECT_EQ(occluded_leaves(h, all, some), expected);
+  // An interior node (drawn at its HLOD) covers exactly its leaves.
+  const uint32_t inner = h.node(leaves[1]).parent;
+  ASSERT_NE(inner, kNoNode);
+  for (uint32_t leaf : occluded_leaves(h, all, std::vector<uint32_t>{inner}))
+    for (uint32_t n = leaf; n != kNoNode; n = h.node(n).parent) EXPECT_NE(n, inner);
+  EXPECT_LT(occluded_leaves(h, all, std::vector<uint32_t>{inner}).size(), leaves.size());
+  // Looking away: nothing in the frustum, nothing occluded.
+  Camera away = Camera::look_at({-5, 0.5, 0.5}, {-10, 0.5, 0.5}, {0, 1, 0}, 60, 1, 0.1, 100);
+  EXPECT_TRUE(occluded_leaves(h, away, {}).empty());
+}
+
 TEST(Culling, HardwareCullReturnsExactlyLeavesContainingVisiblePoints) {
   Scene s = cube_grid(12, 3);
   Hierarchy h = Hierarchy::build(s, {});

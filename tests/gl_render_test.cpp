@@ -11,6 +11,8 @@
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/hierarchy.hpp"
+#include "common/lod.hpp"
+#include "common/scene_io.hpp"
 
 namespace occ {
 inline void PrintTo(GlBackend b, std::ostream* os) {
@@ -251,4 +253,74 @@ TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
   EXPECT_EQ(q.result(q.issue(around_eye)), 0u);
   EXPECT_TRUE(visible_without_query(around_eye, f.cam));
   q.end();
+}
+
+// Issue 16: the geometry goes to GL in small segments (hundreds here) and, with Upload::release,
+// the CPU arrays are freed as they go. The frames (full detail, leaf LODs, HLODs, item ids) must
+// be those of the default upload, and what culling needs must survive the release.
+TEST(SceneRenderer, StreamedUploadWithReleaseDrawsTheSameFramesAndFreesTheArrays) {
+  Scene kept = load_scene("plant:0.05");
+  const Hierarchy h = Hierarchy::build(kept, {});
+  const LodData kept_lod = LodData::build(kept, h, {});
+  Scene freed = kept;
+  LodData freed_lod = kept_lod;
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  SceneRenderer a(*ctx, kept, h, &kept_lod);
+  SceneRenderer b(*ctx, freed, h, &freed_lod, SceneRenderer::Upload{.segment_bytes = 4096, .release = true});
+
+  for (const Mesh& m : freed.meshes) {
+    EXPECT_TRUE(m.released);
+    EXPECT_TRUE(m.positions.empty() && m.normals.empty() && m.indices.empty());
+    EXPECT_EQ(m.positions.capacity() + m.indices.capacity(), 0u);
+  }
+  for (size_t i = 0; i < kept.meshes.size(); ++i) {
+    EXPECT_EQ(freed.meshes[i].triangle_count(), kept.meshes[i].triangle_count());
+    EXPECT_EQ(freed.meshes[i].box().min, kept.meshes[i].box().min);
+    EXPECT_EQ(freed.meshes[i].box().max, kept.meshes[i].box().max);
+  }
+  EXPECT_EQ(freed.triangle_count(), kept.triangle_count());
+  EXPECT_TRUE(freed_lod.geometry_released());
+  EXPECT_FALSE(kept_lod.geometry_released());
+  EXPECT_EQ(freed_lod.total_triangles(), kept_lod.total_triangles());
+  for (const LodMesh& m : freed_lod.hlods()) EXPECT_TRUE(m.indices.empty());
+  EXPECT_THROW((void)freed.content_hash(), std::logic_error);
+  EXPECT_THROW(SceneRenderer(*ctx, freed, h), std::logic_error);  // nothing left to upload
+  EXPECT_TRUE(freed_lod.save(testing::TempDir() + "/released.lod").has_value());  // refuses
+
+  const Renderables ra(h, &kept_lod), rb(h, &freed_lod);
+  for (uint32_t r = 0; r < ra.count(); ++r) ASSERT_EQ(ra.triangles(r), rb.triangles(r)) << r;
+  // Every leaf at each level, and every HLOD: the whole LOD upload is drawn.
+  std::vector<std::vector<uint32_t>> sets(kLeafLodLevels + 2);
+  for (uint32_t id = 0; id < h.size(); ++id) {
+    if (h.node(id).leaf())
+      for (uint32_t l = 0; l <= kLeafLodLevels; ++l) sets[l].push_back(ra.id(id, l));
+    else if (kept_lod.hlod(id) && h.node(id).depth == 2)
+      sets[kLeafLodLevels + 1].push_back(id);
+  }
+  ASSERT_FALSE(sets.back().empty());
+  const Aabb box = kept.bounds();
+  const glm::dvec3 eye(box.min.x + 3.0, 1.7, 0.0);
+  const Camera cam = Camera::look_at(eye, eye + glm::dvec3(1, -0.1, 0.3), {0, 1, 0}, 60.0, 1.0, 0.1, 500.0);
+  for (const auto& ids : sets) {
+    for (SceneRenderer::Mode mode : {SceneRenderer::Mode::Shaded, SceneRenderer::Mode::ItemIds}) {
+      Image img[2];
+      for (int k = 0; k < 2; ++k) {
+        SceneRenderer& r = k ? b : a;
+        if (mode == SceneRenderer::Mode::ItemIds)
+          r.begin_id_frame(cam);
+        else
+          r.begin_frame(cam, true);
+        const DrawStats st = r.draw_renderables(k ? rb : ra, ids, mode);
+        EXPECT_GT(st.triangles, 0u);
+        img[k] = ctx->read_rgba();
+      }
+      ASSERT_EQ(img[0].rgba, img[1].rgba) << "mode " << int(mode) << ", " << ids.size() << " renderables";
+      if (mode == SceneRenderer::Mode::Shaded) {
+        size_t drawn = 0;
+        for (size_t p = 0; p < img[0].rgba.size(); p += 4)
+          drawn += pixel(img[0], int(p / 4 % kSize), int(p / 4 / kSize)) != SceneRenderer::kBackgroundRgba8;
+        EXPECT_GT(drawn, size_t(kSize));  // the frame shows the plant, not just background
+      }
+    }
+  }
 }

@@ -156,8 +156,8 @@ TEST(HardFaults, StrangersAtEveryListeningPortAreRefusedWithAReasonAndTheCluster
 
   c.start_client();
   at1->wrong_version_reply = at1->wrong_version.read_until_closed(10s);
-  // While frames flow: the listening ports are closed once the peers are in; more random bytes
-  // (refused by the OS or ignored) must not disturb the run.
+  // While frames flow the listening ports stay open (a second render client is told the cluster
+  // is busy): more random bytes there (refused with a logged reason) must not disturb the run.
   wait_frames(c.stats(), 5, 4s, &c.client());
   for (int port : {p0, p1}) {
     Stranger late(port);
@@ -170,7 +170,8 @@ TEST(HardFaults, StrangersAtEveryListeningPortAreRefusedWithAReasonAndTheCluster
 
   expect_refused(r.node0_log, *at0, "switch node 0");
   expect_refused(r.node1_log, *at1, "switch node 1");
-  // The stranger with another version was told why (its Bye) after the node's own hello.
+  // The stranger with another version was told why (its Bye; the node answers a hello it cannot
+  // read with no hello of its own).
   EXPECT_NE(at0->wrong_version_reply.find("version"), std::string::npos);
   EXPECT_NE(at1->wrong_version_reply.find("version"), std::string::npos);
 

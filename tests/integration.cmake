@@ -17,3 +17,6 @@ add_dependencies(material_cluster_test switch_node render_client frame_diff)
 # a node killed, stalled or restarted mid-run: degraded frames, resync, frames equal to the reference
 occ_test(recovery_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_recovery_test.cpp)
 add_dependencies(recovery_test switch_node render_client frame_diff link_relay)
+# issue 18: cluster key (membership) and switch_node --serve (successive clients)
+occ_test(membership_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_membership_test.cpp)
+add_dependencies(membership_test switch_node render_client frame_diff occlusion_server link_relay)

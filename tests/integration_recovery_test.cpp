@@ -3,10 +3,15 @@
 // other node serves alone, or the client frustum-culls; a node restarted on its port rejoins with
 // a resync and the switch resumes. Through all of it every frame equals the reference renderer's
 // (frame_diff) and the client exits 0. stats.csv's `mode` column says how each frame was culled.
+// With a cluster key (docs/security.md) the restarted node must prove it like any process: node
+// 0's busy door lets in only a node 1 that does, and only while its link to node 1 is down.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
+
+#include <fstream>
 
 #include "cluster_run.hpp"
 
@@ -56,6 +61,15 @@ std::string control(int port, const std::string& command) {
   }
   ::close(fd);
   return reply;
+}
+
+std::string write_key(const fs::path& file, char fill) {
+  {
+    std::ofstream out(file);
+    out << std::string(64, fill) << "\n";
+  }
+  ::chmod(file.c_str(), 0600);
+  return file.string();
 }
 
 }  // namespace
@@ -119,18 +133,52 @@ TEST(Recovery, BothNodesKilledLeaveFrustumCullingInTheClient) {
 }
 
 // Node k killed, then restarted on its port: it rejoins, a resync sends the full set, the switch
-// resumes with incremental diffs; every frame equals the reference.
-void restarted_node_rejoins(int k) {
+// resumes with incremental diffs; every frame equals the reference. `keyed`: the whole cluster
+// has a cluster key (the restarted node too), and before the restart node 0's door meets
+// strangers (node 1 only): a switch node 1 with another key, and a second render client with the
+// right one. Both are refused with their reason while the run goes on.
+void restarted_node_rejoins(int k, bool keyed = false) {
   // Long enough for the restart (scene load, GL) to happen well before the end.
-  const std::string path = "walk:1500";
-  const fs::path dir = fresh_dir("recovery_rejoin" + std::to_string(k)) / "cluster";
-  Cluster c(dir, ClusterOptions(kCity, path, kView));
+  const std::string path = keyed ? "walk:2000" : "walk:1500";
+  const size_t frames = keyed ? 2000 : 1500;
+  const std::string name = std::string("recovery_rejoin") + (keyed ? "_keyed" : "") + std::to_string(k);
+  const fs::path dir = fresh_dir(name) / "cluster";
+  ClusterOptions o(kCity, path, kView);
+  std::string wrong;
+  if (keyed) {
+    o.all = {"--cluster-key-file", write_key(dir.parent_path() / "cluster.key", 'k')};
+    wrong = write_key(dir.parent_path() / "wrong.key", 'w');
+  }
+  Cluster c(dir, o);
   ASSERT_TRUE(c.start()) << c.logs();
   ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
   (k == 0 ? c.node0() : c.node1()).kill_now();
   // The other node serves alone for a while.
   const size_t killed_at = read_csv(c.stats())["frame"].size();
   ASSERT_GE(wait_frames(c.stats(), killed_at + 30, 60s, &c.client()), killed_at + 30) << c.logs();
+  if (keyed && k == 1) {
+    const int p0 = std::stoi(read_file(dir / "n0.port"));
+    const std::string node0 = "127.0.0.1:" + std::to_string(p0);
+    const std::string node1 = "127.0.0.1:" + read_file(dir / "n1.port").substr(0, read_file(dir / "n1.port").find('\n'));
+    // A node 1 with another key at node 0, whose link to node 1 is down: refused by the key.
+    const Outcome impostor = run_to_end({bin("switch_node"), "--id", "1", "--scene", kCity, "--peer", node0, "--port",
+                                         "0", "--timeout-ms", "20000", "--width", "96", "--height", "72",
+                                         "--cluster-key-file", wrong},
+                                        dir.parent_path() / "impostor.log", 60s);
+    EXPECT_NE(impostor.code, 0) << impostor.log;
+    EXPECT_NE(impostor.log.find("cluster key mismatch"), std::string::npos) << impostor.log;
+    // A second render client with the right key: the cluster is busy (node 0 answers first).
+    const fs::path second = dir.parent_path() / "second";
+    fs::create_directories(second);
+    const Outcome busy = run_to_end({bin("render_client"), "--scene", kCity, "--path", "walk:10", "--out",
+                                     second.string(), "--connect", node0, "--connect", node1, "--timeout-ms", "20000",
+                                     "--width", "96", "--height", "72", "--cluster-key-file", o.all[1]},
+                                    second / "render_client.log", 60s);
+    EXPECT_NE(busy.code, 0) << busy.log;
+    EXPECT_NE(busy.log.find("the cluster is busy"), std::string::npos) << busy.log;
+    EXPECT_NE(busy.log.find("switch_node 0 is serving another render client"), std::string::npos) << busy.log;
+    EXPECT_EQ(frame_count(second), 0u);
+  }
   ASSERT_NE(c.restart_node(k), 0) << c.logs();
   const int code = c.client().wait(300s);
   const std::string rvg = c.client().log();
@@ -140,8 +188,14 @@ void restarted_node_rejoins(int k) {
   EXPECT_NE(rvg.find("switch node " + std::to_string(k) + " (127.0.0.1:"), std::string::npos) << rvg;
   EXPECT_NE(rvg.find("is back"), std::string::npos) << rvg;
   EXPECT_NE(rvg.find("the switch resumes"), std::string::npos) << rvg;
+  if (k == 1) {  // node 0's door let the restarted node 1 in
+    const std::string n0 = c.node0().log();
+    EXPECT_NE(n0.find("switch node 1 (127.0.0.1:"), std::string::npos) << n0;
+    EXPECT_NE(n0.find("is back; waiting for the render client's resync"), std::string::npos) << n0;
+    if (keyed) EXPECT_NE(n0.find("cluster key mismatch"), std::string::npos) << n0;  // the impostor, refused
+  }
   const std::vector<std::string> m = modes(c.stats());
-  ASSERT_EQ(m.size(), 1500u);
+  ASSERT_EQ(m.size(), frames);
   // switch ... (frustum) resync single ... resync switch ... to the end.
   const size_t single = find_from(m, "single", 0);
   ASSERT_LT(single, m.size());
@@ -164,11 +218,12 @@ void restarted_node_rejoins(int k) {
   EXPECT_NE(s["hc_node"][back + 1], s["hc_node"][back + 2]);
   EXPECT_NE(c.restarted(k).log().find("resync at frame " + std::to_string(back)), std::string::npos)
       << c.restarted(k).log();
-  expect_equals_reference(dir, path, 1500);
+  expect_equals_reference(dir, path, frames);
 }
 
 TEST(Recovery, RestartedNode1RejoinsAndTheSwitchResumes) { restarted_node_rejoins(1); }
 TEST(Recovery, RestartedNode0RejoinsAndTheSwitchResumes) { restarted_node_rejoins(0); }
+TEST(Recovery, KeyedRestartedNode1RejoinsAndStrangersAreRefused) { restarted_node_rejoins(1, true); }
 
 // The render client's link to node 1 stalls (link_relay): after its receive timeout the client
 // drops node 1 and node 0 serves alone; the path finishes with exit 0 and exact frames.

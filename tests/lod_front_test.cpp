@@ -307,3 +307,154 @@ TEST(FrontCull, VisiblePixelLodStopsWhereFewPixelsShow) {
   }
   EXPECT_GT(stops, 0);
 }
+
+// The visibility hold (culling.hpp VisibilityHold), the window itself: a node seen in frame s is
+// kept through frame s + K, in the frustum only, and never beside its own ancestor or descendant.
+TEST(VisibilityHold, KeepsRecentlySeenNodesInTheFrustumAndNeverOverlapsFound) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  const Hierarchy& h = w.h;
+  const Camera all = Camera::look_at(h.node(0).box.center() + glm::dvec3(0, h.node(0).box.diagonal(), 0.01),
+                                     h.node(0).box.center(), {0, 1, 0}, 90, 1, 0.1, 1e5);
+  uint32_t leaf = 0, sibling = kNoNode;
+  while (!h.node(leaf).leaf()) leaf = h.node(leaf).first_child;
+  const uint32_t parent = h.node(leaf).parent;
+  for (uint32_t c = h.node(parent).first_child; c < h.node(parent).first_child + h.node(parent).child_count; ++c)
+    if (c != leaf && h.node(c).item_count > 0) sibling = c;
+  ASSERT_NE(sibling, kNoNode);
+  VisibilityHold hold(h.size(), 4);
+  const std::vector<uint32_t> prev{leaf, sibling};
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 1).empty()) << "never seen: not held";
+  hold.seen(leaf, 3);
+  hold.seen(sibling, 3);
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 4).empty()) << "seen in one frame only: not held";
+  hold.seen(leaf, 1);  // an older sighting changes nothing
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 4).empty());
+  hold.seen(leaf, 3);
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 4).empty()) << "the same frame twice is one sighting";
+  VisibilityHold late(h.size(), 4);
+  late.seen(leaf, 1);
+  late.seen(leaf, 20);
+  EXPECT_TRUE(late.held(r, all, prev, {}, 21).empty()) << "the sighting before was 19 frames earlier (> 4 K)";
+  hold = VisibilityHold(h.size(), 4);
+  for (uint32_t f : {1u, 3u}) {
+    hold.seen(leaf, f);
+    hold.seen(sibling, f);
+  }
+  EXPECT_EQ(hold.held(r, all, prev, {}, 7), prev) << "seen in frames 1 and 3, K = 4: kept through frame 7";
+  EXPECT_TRUE(hold.held(r, all, prev, {}, 8).empty()) << "frame 8: five frames after the last sighting";
+  const std::vector<uint32_t> found_leaf{leaf}, found_parent{parent};
+  EXPECT_EQ(hold.held(r, all, prev, found_leaf, 5), std::vector<uint32_t>{sibling}) << "found ids are not held twice";
+  EXPECT_TRUE(hold.held(r, all, prev, found_parent, 5).empty()) << "the parent's HLOD replaces its children";
+  hold.seen(parent, 4);
+  hold.seen(parent, 5);
+  EXPECT_TRUE(hold.held(r, all, found_parent, found_leaf, 6).empty()) << "a child found: its ancestor is not held";
+  // Looking away from the node: outside the frustum, not held.
+  const glm::dvec3 c = h.node(leaf).box.center();
+  const Camera away = Camera::look_at(c + glm::dvec3(0, 0, 50), c + glm::dvec3(0, 0, 100), {0, 1, 0}, 60, 1, 0.1, 1e4);
+  EXPECT_TRUE(hold.held(r, away, std::vector<uint32_t>{leaf}, {}, 6).empty());
+  VisibilityHold off(h.size(), 0);
+  off.seen(leaf, 2);
+  off.seen(leaf, 3);
+  EXPECT_TRUE(off.held(r, all, prev, {}, 3).empty()) << "K = 0 is off";
+}
+
+// Two switch nodes alternating HC frames, each with its own hold that records its own results and
+// the other node's additions (as switch_node does), under an occlusion oracle where some points
+// flicker (visible every other frame): V_f always contains the fresh traversal's set, every extra
+// id was in V_{f-1} and seen within K frames, V_f stays an antichain (each leaf drawn at most once),
+// receivers rebuild it with matching hashes, and far fewer ids cross the wire than without a hold.
+TEST(VisibilityHold, TwoNodesKeepFlickeringNodesConservativelyAndSendFewerIds) {
+  const World& w = world();
+  Renderables r(w.h, &w.lod);
+  const Hierarchy& h = w.h;
+  constexpr uint32_t K = 6;
+  for (double tau : {0.0, 2.0}) {
+    uint64_t ids_sent[2] = {0, 0};
+    for (int with_hold = 0; with_hold < 2; ++with_hold) {
+      std::mt19937 rng(31 + int(tau));
+      ClusterConfig config;
+      config.pixel_error = tau;
+      const SwitchStep step(r, config, 480);
+      std::vector<VisibilityHold> holds(2, VisibilityHold(h.size(), with_hold ? K : 0));
+      std::vector<uint32_t> last_seen_any(h.size(), 0);  // frame + 1, over both nodes
+      VisibleSet visible(r.count()), received(r.count());
+      std::vector<wire::Message> stream;
+      DiffSender out(64, false, [&](const wire::Message& m) { stream.push_back(m); });
+      // The same frames as full sets (--full-sets): every id of V_f, held ones included.
+      std::vector<wire::Message> full_stream;
+      DiffSender full_out(64, true, [&](const wire::Message& m) { full_stream.push_back(m); });
+      VisibleSet full_visible(r.count());
+      std::vector<VisibilityHold> full_holds = holds;
+      DiffReceiver in;
+      const Aabb box = h.node(0).box;
+      Camera cam = random_camera(rng, box);
+      const std::vector<glm::dvec3> steady = random_points(rng, box, 40), flicker = random_points(rng, box, 40);
+      for (uint32_t f = 0; f < 96; ++f) {
+        if (f % 32 == 31) cam = random_camera(rng, box);
+        else cam.eye += glm::dvec3(0.1, 0, 0.05);
+        PointQueries q;
+        q.points = steady;
+        // Half the flickering points show every other frame throughout, half stop after frame 40.
+        if (f % 2 == 0) q.points.insert(q.points.end(), flicker.begin(), flicker.begin() + (f < 40 ? 40 : 20));
+        const LodSelector sel = config.lod_policy(480).selector(r, cam);
+        auto fresh = hardware_cull_lod(h, cam, q, sel);
+        for (uint32_t id : fresh) last_seen_any[r.node_of(id)] = f + 1;
+        const uint32_t k = f % 2;
+        stream.clear();
+        VisibleSet before = visible;
+        step.coarsen(before, cam);
+        const HcFrame hc = step.hc(f, visible, cam, q, {.hold = &holds[k]}, out);
+        full_stream.clear();
+        VisibleSet full_before = full_visible;
+        const HcFrame full_hc = step.hc(f, full_visible, cam, q, {.hold = &full_holds[k]}, full_out);
+        VisibleSet full_received(r.count());  // a full-sets receiver starts each frame empty
+        DiffReceiver full_in;
+        for (const wire::Message& m : full_stream) {
+          const auto& d = std::get<wire::NodeDiff>(m);
+          ASSERT_FALSE(full_in.on_diff(full_received, d));
+          for (uint32_t id : d.added)  // as switch_node: only ids new to V' were found
+            if (!full_before.contains(id)) full_holds[1 - k].seen(r.node_of(id), f);
+        }
+        ASSERT_FALSE(full_in.on_end_of_frame(full_received, full_hc.eof)) << "full sets, frame " << f;
+        EXPECT_TRUE(full_received == full_visible);
+        EXPECT_TRUE(full_visible == visible) << "full sets keep the same set, frame " << f;
+        ids_sent[with_hold] += hc.eof.total_added + hc.eof.total_removed;
+        for (const wire::Message& m : stream)
+          for (uint32_t id : std::get<wire::NodeDiff>(m).added) holds[1 - k].seen(r.node_of(id), f);
+        std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
+        std::sort(v.begin(), v.end());
+        ASSERT_TRUE(std::includes(v.begin(), v.end(), fresh.begin(), fresh.end())) << "tau " << tau << " frame " << f;
+        if (!with_hold) EXPECT_EQ(v, fresh);
+        EXPECT_EQ(hc.held, v.size() - fresh.size());
+        std::vector<uint8_t> in_v(h.size(), 0);
+        for (uint32_t id : v) {
+          const uint32_t n = r.node_of(id);
+          ASSERT_EQ(in_v[n], 0) << "node " << n << " twice in V";
+          in_v[n] = 1;
+          if (!std::binary_search(fresh.begin(), fresh.end(), id)) {
+            EXPECT_TRUE(before.contains(id)) << "held ids come from V_{f-1}";
+            EXPECT_GE(last_seen_any[n] + K, f + 1) << "held longer than K frames: node " << n;
+            EXPECT_NE(cam.frustum().classify(h.node(n).box), Containment::Outside);
+          }
+        }
+        for (uint32_t id = 0; id < h.size(); ++id) {  // each leaf drawn at most once
+          if (!h.node(id).leaf()) continue;
+          int n = 0;
+          for (uint32_t a = id; a != kNoNode; a = h.node(a).parent) n += in_v[a];
+          ASSERT_LE(n, 1) << "leaf " << id << " under two nodes of V, frame " << f;
+        }
+        // The receiving end rebuilds V_f.
+        const uint64_t front = step.coarsen(received, cam);
+        EXPECT_EQ(front, hc.eof.front_hash);
+        for (const wire::Message& m : stream) ASSERT_FALSE(in.on_diff(received, std::get<wire::NodeDiff>(m)));
+        ASSERT_FALSE(in.on_end_of_frame(received, hc.eof)) << "frame " << f;
+        EXPECT_TRUE(received == visible);
+      }
+    }
+    std::printf("tau %g: ids sent %llu with the hold, %llu without\n", tau, (unsigned long long)ids_sent[1],
+                (unsigned long long)ids_sent[0]);
+    EXPECT_LT(2 * ids_sent[1], ids_sent[0]) << "tau " << tau << ": with hold " << ids_sent[1] << " ids, without "
+                                            << ids_sent[0];
+  }
+}

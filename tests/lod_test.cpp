@@ -326,3 +326,41 @@ TEST(LodBenefit, LowPolyScenesHaveNoneCitiesHaveMuch) {
   for (const HNode& n : city.h.nodes()) full += n.leaf() ? n.triangles : 0;
   EXPECT_EQ(high.saved_triangles, uint64_t(std::llround(high.fraction * double(full))));
 }
+
+// An HLOD is drawn opaque: a subtree that holds glass (BLEND) must be refined, never drawn as its
+// HLOD, or the glass would hide what it shows (and occlude in the OR).
+TEST(LodSelect, SubtreesWithBlendedItemsAreNeverDrawnAsHlods) {
+  Built b = small_city(3);
+  const uint32_t glass_mesh = b.scene.objects[b.h.items()[0].object].mesh;
+  Material glass;
+  glass.alpha_mode = AlphaMode::Blend;
+  b.scene.materials.push_back(glass);
+  b.scene.meshes[glass_mesh].material = uint32_t(b.scene.materials.size() - 1);
+  const uint32_t forbidden = forbid_blended_hlods(b.lod, b.scene, b.h);
+
+  Renderables r(b.h, &b.lod);
+  const Aabb all = b.h.node(0).box;
+  const Camera far = Camera::look_at(all.center() + glm::dvec3(0, 0, 1e3 * all.diagonal()), all.center(), {0, 1, 0},
+                                     60.0, 1.0, 0.1, 1e9);
+  const LodSelector sel(r, far, 600, 1000.0);  // every existing HLOD meets this tau from there
+  uint32_t expected = 0, allowed = 0;
+  for (uint32_t id = 0; id < b.h.size(); ++id) {
+    const HNode& n = b.h.node(id);
+    if (n.leaf()) continue;
+    bool holds_glass = false;  // a subtree's items are one contiguous range
+    for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i)
+      holds_glass |= b.scene.objects[b.h.items()[i].object].mesh == glass_mesh;
+    expected += holds_glass;
+    if (holds_glass) {
+      EXPECT_FALSE(sel.hlod_allowed(id)) << id;
+      EXPECT_FALSE(sel.satisfies(id)) << id;
+    } else if (b.lod.hlod(id)) {
+      EXPECT_TRUE(sel.hlod_allowed(id)) << id;
+      EXPECT_TRUE(sel.satisfies(id)) << id;
+      ++allowed;
+    }
+  }
+  EXPECT_GT(expected, 0u);
+  EXPECT_EQ(forbidden, expected);
+  EXPECT_GT(allowed, 0u);
+}

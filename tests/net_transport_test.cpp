@@ -15,6 +15,7 @@
 #include <boost/asio.hpp>
 #include <gtest/gtest.h>
 
+#include "protocol/net/auth.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/visible_set.hpp"
 
@@ -369,10 +370,10 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   peer.join();
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(),
-                       "hello: unsupported protocol version 1 (this build speaks 3)"))
+                       "hello: unsupported protocol version 1 (this build speaks 4)"))
       << result.error();
   EXPECT_EQ(bye_reason(peer_saw),
-            "protocol error: hello: unsupported protocol version 1 (this build speaks 3)");
+            "protocol error: hello: unsupported protocol version 1 (this build speaks 4)");
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 
@@ -587,4 +588,170 @@ TEST_F(Listener, AcceptTimesOutWhenNobodyConnects) {
   EXPECT_LT(elapsed_ms(t0), 1000);
   ASSERT_FALSE(conn);
   EXPECT_TRUE(contains(conn.error(), "within 200 ms")) << conn.error();
+}
+
+// ---- The cluster key in the handshake (wire.hpp "Handshake", docs/security.md) ----
+
+namespace {
+
+net::ClusterKey key_of(char fill) { return *net::ClusterKey::from_bytes(std::string(40, fill)); }
+
+struct Outcomes {
+  Result<wire::Hello> acceptor = Error{"not run"}, connector = Error{"not run"};
+  std::unique_ptr<net::Connection> connection;  // the connector's, after its handshake
+};
+
+// The acceptor's handshake (a switch node) in a thread, the connector's (a render client) here.
+Outcomes handshake_both(net::Listener& listener, const net::PeerExpectation& acceptor,
+                        const net::PeerExpectation& connector, LogCapture& log) {
+  Outcomes o;
+  std::thread server([&] {
+    auto conn = listener.accept(5s, log.options());
+    if (!conn) return;
+    o.acceptor = net::handshake(*conn, make_hello(wire::Role::switch_node), acceptor, 5s);
+    if (o.acceptor) conn->receive(2s);  // until the client's Bye
+  });
+  auto conn = net::Connection::connect("127.0.0.1", listener.port(), 5s, log.options());
+  if (conn) {
+    o.connector = net::handshake(*conn, make_hello(wire::Role::render_client), connector, 5s);
+    o.connection = std::make_unique<net::Connection>(std::move(*conn));
+    if (o.connector) o.connection->close("done");
+  }
+  server.join();
+  return o;
+}
+
+net::PeerExpectation with_key(const net::ClusterKey* key) {
+  net::PeerExpectation e;
+  e.key = key;
+  return e;
+}
+
+}  // namespace
+
+TEST_F(Handshake, TheSameKeyOnBothSidesIsAccepted) {
+  const net::ClusterKey a = key_of('k'), b = key_of('k');
+  Outcomes o = handshake_both(*listener, with_key(&a), with_key(&b), log);
+  ASSERT_TRUE(o.acceptor) << o.acceptor.error();
+  ASSERT_TRUE(o.connector) << o.connector.error();
+  EXPECT_EQ(o.connector->role, wire::Role::switch_node);
+  EXPECT_EQ(o.connector->auth, wire::Auth::cluster_key);
+  EXPECT_EQ(o.acceptor->auth, wire::Auth::cluster_key);
+  EXPECT_NE(o.acceptor->nonce, wire::Nonce{});
+  // Each side sent one hello and one proof.
+  EXPECT_EQ(o.connection->stats().sent.messages_of(wire::Type::proof), 1u);
+  EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::proof), 1u);
+  EXPECT_TRUE(log.snapshot().empty());
+}
+
+TEST_F(Handshake, AKeyOnOneSideOnlyIsRefusedOnBothSidesSayingWhich) {
+  const net::ClusterKey key = key_of('k');
+  Outcomes o = handshake_both(*listener, with_key(&key), {}, log);  // a client without the key
+  ASSERT_FALSE(o.acceptor);
+  ASSERT_FALSE(o.connector);
+  EXPECT_TRUE(contains(o.acceptor.error(), "cluster key: the peer has none")) << o.acceptor.error();
+  EXPECT_TRUE(contains(o.connector.error(), "cluster key: the peer requires one")) << o.connector.error();
+
+  Outcomes p = handshake_both(*listener, {}, with_key(&key), log);  // a keyed client, a node without
+  ASSERT_FALSE(p.acceptor);
+  ASSERT_FALSE(p.connector);
+  EXPECT_TRUE(contains(p.acceptor.error(), "cluster key: the peer requires one")) << p.acceptor.error();
+  EXPECT_TRUE(contains(p.connector.error(), "cluster key: the peer has none")) << p.connector.error();
+}
+
+TEST_F(Handshake, AWrongKeyIsRefusedOnBothSidesAndTheAcceptorProvesNothing) {
+  const net::ClusterKey key = key_of('k'), wrong = key_of('w');
+  Outcomes o = handshake_both(*listener, with_key(&key), with_key(&wrong), log);
+  ASSERT_FALSE(o.acceptor);
+  ASSERT_FALSE(o.connector);
+  EXPECT_TRUE(contains(o.acceptor.error(), "cluster key mismatch")) << o.acceptor.error();
+  EXPECT_TRUE(contains(o.connector.error(), "peer said bye: cluster key mismatch: the proof of render_client 0 (\"test\") does not verify"))
+      << o.connector.error();
+  EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::proof), 0u);
+}
+
+// A connector that plays the handshake by hand with the right key, sends its proof through
+// `tweak`, and reports what the acceptor answered.
+struct ManualConnector {
+  net::Listener& listener;
+  LogCapture& log;
+  wire::Nonce nonce;
+  wire::Hello acceptor_hello;
+
+  Result<wire::Hello> run(const net::ClusterKey& node_key, const net::ClusterKey& my_key,
+                          const std::function<wire::Proof(const wire::Proof& fresh)>& tweak,
+                          std::vector<wire::Type>* answered) {
+    Result<wire::Hello> acceptor = Error{"not run"};
+    std::thread server([&] {
+      auto conn = listener.accept(5s, log.options());
+      if (!conn) return;
+      acceptor = net::handshake(*conn, make_hello(wire::Role::switch_node), with_key(&node_key), 5s);
+    });
+    auto conn = net::Connection::connect("127.0.0.1", listener.port(), 5s, log.options());
+    if (conn) {
+      wire::Hello mine = make_hello(wire::Role::render_client);
+      mine.auth = wire::Auth::cluster_key;
+      mine.nonce = nonce;
+      conn->send(mine);
+      net::Received r = conn->receive(5s);
+      if (auto* h = std::get_if<wire::Hello>(&r.message)) {
+        acceptor_hello = *h;
+        conn->send(tweak(my_key.prove(wire::ProofDirection::connector, mine, *h)));
+        for (net::Received m = conn->receive(5s); m.ok(); m = conn->receive(5s))
+          answered->push_back(wire::type_of(m.message));
+      }
+    }
+    server.join();
+    return acceptor;
+  }
+};
+
+TEST_F(Handshake, AReplayedProofIsRefused) {
+  const net::ClusterKey key = key_of('k');
+  ManualConnector c{*listener, log, net::random_nonce(), {}};
+  std::vector<wire::Type> answered;
+  wire::Proof recorded;
+  // A genuine exchange, recorded by an eavesdropper...
+  ASSERT_TRUE(c.run(key, key, [&](const wire::Proof& p) { return recorded = p; }, &answered));
+  ASSERT_EQ(answered, std::vector<wire::Type>{wire::Type::proof});
+  const wire::Nonce first_challenge = c.acceptor_hello.nonce;
+  // ... replayed on a new connection with the same hello: the acceptor's challenge is new.
+  answered.clear();
+  auto replay = c.run(key, key, [&](const wire::Proof&) { return recorded; }, &answered);
+  EXPECT_NE(c.acceptor_hello.nonce, first_challenge);
+  ASSERT_FALSE(replay);
+  EXPECT_TRUE(contains(replay.error(), "cluster key mismatch")) << replay.error();
+  EXPECT_TRUE(answered.empty());  // no proof of the acceptor's in return
+}
+
+TEST_F(Handshake, ATamperedProofIsRefused) {
+  const net::ClusterKey key = key_of('k');
+  for (size_t byte : {0u, 17u, 31u}) {
+    ManualConnector c{*listener, log, net::random_nonce(), {}};
+    std::vector<wire::Type> answered;
+    auto r = c.run(key, key, [&](wire::Proof p) { p.mac[byte] ^= 0x01; return p; }, &answered);
+    ASSERT_FALSE(r) << "byte " << byte;
+    EXPECT_TRUE(contains(r.error(), "cluster key mismatch")) << r.error();
+    EXPECT_TRUE(answered.empty());
+  }
+}
+
+TEST_F(Handshake, ARefusalTakesThePlaceOfTheAcceptorsLastMessage) {
+  const net::ClusterKey key = key_of('k');
+  for (const net::ClusterKey* k : {static_cast<const net::ClusterKey*>(nullptr), &key}) {
+    net::PeerExpectation acceptor = with_key(k);
+    std::string asked_about;
+    acceptor.refuse = [&](const wire::Hello& h) {
+      asked_about = std::string(wire::role_name(h.role));
+      return std::optional<std::string>("busy: node 0 is serving another render client");
+    };
+    Outcomes o = handshake_both(*listener, acceptor, with_key(k), log);
+    ASSERT_FALSE(o.acceptor);
+    ASSERT_FALSE(o.connector) << "the connector's handshake must fail, not succeed and then read a bye";
+    EXPECT_EQ(asked_about, "render_client");
+    EXPECT_TRUE(contains(o.connector.error(), "peer said bye: busy: node 0 is serving another render client"))
+        << o.connector.error();
+    EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::hello), k ? 1u : 0u);
+    EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::proof), 0u);
+  }
 }

@@ -33,7 +33,8 @@ void check_frame(const std::vector<uint8_t>& bytes, Tally& tally) {
 // A frame header with a known type and a length inside that type's bounds, followed by random
 // payload bytes, so the input gets past the header checks into the payload decoders.
 std::vector<uint8_t> random_plausible_frame(std::mt19937_64& rng) {
-  static const uint32_t sizes[][2] = {{46, 110}, {100, 100}, {12, 200}, {68, 68}, {2, 120}, {12, 12}};
+  static const uint32_t sizes[][2] = {{79, 143}, {100, 100}, {12, 200}, {68, 68},
+                                      {2, 120},  {32, 32},   {12, 12}};
   static_assert(std::size(sizes) == kTypeCount);
   const uint16_t type = static_cast<uint16_t>(1 + rng() % kTypeCount);
   const auto [lo, hi] = sizes[type - 1];
@@ -45,10 +46,13 @@ std::vector<uint8_t> random_plausible_frame(std::mt19937_64& rng) {
   if (type == 1 && rng() % 2) {
     const uint8_t prefix[] = {'O', 'C', 'S', 'W', static_cast<uint8_t>(kProtocolVersion), 0, static_cast<uint8_t>(rng() % 3)};
     std::copy(std::begin(prefix), std::end(prefix), b.begin() + 6);
-    const uint16_t name = static_cast<uint16_t>(len - 46);
-    b[6 + 44] = name & 0xff;
-    b[6 + 45] = name >> 8;
-    for (size_t i = 6 + 46; i < b.size(); ++i) b[i] = 'a' + rng() % 26;
+    const uint8_t auth = static_cast<uint8_t>(rng() % 2);  // with auth 0, the nonce must be zero
+    b[6 + 44] = auth;
+    if (auth == 0) std::fill(b.begin() + 6 + 45, b.begin() + 6 + 77, uint8_t(0));
+    const uint16_t name = static_cast<uint16_t>(len - 79);
+    b[6 + 77] = name & 0xff;
+    b[6 + 78] = name >> 8;
+    for (size_t i = 6 + 79; i < b.size(); ++i) b[i] = 'a' + rng() % 26;
   }
   if (type == 3 && rng() % 2) {  // consistent counts
     const uint32_t ids = (len - 12) / 4, added = ids ? static_cast<uint32_t>(rng() % (ids + 1)) : 0;

@@ -18,6 +18,12 @@ std::vector<Message> sample_messages() {
   hello.cluster_triangles = 2048;
   hello.config_hash = 0xfedcba9876543210ULL;
   hello.name = "switch-1 \xc3\xa9\xe2\x9c\x93";  // "switch-1 é✓"
+  Hello keyed = hello;
+  keyed.role = Role::render_client;
+  keyed.auth = Auth::cluster_key;
+  for (size_t i = 0; i < keyed.nonce.size(); ++i) keyed.nonce[i] = uint8_t(0xa0 + i);
+  Proof proof;
+  for (size_t i = 0; i < proof.mac.size(); ++i) proof.mac[i] = uint8_t(255 - 7 * i);
 
   Camera cam;
   cam.frame = 0x01020304;
@@ -44,5 +50,6 @@ std::vector<Message> sample_messages() {
 
   return {Message{hello},      Message{Hello{}}, Message{cam},           Message{Camera{}},
           Message{diff},       Message{only_removed}, Message{empty},   Message{eof},
-          Message{Bye{"done"}}, Message{Bye{""}}, Message{Resync{41, 3, 1}}, Message{Resync{}}};
+          Message{Bye{"done"}}, Message{Bye{""}}, Message{keyed},   Message{proof},
+          Message{Proof{}},     Message{Resync{41, 3, 1}}, Message{Resync{}}};
 }

@@ -43,17 +43,18 @@ TEST(Wire, EveryMessageTypeRoundTrips) {
 }
 
 TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
-  EXPECT_EQ(encode(Hello{}).size(), 6u + 46u);
+  EXPECT_EQ(encode(Hello{}).size(), 6u + 79u);
   Hello named;
   named.name = "abc";
-  EXPECT_EQ(encode(named).size(), 6u + 46u + 3u);
+  EXPECT_EQ(encode(named).size(), 6u + 79u + 3u);
+  EXPECT_EQ(encode(Proof{}).size(), 6u + 32u);
   EXPECT_EQ(encode(Camera{}).size(), 6u + 100u);
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
   EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
   EXPECT_EQ(encode(Bye{"bye"}).size(), 6u + 2u + 3u);
   const auto resync = encode(Resync{0x01020304, 5, 1});
   ASSERT_EQ(resync.size(), 6u + 12u);
-  EXPECT_EQ(resync[0], 6);  // type resync
+  EXPECT_EQ(resync[0], 7);  // type resync (6 is proof)
   EXPECT_EQ(resync[6], 4);  // frame, u32 LE
   EXPECT_EQ(resync[10], 5);  // epoch
   EXPECT_EQ(resync[14], 1);  // nodes
@@ -66,6 +67,28 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   EXPECT_EQ(std::string(hello.begin() + 6, hello.begin() + 10), "OCSW");
   EXPECT_EQ(hello[10], kProtocolVersion);
   EXPECT_EQ(hello[11], 0);
+  Hello keyed;
+  keyed.config_hash = 0x0102030405060708ULL;
+  keyed.auth = Auth::cluster_key;
+  keyed.nonce[0] = 0x5a;
+  keyed.nonce[31] = 0xa5;
+  keyed.name = "n";
+  const auto k = encode(keyed);
+  EXPECT_EQ(k[6 + 36], 0x08);  // config_hash
+  EXPECT_EQ(k[6 + 43], 0x01);
+  EXPECT_EQ(k[6 + 44], 1);     // auth
+  EXPECT_EQ(k[6 + 45], 0x5a);  // nonce
+  EXPECT_EQ(k[6 + 76], 0xa5);
+  EXPECT_EQ(k[6 + 77], 1);     // name_bytes
+  EXPECT_EQ(k[6 + 79], 'n');
+  Proof proof;
+  proof.mac[0] = 0x11;
+  proof.mac[31] = 0x22;
+  const auto p = encode(proof);
+  EXPECT_EQ(p[0], 6);  // type proof
+  EXPECT_EQ(p[2], 32);
+  EXPECT_EQ(p[6], 0x11);
+  EXPECT_EQ(p[6 + 31], 0x22);
 
   Camera cam;
   cam.frame = 0x01020304;
@@ -128,7 +151,7 @@ TEST(Wire, TrailingBytesAreRejected) {
   // Inside a payload: a string length or id count that does not cover the whole payload.
   auto hello = encode(Hello{});
   hello.push_back('x');
-  put_u32(hello, 2, 47);
+  put_u32(hello, 2, 80);
   EXPECT_NE(decode_error(hello).find("does not match"), std::string::npos) << decode_error(hello);
   auto diff = encode(NodeDiff{1, {1}, {}});
   diff.insert(diff.end(), {2, 0, 0, 0});
@@ -139,7 +162,7 @@ TEST(Wire, TrailingBytesAreRejected) {
 
 TEST(Wire, CorruptedHeaderFieldsAreRejected) {
   auto bytes = encode(Camera{});
-  for (uint16_t type : {0, 7, 255, 0xffff}) {
+  for (uint16_t type : {0, 8, 255, 0xffff}) {
     auto b = bytes;
     put_u16(b, 0, type);
     EXPECT_EQ(decode_error(b), "unknown message type " + std::to_string(type));
@@ -170,7 +193,10 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 3)");
+            "hello: unsupported protocol version 1 (this build speaks 4)");
+  put_u16(bad_version, 10, 3);  // the cluster key without Resync
+  EXPECT_EQ(decode_error(bad_version),
+            "hello: unsupported protocol version 3 (this build speaks 4)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
@@ -201,9 +227,59 @@ TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
   h = Hello{};
   h.name = std::string(kMaxNameBytes + 1, 'n');
   EXPECT_EQ(*invalid_reason(h), "hello: name of 65 bytes exceeds 64");
-  EXPECT_EQ(decode_error(encode(h)), "hello: payload of 111 bytes, expected 46..110");
+  EXPECT_EQ(decode_error(encode(h)), "hello: payload of 144 bytes, expected 79..143");
   h.name.pop_back();
   EXPECT_TRUE(decode(encode(h)));
+}
+
+TEST(Wire, HelloRejectsUnknownAuthAndANonceWithoutAuth) {
+  auto bytes = encode(Hello{});
+  bytes[6 + 44] = 2;
+  EXPECT_EQ(decode_error(bytes), "hello: unknown auth 2");
+  bytes[6 + 44] = 0;
+  bytes[6 + 50] = 1;  // a nonce byte with auth 0
+  EXPECT_EQ(decode_error(bytes), "hello: nonce without auth");
+  bytes[6 + 44] = 1;
+  EXPECT_EQ(decode_error(bytes), "<accepted>");
+}
+
+TEST(Wire, ProofIsExactly32Bytes) {
+  auto bytes = encode(Proof{});
+  bytes.push_back(0);
+  put_u32(bytes, 2, 33);
+  EXPECT_EQ(decode_error(bytes), "proof: payload of 33 bytes, expected 32");
+}
+
+// The MAC'd bytes of a proof (wire.hpp "Handshake"): label, roles and ids, verifier's nonce, then
+// the prover's; each direction, role, id and nonce changes them.
+TEST(Wire, ProofInputLayout) {
+  Hello c, a;
+  c.role = Role::render_client;
+  c.auth = a.auth = Auth::cluster_key;
+  a.role = Role::switch_node;
+  a.node_id = 1;
+  c.nonce.fill(0xcc);
+  a.nonce.fill(0xaa);
+  const auto in = proof_input(ProofDirection::connector, c, a);
+  const std::string label = "occswitch proof v1 connector";
+  ASSERT_EQ(in.size(), label.size() + 4 + 64);
+  EXPECT_EQ(std::string(in.begin(), in.begin() + long(label.size())), label);
+  const size_t o = label.size();
+  EXPECT_EQ(in[o], 1);      // prover role render_client
+  EXPECT_EQ(in[o + 1], 0);  // prover node id
+  EXPECT_EQ(in[o + 2], 0);  // verifier role switch_node
+  EXPECT_EQ(in[o + 3], 1);  // verifier node id
+  EXPECT_EQ(in[o + 4], 0xaa);       // the verifier's nonce: the challenge
+  EXPECT_EQ(in[o + 4 + 32], 0xcc);  // the prover's own
+  const auto acc = proof_input(ProofDirection::acceptor, a, c);
+  EXPECT_EQ(std::string(acc.begin(), acc.begin() + 27), "occswitch proof v1 acceptor");
+  EXPECT_NE(acc, in);
+  Hello c2 = c;
+  c2.nonce[5] ^= 1;
+  EXPECT_NE(proof_input(ProofDirection::connector, c2, a), in);
+  c2 = c;
+  c2.node_id = 1;
+  EXPECT_NE(proof_input(ProofDirection::connector, c2, a), in);
 }
 
 TEST(Wire, CameraRejectsEveryInvalidValue) {
@@ -324,6 +400,8 @@ TEST(Wire, TypeAndRoleNames) {
   EXPECT_EQ(role_name(Role::render_client), "render_client");
   EXPECT_EQ(role_name(static_cast<Role>(7)), "unknown");
   EXPECT_EQ(type_index(Type::hello), 0u);
+  EXPECT_EQ(type_index(Type::proof), 5u);
+  EXPECT_EQ(type_name(Type::proof), "proof");
   EXPECT_EQ(type_index(Type::resync), kTypeCount - 1);
   EXPECT_EQ(type_name(Type::resync), "resync");
 }

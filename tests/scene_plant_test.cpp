@@ -2,14 +2,22 @@
 // triangles, unique meshes, a walk down its aisle, clear errors for bad specs.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
+#include <random>
 #include <set>
 
 #include "common/camera_path.hpp"
 #include "common/error.hpp"
 #include "common/hierarchy.hpp"
 #include "common/plant.hpp"
+#include "common/scene_cache.hpp"
 #include "common/scene_io.hpp"
+#include "common/scene_setup.hpp"
 #include "scene_fixtures.hpp"
 
 using namespace occ;
@@ -98,4 +106,140 @@ TEST(Plant, BadSpecsNameTheSpec) {
     EXPECT_NE(e.find("0.01..200"), std::string::npos) << e;
   }
   EXPECT_THROW(plant::generate_plant({0.0, 1}), InputError);
+}
+
+// ---- The scene cache (common/scene_cache.hpp, issue 16).
+
+namespace {
+
+std::string cache_dir(const std::string& name) {
+  const std::string d = testing::TempDir() + "/occ_scene_cache_" + name + "_" + std::to_string(::getpid());
+  std::filesystem::remove_all(d);
+  return d;
+}
+
+std::vector<char> file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::string& path, const std::vector<char>& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+}
+
+}  // namespace
+
+TEST(SceneCache, RoundTripRestoresTheSceneAndHierarchyExactly) {
+  Scene s = load_scene("plant:0.05");
+  const Hierarchy h = Hierarchy::build(s, {});
+  const std::string dir = cache_dir("roundtrip"), path = dir + "/p.scene";
+  const uint64_t key = scene_cache_key("plant:0.05", {});
+  ASSERT_FALSE(save_scene_cache(path, key, s, h).has_value());
+  std::string why;
+  auto back = load_scene_cache(path, key, &why);
+  ASSERT_TRUE(back.has_value()) << why;
+  EXPECT_EQ(back->scene.content_hash(), s.content_hash());
+  EXPECT_EQ(back->hierarchy.fingerprint(), h.fingerprint());
+  // The restored scene is the split one (clusters and the reordered indices), as the renderers
+  // and the LOD builder need it: same clusters per mesh, same hash.
+  ASSERT_EQ(back->hierarchy.size(), h.size());
+  for (uint32_t id = 0; id < h.size(); ++id) {
+    EXPECT_EQ(back->hierarchy.node(id).first_item, h.node(id).first_item);
+    EXPECT_EQ(back->hierarchy.node(id).triangles, h.node(id).triangles);
+    EXPECT_EQ(back->hierarchy.node(id).box.min, h.node(id).box.min);
+  }
+  ASSERT_EQ(back->scene.meshes.size(), s.meshes.size());
+  for (size_t m = 0; m < s.meshes.size(); ++m) {
+    ASSERT_EQ(back->scene.meshes[m].clusters.size(), s.meshes[m].clusters.size());
+    EXPECT_EQ(back->scene.meshes[m].normals, s.meshes[m].normals);
+    EXPECT_EQ(back->scene.meshes[m].name, s.meshes[m].name);
+  }
+  EXPECT_EQ(back->scene.objects.back().name, s.objects.back().name);
+  EXPECT_EQ(back->scene.source, s.source);
+  // Another spec or other hierarchy parameters: another key, the file is stale.
+  EXPECT_NE(scene_cache_key("plant:0.06", {}), key);
+  BuildParams other;
+  other.arity = 4;
+  EXPECT_FALSE(load_scene_cache(path, scene_cache_key("plant:0.05", other), &why).has_value());
+  EXPECT_NE(why.find("stale"), std::string::npos) << why;
+  EXPECT_TRUE(scene_cache_applies("plant:13"));
+  EXPECT_FALSE(scene_cache_applies("city"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SceneCache, CorruptTruncatedOrWrongVersionFilesAreRejectedAndRebuiltByName) {
+  Scene s = load_scene("plant:0.02");
+  const Hierarchy h = Hierarchy::build(s, {});
+  const std::string dir = cache_dir("corrupt"), path = dir + "/p.scene";
+  const uint64_t key = scene_cache_key("plant:0.02", {});
+  ASSERT_FALSE(save_scene_cache(path, key, s, h).has_value());
+  const std::vector<char> good = file_bytes(path);
+  std::string why;
+  for (size_t len : {size_t(0), size_t(7), size_t(20), size_t(35), size_t(36), good.size() / 2, good.size() - 1}) {
+    write_bytes(path, std::vector<char>(good.begin(), good.begin() + ptrdiff_t(len)));
+    EXPECT_FALSE(load_scene_cache(path, key, &why).has_value()) << len;
+    EXPECT_TRUE(why.find("truncated") != std::string::npos) << len << ": " << why;
+  }
+  std::mt19937 rng(5);
+  for (int k = 0; k < 60; ++k) {  // bit flips in the header and anywhere in the payload
+    std::vector<char> bad = good;
+    const size_t at = k < 36 ? size_t(k) : rng() % bad.size();
+    bad[at] = char(bad[at] ^ (1 << (rng() % 8)));
+    write_bytes(path, bad);
+    EXPECT_FALSE(load_scene_cache(path, key, &why).has_value()) << at;
+    EXPECT_FALSE(why.empty());
+  }
+  std::vector<char> bad = good;
+  bad[8] = char(bad[8] + 1);  // format version
+  write_bytes(path, bad);
+  EXPECT_FALSE(load_scene_cache(path, key, &why).has_value());
+  EXPECT_NE(why.find("format version 2, expected 1"), std::string::npos) << why;
+  bad = good;
+  bad[0] = 'X';
+  write_bytes(path, bad);
+  EXPECT_FALSE(load_scene_cache(path, key, &why).has_value());
+  EXPECT_NE(why.find("bad magic"), std::string::npos) << why;
+  bad = good;
+  bad[good.size() / 2] = char(bad[good.size() / 2] ^ 0x10);
+  write_bytes(path, bad);
+  EXPECT_FALSE(load_scene_cache(path, key, &why).has_value());
+  EXPECT_NE(why.find("checksum"), std::string::npos) << why;
+  EXPECT_FALSE(load_scene_cache(dir + "/none.scene", key, &why).has_value());
+  EXPECT_EQ(why, "missing");
+
+  // load_and_build: the first start writes the cache, the second reads it (same fingerprint),
+  // a corrupt one is named, rebuilt and rewritten.
+  SceneOptions o;
+  o.spec = "plant:0.02";
+  o.lod_cache = dir;
+  const std::string cpath = scene_cache_path(dir, o.spec);
+  testing::internal::CaptureStderr();
+  const uint64_t fp1 = load_and_build(o, "t").fingerprint;
+  std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("wrote scene cache " + cpath), std::string::npos) << err;
+  testing::internal::CaptureStderr();
+  const LoadedScene second = load_and_build(o, "t");
+  err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("read from scene cache " + cpath), std::string::npos) << err;
+  EXPECT_EQ(second.fingerprint, fp1);
+  EXPECT_EQ(second.fingerprint, h.fingerprint());
+  EXPECT_EQ(second.scene.triangle_count(), s.triangle_count());
+  std::vector<char> cached = file_bytes(cpath);
+  cached[cached.size() - 3] ^= 0x40;
+  write_bytes(cpath, cached);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(load_and_build(o, "t").fingerprint, fp1);
+  err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("scene cache " + cpath + " is unusable (checksum mismatch (corrupt)): rebuilding it"),
+            std::string::npos) << err;
+  EXPECT_NE(err.find("wrote scene cache"), std::string::npos) << err;
+  o.scene_cache = false;  // --scene-cache off: neither read nor written
+  std::filesystem::remove(cpath);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(load_and_build(o, "t").fingerprint, fp1);
+  err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(err.find("scene cache"), std::string::npos) << err;
+  EXPECT_FALSE(std::filesystem::exists(cpath));
+  std::filesystem::remove_all(dir);
 }

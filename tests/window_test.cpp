@@ -127,6 +127,17 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
   xdotool(dir, {"key", "p"});
   ASSERT_TRUE(wait_for([&] { return rvg.log().find("screenshot ") != std::string::npos || !rvg.running(); }, 10s))
       << rvg.log();
+  // O: the culling overlay, then a second screenshot (with it).
+  xdotool(dir, {"key", "o"});
+  std::this_thread::sleep_for(1000ms);
+  xdotool(dir, {"key", "p"});
+  ASSERT_TRUE(wait_for(
+      [&] {
+        const std::string l = rvg.log();
+        return l.find("screenshot ", l.find("screenshot ") + 1) != std::string::npos || !rvg.running();
+      },
+      10s))
+      << rvg.log();
   xdotool(dir, {"key", "Escape"});
 
   EXPECT_EQ(rvg.wait(30s), 0) << rvg.log();
@@ -172,6 +183,28 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
         break;
       }
   EXPECT_EQ(differing, 0u) << "screenshot frame " << index << " vs the replay's " << name;
+
+  // The overlay screenshot: its frame with occlusion-culled boxes tinted orange (more red, less
+  // blue) over it, and nothing else changed; --out's frames never carry it.
+  EXPECT_NE(log.find("culling overlay on"), std::string::npos) << log;
+  const std::string rest = log.substr(size_t(m.position(0) + m.length(0)));
+  std::smatch m2;
+  ASSERT_TRUE(std::regex_search(rest, m2, std::regex("screenshot (\\S+screenshot_(\\d+)\\.png)"))) << log;
+  const occ::Image tinted = occ::read_png(m2[1].str());
+  const size_t index2 = std::stoul(m2[2].str());
+  ASSERT_LT(index2, cams.size());
+  std::snprintf(name, sizeof name, "frame_%05zu.png", index2);
+  const occ::Image plain = occ::read_png((dir / "replay" / name).string());
+  ASSERT_EQ(plain.rgba.size(), tinted.rgba.size());
+  size_t tinted_px = 0, other = 0;
+  for (size_t p = 0; p < tinted.rgba.size(); p += 4) {
+    const int dr = int(tinted.rgba[p]) - int(plain.rgba[p]), dg = int(tinted.rgba[p + 1]) - int(plain.rgba[p + 1]),
+              db = int(tinted.rgba[p + 2]) - int(plain.rgba[p + 2]);
+    if (std::abs(dr) <= 1 && std::abs(dg) <= 1 && std::abs(db) <= 1) continue;
+    (dr >= -1 && db <= 1 && (dr > 1 || db < -1)) ? ++tinted_px : ++other;
+  }
+  EXPECT_GT(tinted_px, 0u) << "overlay screenshot frame " << index2 << ": nothing tinted";
+  EXPECT_EQ(other, 0u) << "overlay screenshot frame " << index2 << ": pixels changed other than by the tint";
 }
 
 // The window manager's close button (WM_DELETE_WINDOW) quits cleanly, and a movement key takes

@@ -9,6 +9,7 @@
 #include <string>
 
 #include <errno.h>
+#include <malloc.h>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "common/gl/shader.hpp"
@@ -186,8 +187,16 @@ uint32_t pack_rgba8(glm::vec4 c) {
 
 }  // namespace
 
+// Without Upload::release nothing is written through these pointers.
 SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod)
+    : SceneRenderer(ctx, const_cast<Scene&>(scene), hierarchy, const_cast<LodData*>(lod), Upload{}) {}
+
+SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* release_lod,
+                             const Upload& upload)
     : gl_(ctx.gl()), hierarchy_(hierarchy) {
+  const LodData* lod = release_lod;
+  if (scene.geometry_released())
+    throw std::logic_error("SceneRenderer: the geometry of " + scene.source + " was released after an upload");
   struct Vertex {
     glm::vec3 position, normal;
     uint32_t color;  // RGBA8
@@ -246,56 +255,108 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
       any_textured = true;
     }
 
-  std::vector<Vertex> vertices;
-  std::vector<glm::vec2> uvs;
-  std::vector<uint32_t> indices;
+  // Geometry goes to GL in segments (Upload): a segment is staged on the CPU until it holds about
+  // segment_bytes, then becomes its own vertex/index/uv buffers. With Upload::release each mesh's
+  // CPU arrays are freed as soon as they are staged, so the CPU geometry shrinks as the driver's
+  // copy grows (plant:40: 6.5 GB a process with one buffer and kept arrays, see docs/scale.md).
+  std::vector<const LodMesh*> lod_meshes;  // upload order: cluster LODs, then HLODs by node id
+  std::vector<uint32_t> lod_node;          // per entry of lod_meshes: its node (HLODs) or kNoNode
+  if (lod) {
+    for (const LodMesh& m : lod->cluster_lods()) {
+      lod_meshes.push_back(&m);
+      lod_node.push_back(kNoNode);
+    }
+    for (uint32_t id = 0; id < hierarchy.size(); ++id)
+      if (const LodMesh* m = lod->hlod(id)) {
+        lod_meshes.push_back(m);
+        lod_node.push_back(id);
+      }
+    for (const LodMesh* m : lod_meshes)
+      if (m->released) throw std::logic_error("SceneRenderer: the LOD data's geometry was released");
+  }
+  const size_t limit = std::max<size_t>(upload.segment_bytes, 4096);
+  std::vector<Vertex> vstage;
+  std::vector<uint32_t> istage;
+  std::vector<glm::vec2> uvstage;
+  auto flush_segment = [&] {
+    Segment sg;
+    auto create = [&](GLuint* buf, const void* data, size_t bytes) {
+      gl_.CreateBuffers(1, buf);
+      gl_.NamedBufferStorage(*buf, GLsizeiptr(std::max<size_t>(1, bytes)), bytes ? data : nullptr, 0);
+    };
+    create(&sg.vertices, vstage.data(), vstage.size() * sizeof(Vertex));
+    create(&sg.indices, istage.data(), istage.size() * sizeof(uint32_t));
+    if (any_textured) create(&sg.uvs, uvstage.data(), uvstage.size() * sizeof(glm::vec2));
+    segments_.push_back(sg);
+    vstage.clear();
+    istage.clear();
+    uvstage.clear();
+  };
+  // Starts a new segment unless nv vertices and ni indices still fit the current one.
+  auto make_room = [&](size_t nv, size_t ni) {
+    if ((!vstage.empty() || !istage.empty()) &&
+        (vstage.size() + nv) * sizeof(Vertex) + (istage.size() + ni) * sizeof(uint32_t) > limit)
+      flush_segment();
+    if (vstage.size() + nv > size_t(INT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^31 vertices in a mesh");
+  };
+  uint64_t freed_since_trim = 0;
+  auto released = [&](uint64_t bytes) {  // give freed heap pages back to the system now and then
+    freed_since_trim += bytes;
+    if (freed_since_trim >= (uint64_t(64) << 20)) {
+      ::malloc_trim(0);
+      freed_since_trim = 0;
+    }
+  };
+
   std::vector<int32_t> base_vertex(scene.meshes.size());
-  std::vector<uint32_t> first_index(scene.meshes.size());
+  std::vector<uint32_t> first_index(scene.meshes.size()), mesh_segment(scene.meshes.size());
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
-    const Mesh& mesh = scene.meshes[m];
-    if (vertices.size() + mesh.positions.size() > size_t(INT32_MAX))
-      throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
-    base_vertex[m] = int32_t(vertices.size());
-    first_index[m] = uint32_t(indices.size());
+    Mesh& mesh = scene.meshes[m];
+    make_room(mesh.positions.size(), mesh.indices.size());
+    base_vertex[m] = int32_t(vstage.size());
+    first_index[m] = uint32_t(istage.size());
+    mesh_segment[m] = uint32_t(segments_.size());
     const bool colored = mesh.colors.size() == mesh.positions.size();
     for (size_t v = 0; v < mesh.positions.size(); ++v)
-      vertices.push_back({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1),
-                          colored ? mesh.colors[v] : 0xffffffffu});
+      vstage.push_back({mesh.positions[v], v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1),
+                        colored ? mesh.colors[v] : 0xffffffffu});
     if (any_textured) {
-      if (mesh_textured[m] && mesh.uvs.size() == mesh.positions.size())
-        uvs.insert(uvs.end(), mesh.uvs.begin(), mesh.uvs.end());
-      else
-        uvs.resize(vertices.size(), glm::vec2(0.0f));
+      const bool with_uv = mesh_textured[m] && mesh.uvs.size() == mesh.positions.size();
+      for (size_t v = 0; v < mesh.positions.size(); ++v) uvstage.push_back(with_uv ? mesh.uvs[v] : glm::vec2(0.0f));
     }
-    indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
+    istage.insert(istage.end(), mesh.indices.begin(), mesh.indices.end());
+    if (upload.release) {
+      const uint64_t bytes = mesh.positions.capacity() * 24 + mesh.indices.capacity() * 4 +
+                             mesh.uvs.capacity() * 8 + mesh.colors.capacity() * 4;
+      mesh.release_geometry();
+      released(bytes);
+    }
   }
   if (lod) {
-    auto upload = [&](const LodMesh& m) {
-      if (vertices.size() + m.positions.size() > size_t(INT32_MAX))
-        throw std::runtime_error("SceneRenderer: more than 2^31 vertices");
-      ItemDraw d{uint32_t(m.indices.size()), uint32_t(indices.size()), int32_t(vertices.size()), 0};
+    hlod_of_node_.assign(hierarchy.size(), kNoNode);
+    for (size_t k = 0; k < lod_meshes.size(); ++k) {
+      const LodMesh& m = *lod_meshes[k];
+      make_room(m.positions.size(), m.indices.size());
+      ItemDraw d{uint32_t(m.indices.size()), uint32_t(istage.size()), int32_t(vstage.size()), 0,
+                 uint32_t(segments_.size())};
       for (size_t v = 0; v < m.positions.size(); ++v) {
         uint32_t rgba = 0xffffffffu;  // leaf LODs: the object's colour
         if (!m.objects.empty()) {     // HLODs: each vertex its source object's colour
           const uint32_t o = m.objects[v];
           rgba = pack_rgba8(o < looks_.size() ? glm::vec4(glm::vec3(looks_[o].color), 1.0f) : object_color(o));
         }
-        vertices.push_back({m.positions[v], m.normals[v], rgba});
+        vstage.push_back({m.positions[v], m.normals[v], rgba});
+        if (any_textured) uvstage.push_back(glm::vec2(0.0f));
       }
-      if (any_textured) uvs.resize(vertices.size(), glm::vec2(0.0f));
-      indices.insert(indices.end(), m.indices.begin(), m.indices.end());
-      return d;
-    };
-    for (const LodMesh& m : lod->cluster_lods()) lod_draws_.push_back(upload(m));
-    item_slot_ = lod->item_slots();
-    hlod_of_node_.assign(hierarchy.size(), kNoNode);
-    for (uint32_t id = 0; id < hierarchy.size(); ++id)
-      if (const LodMesh* m = lod->hlod(id)) {
+      istage.insert(istage.end(), m.indices.begin(), m.indices.end());
+      if (lod_node[k] == kNoNode) {
+        lod_draws_.push_back(d);
+      } else {
+        const uint32_t id = lod_node[k];
         hlod_of_node_[id] = uint32_t(hlod_draws_.size());
-        ItemDraw d = upload(*m);
         d.object = uint32_t(transforms_.size());  // pseudo-object: translation to the origin
         glm::dmat4 t(1.0);
-        t[3] = glm::dvec4(m->origin, 1.0);
+        t[3] = glm::dvec4(m.origin, 1.0);
         transforms_.push_back(t);
         ObjectLook hlod_look;  // opaque, lit, double-sided, white x vertex colours
         hlod_look.bits = kVertexColor;
@@ -303,12 +364,25 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
         object_box.push_back(hierarchy.node(id).box);
         hlod_draws_.push_back(d);
       }
+      if (upload.release) {
+        const uint64_t bytes = m.positions.capacity() * 24 + m.objects.capacity() * 4 + m.indices.capacity() * 4;
+        release_lod->release(m);
+        released(bytes);
+      }
+    }
+    item_slot_ = lod->item_slots();
   }
+  if (!vstage.empty() || !istage.empty() || segments_.empty()) flush_segment();
+  std::vector<Vertex>().swap(vstage);
+  std::vector<uint32_t>().swap(istage);
+  std::vector<glm::vec2>().swap(uvstage);
+  if (upload.release) ::malloc_trim(0);
   item_draws_.reserve(hierarchy.items().size());
   for (const Item& it : hierarchy.items()) {
     const uint32_t mesh = scene.objects[it.object].mesh;
     const MeshCluster& cl = scene.meshes[mesh].clusters[it.cluster];
-    item_draws_.push_back({cl.index_count, first_index[mesh] + cl.first_index, base_vertex[mesh], it.object});
+    item_draws_.push_back(
+        {cl.index_count, first_index[mesh] + cl.first_index, base_vertex[mesh], it.object, mesh_segment[mesh]});
   }
   object_frame_.assign(transforms_.size(), 0);
   object_matrices_.resize(transforms_.size());
@@ -359,15 +433,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
                  counts[0], counts[1], counts[2], textured, single, scene.images.size(), variants_.c_str());
   });
 
-  gl_.CreateBuffers(1, &vertex_buf_);
-  gl_.NamedBufferStorage(vertex_buf_, GLsizeiptr(std::max<size_t>(1, vertices.size() * sizeof(Vertex))),
-                         vertices.empty() ? nullptr : vertices.data(), 0);
-  gl_.CreateBuffers(1, &index_buf_);
-  gl_.NamedBufferStorage(index_buf_, GLsizeiptr(std::max<size_t>(1, indices.size() * sizeof(uint32_t))),
-                         indices.empty() ? nullptr : indices.data(), 0);
-
   gl_.CreateVertexArrays(1, &vao_);
-  gl_.VertexArrayVertexBuffer(vao_, 0, vertex_buf_, 0, sizeof(Vertex));
   gl_.VertexArrayAttribFormat(vao_, 0, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, position));
   gl_.VertexArrayAttribFormat(vao_, 1, 3, GL_FLOAT, GL_FALSE, offsetof(Vertex, normal));
   gl_.VertexArrayAttribFormat(vao_, 10, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(Vertex, color));
@@ -385,16 +451,19 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
     gl_.EnableVertexArrayAttrib(vao_, a);
   }
   if (any_textured) {
-    gl_.CreateBuffers(1, &uv_buf_);
-    gl_.NamedBufferStorage(uv_buf_, GLsizeiptr(std::max<size_t>(1, uvs.size() * sizeof(glm::vec2))),
-                           uvs.empty() ? nullptr : uvs.data(), 0);
-    gl_.VertexArrayVertexBuffer(vao_, 2, uv_buf_, 0, sizeof(glm::vec2));
     gl_.VertexArrayAttribFormat(vao_, 12, 2, GL_FLOAT, GL_FALSE, 0);
     gl_.VertexArrayAttribBinding(vao_, 12, 2);
     gl_.EnableVertexArrayAttrib(vao_, 12);
     upload_textures(scene, used_texture);
   }
-  gl_.VertexArrayElementBuffer(vao_, index_buf_);
+  bind_segment(0);
+}
+
+void SceneRenderer::bind_segment(uint32_t s) {
+  const Segment& sg = segments_.at(s);
+  gl_.VertexArrayVertexBuffer(vao_, 0, sg.vertices, 0, 28);
+  gl_.VertexArrayElementBuffer(vao_, sg.indices);
+  if (sg.uvs) gl_.VertexArrayVertexBuffer(vao_, 2, sg.uvs, 0, sizeof(glm::vec2));
 }
 
 void SceneRenderer::upload_textures(const Scene& scene, const std::vector<uint8_t>& used_texture) {
@@ -443,9 +512,12 @@ SceneRenderer::~SceneRenderer() {
     for (const Program& p : mode)
       if (p.id) gl_.DeleteProgram(p.id);
   gl_.DeleteVertexArrays(1, &vao_);
-  const GLuint buffers[] = {vertex_buf_, index_buf_, record_buf_, indirect_buf_, uv_buf_};
+  const GLuint buffers[] = {record_buf_, indirect_buf_};
   for (GLuint b : buffers)
     if (b) gl_.DeleteBuffers(1, &b);
+  for (const Segment& sg : segments_)
+    for (GLuint b : {sg.vertices, sg.indices, sg.uvs})
+      if (b) gl_.DeleteBuffers(1, &b);
   for (GLuint t : textures_)
     if (t) gl_.DeleteTextures(1, &t);
   for (GLuint s : samplers_)
@@ -700,9 +772,15 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
   unsigned bound_bits = ~0u;
   int64_t bound_texture = -1;
   int bound_cull = -1;
+  uint32_t bound_segment = segments_.size() > 1 ? ~0u : 0;  // bound at construction
   for (size_t b = 0; b < draws.size();) {
     size_t e = b + 1;
-    while (e < draws.size() && draws[e].key == draws[b].key) ++e;
+    const uint32_t segment = draws[b].draw.segment;
+    while (e < draws.size() && draws[e].key == draws[b].key && draws[e].draw.segment == segment) ++e;
+    if (segment != bound_segment) {
+      bind_segment(segment);
+      bound_segment = segment;
+    }
     const uint64_t key = draws[b].key;
     const unsigned bits = unsigned(key >> 40) & (kVariants - 1);
     const int64_t texture = int64_t((key >> 8) & 0xffffffffu) - 1;

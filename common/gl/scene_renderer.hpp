@@ -30,8 +30,8 @@
 // compiled at construction; no texture coordinates, textures or blending state unless the
 // scene has them. The first renderer of a process logs the scene's variants in one line.
 //
-// GPU layout (uploaded once at construction):
-//   vertex buffer  all meshes back to back, interleaved {vec3 position; vec3 normal; RGBA8
+// GPU layout (uploaded once at construction, in segments: see Upload):
+//   vertex buffer  all meshes back to back (per segment), interleaved {vec3 position; vec3 normal; RGBA8
 //                  colour} (28 bytes; attributes 0, 1, 10, binding 0); colour = COLOR_0 (white
 //                  if none) or an HLOD vertex's object colour; a mesh starts at its base vertex;
 //   uv buffer      vec2 per vertex (attribute 12, binding 2), only when a drawn mesh is textured;
@@ -54,7 +54,7 @@
 // Contracts: the GlContext is current on the calling thread for every call; the context and the
 // hierarchy outlive the renderer; `scene` is the one the hierarchy was built from (its clusters)
 // and is only read in the constructor (meshes, materials and images go to the GPU, transforms
-// are copied). Invalid item or node ids throw std::out_of_range.
+// are copied) unless Upload::release frees its geometry there. Invalid item or node ids throw std::out_of_range.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -93,6 +93,20 @@ class SceneRenderer {
   // With `lod`, its leaf LODs and HLODs are uploaded too (draw_renderables); it must outlive
   // nothing (only read here).
   SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod = nullptr);
+  // How the geometry reaches GL: in segments of about segment_bytes (vertices + indices), each
+  // its own vertex and index buffer, staged on the CPU and uploaded when full, never the whole
+  // scene in one piece (llvmpipe zeroes a buffer's whole storage when it is created, so one big
+  // buffer would be resident next to the whole CPU geometry). With release, every mesh's CPU
+  // arrays (scene meshes and LOD/HLOD meshes) are freed as soon as they are staged
+  // (Mesh::release_geometry, LodData::release): the driver's copy is then the only one, and
+  // what stays on the CPU is what culling needs (objects, clusters and their boxes, triangle
+  // counts, the LOD errors and tables). start_scene_gl does this for the processes. Draws keep
+  // their order; a run of one batch key is split where the segment changes.
+  struct Upload {
+    size_t segment_bytes = size_t(64) << 20;
+    bool release = false;
+  };
+  SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* lod, const Upload& upload);
   ~SceneRenderer();
   SceneRenderer(const SceneRenderer&) = delete;
   SceneRenderer& operator=(const SceneRenderer&) = delete;
@@ -139,9 +153,14 @@ class SceneRenderer {
  private:
   bool occluder_offset_ = false;
   struct ItemDraw {
-    uint32_t index_count, first_index;
+    uint32_t index_count, first_index;  // first_index, base_vertex: within its segment
     int32_t base_vertex;
     uint32_t object;
+    uint32_t segment;
+  };
+  // A piece of the geometry upload: its own vertex, index (and uv) buffers.
+  struct Segment {
+    GLuint vertices = 0, indices = 0, uvs = 0;
   };
   struct ObjectMatrices {  // an object's per-frame data, as laid out in DrawRecord
     glm::mat4 model_view;
@@ -203,7 +222,9 @@ class SceneRenderer {
   std::vector<uint32_t> item_slot_;     // per item: LodData slot
   std::vector<uint32_t> hlod_of_node_;  // per node: HLOD index or kNoNode
   Program programs_[3][32];             // [mode][variant bits] (kVariants); id 0 = not compiled
-  GLuint vao_ = 0, vertex_buf_ = 0, uv_buf_ = 0, index_buf_ = 0, record_buf_ = 0, indirect_buf_ = 0;
+  GLuint vao_ = 0, record_buf_ = 0, indirect_buf_ = 0;
+  std::vector<Segment> segments_;       // the geometry, in upload order (at least one)
+  void bind_segment(uint32_t s);
   size_t record_capacity_ = 0, indirect_capacity_ = 0;  // bytes
   std::vector<GLuint> textures_;        // per scene image (0: unused)
   std::vector<GLuint> samplers_;        // per scene texture (0: unused)

@@ -1,9 +1,12 @@
 #include "common/gl/startup.hpp"
 
+#include <cstdio>
 #include <iostream>
 
 #include "common/camera.hpp"
 #include "common/cli.hpp"
+#include "common/memory.hpp"
+#include "common/progress.hpp"
 
 namespace occ {
 
@@ -29,10 +32,17 @@ SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool w
   SceneGl s;
   s.loaded = std::make_unique<LoadedScene>(load_and_build(scene, who, with_lod));
   if (before_gl) before_gl(*s.loaded);
-  const LodData* lod = s.loaded->lod.get();
+  LodData* lod = s.loaded->lod.get();
   s.renderables = std::make_unique<Renderables>(s.loaded->hierarchy, lod);
   s.ctx = start_gl(who, backend, width, height);
-  s.renderer = std::make_unique<SceneRenderer>(*s.ctx, s.loaded->scene, s.loaded->hierarchy, lod);
+  // The driver keeps its own copy of the geometry: the CPU arrays are freed as they are uploaded.
+  const double t0 = now_ms();
+  s.renderer = std::make_unique<SceneRenderer>(*s.ctx, s.loaded->scene, s.loaded->hierarchy, lod,
+                                               SceneRenderer::Upload{.release = true});
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s: geometry uploaded in %.0f ms, CPU copies released (RSS %ld MB, peak %ld MB)",
+                who.c_str(), now_ms() - t0, rss_mb(), peak_rss_mb());
+  std::cerr << buf << "\n";
   return s;
 }
 

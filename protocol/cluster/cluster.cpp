@@ -99,6 +99,11 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "accept a subtree without queries where its queries cost more (measured) than they saved"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
+  cli.option("occluder-pixels-per-triangle", &c.occluder_pixels_per_triangle, 0.0, 1e9,
+             "OR and occluder fusion skip objects whose projected bounding sphere covers fewer pixels per "
+             "triangle than this (dense small parts cost more to draw than they hide; 0: draw every one)");
+  cli.option("visibility-hold", &c.visibility_hold, 0, 255,
+             "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {
@@ -126,6 +131,19 @@ net::Listener open_listener(const std::string& who, const ListenOptions& o) {
       throw InputError("--port-file '" + o.port_file + "': " + *err);
   std::cerr << who << ": listening on " << listener->address() << ":" << listener->port() << "\n";
   return std::move(*listener);
+}
+
+void add_key_option(Cli& cli, std::string* file) {
+  cli.option("cluster-key-file", file, "FILE",
+             "a secret shared by every process of the cluster (at least 32 bytes, e.g. `openssl rand -hex 32`): "
+             "peers must prove it in the handshake (HMAC-SHA256); without it, anyone who can connect may join");
+}
+
+std::optional<net::ClusterKey> load_cluster_key(const std::string& file) {
+  if (file.empty()) return std::nullopt;
+  auto key = net::ClusterKey::load(file);
+  if (!key) throw InputError("--cluster-key-file: " + key.error());
+  return std::move(*key);
 }
 
 }  // namespace occ

@@ -14,6 +14,7 @@
 #include "common/camera.hpp"
 #include "common/culling.hpp"
 #include "common/hierarchy.hpp"
+#include "protocol/net/auth.hpp"
 #include "protocol/net/endpoint.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/wire.hpp"
@@ -55,9 +56,17 @@ struct HcChoices {
   bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
   HcOrder order = HcOrder::near_first;
   bool occluder_fusion = true;     // draw what each batch found visible before the next batch
-  bool query_budget = true;        // accept subtrees whole where measured costs say queries do not pay
+  // Accept subtrees whole where measured costs say queries do not pay. Off by default (issue 15,
+  // docs/spikes.md): each node's choices follow its own timings, so the two nodes disagree and V
+  // alternates between a subtree's leaves and its visible ones: the main source of id churn.
+  bool query_budget = false;
+  int visibility_hold = 2;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
+  // OR and fusion draw an object as an occluder only if it covers at least this many pixels per
+  // triangle (OccluderSelection in common/culling.hpp; 0: every visible object).
+  double occluder_pixels_per_triangle = 1.0;
 };
-// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget.
+// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
+// --occluder-pixels-per-triangle.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
@@ -80,6 +89,12 @@ net::Endpoint resolve_listen(ListenOptions& o);
 // Opens the listening socket (after resolve_listen), writes --port-file and prints
 // "<who>: listening on ADDR:PORT". Throws naming the address.
 net::Listener open_listener(const std::string& who, const ListenOptions& o);
+
+// --cluster-key-file FILE: membership by a shared key (docs/security.md), on every process.
+void add_key_option(Cli& cli, std::string* file);
+// The key of --cluster-key-file, or none when no file was given. Throws InputError naming the
+// file when it is missing, unreadable, empty or too short.
+std::optional<net::ClusterKey> load_cluster_key(const std::string& file);
 
 inline uint32_t hc_node_of_frame(uint32_t frame) { return frame % 2; }
 

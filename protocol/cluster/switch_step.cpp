@@ -58,10 +58,21 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
                          .occluders = local.occluders});
   VisibleSet cur(visible.id_limit());
   for (uint32_t id : found) cur.insert(id);
+  std::vector<uint32_t> held;
+  if (local.hold) {
+    for (uint32_t id : found) local.hold->seen(r_.node_of(id), frame);
+    held = local.hold->held(r_, cam, sorted(visible), found, frame);
+    for (uint32_t id : held) {
+      cur.insert(id);
+      out.visible(id);  // in V' already: nothing to send, except in full-sets mode (every id)
+    }
+    result.held = uint32_t(held.size());
+  }
   result.eof = out.end(cur);
   result.eof.front_hash = fhash;
   result.eof.queries = result.stats.queries;
   for (uint32_t id : found) result.eof.triangles += r_.triangles(id);
+  for (uint32_t id : held) result.eof.triangles += r_.triangles(id);
   visible = std::move(cur);
   return result;
 }

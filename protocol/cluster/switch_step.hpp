@@ -29,12 +29,16 @@ struct HcLocal {
   HcOrder order = HcOrder::levels;
   // Occluder fusion (HcOptions::occluders): draws the renderables a batch accepted, depth only.
   std::function<void(std::span<const uint32_t>)> occluders = nullptr;
+  // Hysteresis (culling.hpp VisibilityHold): hc() records what it found and keeps recently seen
+  // renderables of V_{f-1} in V_f. The caller records the other node's additions.
+  VisibilityHold* hold = nullptr;
 };
 
 struct HcFrame {
   wire::EndOfFrame eof;  // set fields, front_hash, queries and triangles; the caller adds times
   CullStats stats;
   uint32_t tests_above_fronts = 0;  // interior nodes a root traversal would have queried
+  uint32_t held = 0;                // renderables kept in V_f by HcLocal::hold, not found this frame
 };
 
 class SwitchStep {

@@ -1,5 +1,7 @@
 #include "protocol/net/transport.hpp"
 
+#include "protocol/net/auth.hpp"
+
 #include "common/hash.hpp"
 
 #include <unistd.h>
@@ -78,6 +80,7 @@ struct Connection::Impl {
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
   std::thread thread;
   std::string peer = "unknown";
+  bool accepted = false;  // made by Listener::accept (the acceptor in the handshake)
 
   mutable std::mutex m;
   std::condition_variable cv_in;   // inbox or end changed
@@ -450,6 +453,7 @@ Received Connection::receive(Millis timeout) { return impl_->receive(timeout); }
 void Connection::close(const std::string& reason) { impl_->close(reason); }
 void Connection::close_with_error(const std::string& reason) { impl_->close_with_error(reason); }
 const std::string& Connection::peer() const { return impl_->peer; }
+bool Connection::accepted() const { return impl_->accepted; }
 
 bool Connection::is_open() const {
   std::lock_guard lk(impl_->m);
@@ -496,30 +500,98 @@ std::optional<std::string> hello_mismatch(const wire::Hello& ours, const wire::H
   return std::nullopt;
 }
 
+// Whether the two hellos' auth settings can meet: both with a key or both without.
+std::optional<std::string> auth_mismatch(bool keyed, const wire::Hello& peer) {
+  const bool peer_keyed = peer.auth == wire::Auth::cluster_key;
+  if (keyed && !peer_keyed)
+    return std::string("cluster key: the peer has none (it was started without --cluster-key-file), this process "
+                       "requires one");
+  if (!keyed && peer_keyed)
+    return std::string("cluster key: the peer requires one (--cluster-key-file), this process has none");
+  return std::nullopt;
+}
+
+// Said by the side that checked the proof (and, in its Bye, to the side that sent it).
+std::string wrong_key(const wire::Hello& prover) {
+  return "cluster key mismatch: the proof of " + std::string(wire::role_name(prover.role)) + " " +
+         std::to_string(prover.node_id) + " (\"" + prover.name + "\") does not verify: another key";
+}
+
 }  // namespace
 
-Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine,
+Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine_in,
                               const PeerExpectation& expect, Millis timeout) {
   auto fail = [&](const std::string& reason) -> Result<wire::Hello> {
     conn.close_with_error(reason);
     return Error{"peer " + conn.peer() + ": " + reason};
   };
+  const auto deadline = deadline_after(timeout);
+  // One message from the peer within the handshake's time; a Bye or failure ends it with its reason.
+  auto next = [&](wire::Type type) -> Result<wire::Message> {
+    const std::string what(wire::type_name(type));
+    Received r = conn.receive(std::max(Millis(1), remaining_until(deadline)));
+    switch (r.status) {
+      case Received::Status::timeout:
+        return Error{"no " + what + " within " + std::to_string(timeout.count()) + " ms"};
+      case Received::Status::closed:
+      case Received::Status::error: return Error{r.reason};
+      case Received::Status::message: break;
+    }
+    if (wire::type_of(r.message) != type)
+      return Error{"expected " + what + ", got " + std::string(wire::type_name(wire::type_of(r.message)))};
+    return std::move(r.message);
+  };
   // A connection that already ended (e.g. the peer's first bytes were garbage) reports why in
-  // receive(); only a hello we cannot send at all fails here.
-  if (auto e = conn.send(mine); e && conn.is_open()) return fail(*e);
-  Received r = conn.receive(timeout);
-  switch (r.status) {
-    case Received::Status::timeout:
-      return fail("no hello within " + std::to_string(timeout.count()) + " ms");
-    case Received::Status::closed:
-    case Received::Status::error: return fail(r.reason);
-    case Received::Status::message: break;
+  // receive(); only a message we cannot send at all fails here.
+  auto send = [&](const wire::Message& m) -> std::optional<std::string> {
+    if (auto e = conn.send(m); e && conn.is_open()) return e;
+    return std::nullopt;
+  };
+  const bool keyed = expect.key != nullptr;
+  wire::Hello mine = mine_in;
+  mine.auth = keyed ? wire::Auth::cluster_key : wire::Auth::none;
+  mine.nonce = keyed ? random_nonce() : wire::Nonce{};
+  using wire::ProofDirection;
+
+  if (!conn.accepted()) {  // the connector: hello, (its proof), then the acceptor's verdict
+    if (auto e = send(mine)) return fail(*e);
+    auto m = next(wire::Type::hello);
+    if (!m) return fail(m.error());
+    const wire::Hello peer = std::get<wire::Hello>(*m);
+    if (auto e = hello_mismatch(mine, peer, expect)) return fail(*e);
+    if (auto e = auth_mismatch(keyed, peer)) return fail(*e);
+    if (!keyed) return peer;
+    if (peer.nonce == mine.nonce) return fail("cluster key: the peer's nonce is ours (reflected)");
+    if (auto e = send(expect.key->prove(ProofDirection::connector, mine, peer))) return fail(*e);
+    auto p = next(wire::Type::proof);
+    if (!p) return fail(p.error());
+    if (!expect.key->verify(std::get<wire::Proof>(*p), ProofDirection::acceptor, peer, mine))
+      return fail(wrong_key(peer));
+    return peer;
   }
-  const auto* hello = std::get_if<wire::Hello>(&r.message);
-  if (!hello)
-    return fail("expected hello, got " + std::string(wire::type_name(wire::type_of(r.message))));
-  if (auto e = hello_mismatch(mine, *hello, expect)) return fail(*e);
-  return *hello;
+
+  // The acceptor: the connector's hello first, then ours (or a refusal instead of our last message).
+  auto m = next(wire::Type::hello);
+  if (!m) return fail(m.error());
+  const wire::Hello peer = std::get<wire::Hello>(*m);
+  std::optional<std::string> wrong = hello_mismatch(mine, peer, expect);
+  if (!wrong) wrong = auth_mismatch(keyed, peer);
+  if (wrong) {  // our hello first, so the connector sees the difference and says so itself
+    send(mine);
+    return fail(*wrong);
+  }
+  if (keyed) {
+    if (auto e = send(mine)) return fail(*e);
+    auto p = next(wire::Type::proof);
+    if (!p) return fail(p.error());
+    if (!expect.key->verify(std::get<wire::Proof>(*p), ProofDirection::connector, peer, mine))
+      return fail(wrong_key(peer));
+  }
+  if (expect.refuse)
+    if (auto why = expect.refuse(peer)) return fail(*why);
+  if (auto e = send(keyed ? wire::Message{expect.key->prove(ProofDirection::acceptor, mine, peer)} : wire::Message{mine}))
+    return fail(*e);
+  return peer;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -579,6 +651,7 @@ Result<Connection> Listener::accept(Millis timeout, ConnectionOptions options) {
     return Error{"no connection on " + impl_->where() + " within " +
                  std::to_string(timeout.count()) + " ms"};
   if (result) return Error{"accept on " + impl_->where() + ": " + result.message()};
+  conn->accepted = true;
   conn->start();
   return Connection(std::move(conn));
 }

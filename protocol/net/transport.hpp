@@ -93,6 +93,8 @@ class Connection {
   void close_with_error(const std::string& reason);
 
   bool is_open() const;
+  // Made by Listener::accept (the acceptor of the handshake) rather than connect().
+  bool accepted() const;
   ConnectionStats stats() const;
   const std::string& peer() const;  // "127.0.0.1:40312"
 
@@ -103,16 +105,25 @@ class Connection {
   friend class Listener;
 };
 
+class ClusterKey;  // protocol/net/auth.hpp
+
 // What a handshake accepts besides our own scene fingerprint and build parameters.
 struct PeerExpectation {
   std::optional<wire::Role> role;     // nullopt: any role
   std::optional<uint8_t> node_id;     // nullopt: any node id
   bool same_viewport = true;          // the peer's viewport must equal ours
+  // The cluster key (docs/security.md): both sides prove it, or neither has one. nullptr: none.
+  const ClusterKey* key = nullptr;
+  // The acceptor only: asked once the connector's hello (and key) passed; a reason refuses it
+  // (the connector gets Bye(reason) instead of our last handshake message), e.g. "busy: ...".
+  std::function<std::optional<std::string>(const wire::Hello& peer)> refuse{};
 };
 
-// Both sides call this first: sends `mine`, waits up to `timeout` for the peer's Hello and
-// checks it (magic and version in the decoder; scene fingerprint, arity, leaf_items,
-// cluster_triangles, config_hash equal to ours; then `expect`). On failure the connection is
+// Both sides call this first (the message order is in wire.hpp, "Handshake"): exchanges Hellos
+// (the one that connected sends first), waits up to `timeout` in all and checks the peer's
+// (magic and version in the decoder; scene fingerprint, arity, leaf_items, cluster_triangles,
+// config_hash equal to ours; then `expect`), then, with expect.key, the HMAC challenge-response.
+// `mine`'s auth and nonce are set here (a fresh nonce per call). On failure the connection is
 // ended with close_with_error, so the peer gets a Bye saying why, and the error names the peer
 // and both values: "peer 127.0.0.1:5555: scene fingerprint mismatch: ours 0x..., peer has 0x...".
 Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine,

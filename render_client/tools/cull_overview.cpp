@@ -77,10 +77,12 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     std::sort(prev.begin(), prev.end());
     std::set_union(before.begin(), before.end(), prev.begin(), prev.end(), std::back_inserter(occluders));
     renderer.begin_frame(path[f], false);
-    renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
     // HC(f), with the node's choices (occluder fusion draws what it finds that OR did not).
     std::vector<uint8_t> drawn(h.size(), 0);
     for (uint32_t id : occluders) drawn[id] = 1;
+    const OccluderSelection select{o.hc.occluder_pixels_per_triangle};
+    select.filter(occluders, renderables, path[f], o.height);
+    renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
     // (No query budget: its choices follow the nodes' measured timings, which a replay cannot.)
     HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], nullptr, o.hc.order, nullptr};
     if (o.hc.occluder_fusion)
@@ -88,6 +90,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
         std::vector<uint32_t> fresh;
         for (uint32_t id : found)
           if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
+        select.filter(fresh, renderables, path[f], o.height);
         renderer.draw_items(items_of_nodes(h, fresh), SceneRenderer::Mode::DepthOnly);
         querier.begin(path[f]);
       };

@@ -57,6 +57,7 @@ struct ServerOptions {
   GlBackend gl = GlBackend::Auto;
   ListenOptions listen;
   int diff_chunk_ids = 100, timeout_ms = 30000;
+  std::optional<net::ClusterKey> key;  // --cluster-key-file
 };
 
 int serve(const ServerOptions& o) {
@@ -69,7 +70,9 @@ int serve(const ServerOptions& o) {
   const ClusterConfig config;  // lockstep, incremental: what the render client expects by default
   const wire::Hello mine =
       make_hello(wire::Role::switch_node, 0, {o.width, o.height}, g.fingerprint(), h.params(), config, who);
-  auto peer = listener.accept_peer(mine, {wire::Role::render_client, std::nullopt}, net::Millis(o.timeout_ms));
+  net::PeerExpectation expect{wire::Role::render_client, std::nullopt};
+  expect.key = o.key ? &*o.key : nullptr;
+  auto peer = listener.accept_peer(mine, expect, net::Millis(o.timeout_ms));
   if (!peer) throw std::runtime_error("no render client: " + peer.error());
   net::Connection& rvg = peer->connection;
 
@@ -138,8 +141,11 @@ int main(int argc, char** argv) {
     occ::add_listen_options(cli, o.listen);
     cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for the client or a camera");
+    std::string key_file;
+    occ::add_key_option(cli, &key_file);
     if (!cli.parse(argc, argv)) return 0;
     occ::resolve_listen(o.listen);  // fail before loading the scene
+    o.key = occ::load_cluster_key(key_file);
     return occ::serve(o);
   });
 }

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The issue-15 measurement matrix (docs/spikes.md): every path at 512² and 1024², tau 0 and 1,
+# a --full-sets run at tau 0, and an item-buffer run (every 10th camera) for PVS/exact.
+#   scripts/spikes_matrix.sh OUT [extra cluster args...]      e.g. OUT=out/sp/base
+# Paths: the generated city walks (45x45 passes through buildings, 20x20 follows a street), street
+# walks with 90° turns (scripts/street_walk.py) and the duplex layout walk. SKIP_EXACT=1 skips the
+# item-buffer runs (they do not depend on the cluster's flags). ONLY=label limits to one path.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+out=$1; shift
+export LP_NUM_THREADS=1
+BIN=${OCC_BIN:-build/bin}
+mkdir -p "$out" out/sp
+python3 scripts/street_walk.py --city 45x45:4 --frames 300 --out out/sp/street45.csv
+python3 scripts/street_walk.py --city 20x20:4 --frames 300 --out out/sp/street20.csv
+duplex=layout:4x4:../shared/scenes/duplex/Duplex_A_20110505.gltf
+paths=("c45walk city:45x45:4:16:2 walk:300" "c45street city:45x45:4:16:2 out/sp/street45.csv"
+       "c20walk city:20x20:4:16:2 walk:300" "c20street city:20x20:4:16:2 out/sp/street20.csv"
+       "duplex $duplex walk:300")
+for p in "${paths[@]}"; do
+  read -r label scene path <<<"$p"
+  [ -n "${ONLY:-}" ] && [ "$ONLY" != "$label" ] && continue
+  for size in 512 1024; do
+    ex=out/sp/exact/${label}_$size
+    if [ -z "${SKIP_EXACT:-}" ] && [ ! -s "$ex/stats.csv" ]; then
+      mkdir -p "$ex"
+      # The camera path as CSV: the reference writes it before it renders; stop it once written.
+      "$BIN"/render_client --reference --scene "$scene" --path "$path" --width $size --height $size \
+        --no-images --out "$ex/full" --save-path "$ex/path.csv" --cull frustum >/dev/null 2>&1 &
+      rp=$!
+      while kill -0 $rp 2>/dev/null && ! grep -q '^299,' "$ex/path.csv" 2>/dev/null; do sleep 0.2; done
+      sleep 0.5; kill $rp 2>/dev/null; wait $rp 2>/dev/null
+      awk -F, 'NR == 1 { print; next } (NR - 2) % 10 == 0 { $1 = (NR - 2) / 10; print }' OFS=, "$ex/path.csv" >"$ex/sub.csv" &&
+        "$BIN"/render_client --reference --scene "$scene" --path "$ex/sub.csv" --width $size --height $size \
+          --no-images --exact --cull frustum --out "$ex" >"$ex/log" 2>&1 || echo "exact $label $size failed" >&2
+    fi
+    for tau in 0 1; do
+      for fs in "" full; do
+        [ -n "$fs" ] && [ $tau != 0 ] && continue
+        d=$out/${label}_${size}_t$tau${fs:+_full}
+        scripts/cluster.sh --scene "$scene" --path "$path" --width $size --height $size --pixel-error $tau \
+          --no-images --out "$d" ${fs:+--full-sets} "$@" >"$d.log" 2>&1 || { echo "run $d failed" >&2; continue; }
+      done
+      d=$out/${label}_${size}_t$tau
+      args=(); [ $tau = 0 ] && args+=(--full-sets "${d}_full")
+      [ -s "$ex/stats.csv" ] && args+=(--exact "$ex" --exact-every 10)
+      python3 scripts/spikes_report.py "$d" "${args[@]}" --label "${label} ${size}² tau $tau" | tee -a "$out/report.txt"
+    done
+  done
+done
