@@ -192,7 +192,9 @@ void restarted_node_rejoins(int k, bool keyed = false) {
     const std::string n0 = c.node0().log();
     EXPECT_NE(n0.find("switch node 1 (127.0.0.1:"), std::string::npos) << n0;
     EXPECT_NE(n0.find("is back; waiting for the render client's resync"), std::string::npos) << n0;
-    if (keyed) EXPECT_NE(n0.find("cluster key mismatch"), std::string::npos) << n0;  // the impostor, refused
+    if (keyed) {  // the impostor, refused
+      EXPECT_NE(n0.find("cluster key mismatch"), std::string::npos) << n0;
+    }
   }
   const std::vector<std::string> m = modes(c.stats());
   ASSERT_EQ(m.size(), frames);
