@@ -255,9 +255,9 @@ class SwitchNode {
       std::optional<wire::Camera> peer_camera;
       uint32_t min_camera = last_camera ? *last_camera + 1 : 0;
       if (o_.config.camera_mode == CameraMode::latest && frame > 0) {
-        const Clock::time_point wait_start = Clock::now();
+        // Before or_start: this wait is not inside the OR's time window, so it is not in `waited`
+        // (subtracting it from the OR's time made or_us wrap round to ~4e9 in latest mode).
         std::optional<net::Received> r = receive_peer(frame - 1);
-        waited += Clock::now() - wait_start;
         if (!r) return;  // the other node finished cleanly
         auto* c = std::get_if<wire::Camera>(&r->message);
         if (!c)
@@ -297,8 +297,9 @@ class SwitchNode {
       or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
       or_tail_cpu_us_ = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0));
       or_tail_us_ = micros_since(tail_t0_);
-      const uint32_t or_us =
-          micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
+      const uint32_t or_elapsed = micros_since(or_start),
+                     or_waited = uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
+      const uint32_t or_us = or_elapsed > or_waited ? or_elapsed - or_waited : 0;
 
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
