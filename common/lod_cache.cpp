@@ -157,12 +157,7 @@ std::optional<std::string> LodData::save(const std::string& path) const {
       return "cannot write " + tmp + " (disk full?)";
     }
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return "cannot rename " + tmp + " to " + path;
-  }
-  return std::nullopt;
+  return commit_cache_file(tmp, path);
 }
 
 std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_key, const Scene& scene,
@@ -176,24 +171,14 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   // it goes (mapped_file.hpp), so loading costs about the LOD data, not the data plus the file.
   MappedFile file;
   if (!file.open(path, why ? why : &ignored)) return std::nullopt;
+  CacheHeader head;
+  if (auto bad = check_cache_header(file, kCacheMagic, "LOD cache", kCacheVersion, expected_key,
+                                    "stale (built for another scene, hierarchy or LOD parameters)", &head))
+    return fail(*bad);
+  constexpr size_t kHead = CacheHeader::kSize;
   const uint8_t* const bytes = file.data();
   const size_t file_size = file.size();
-  constexpr size_t kHead = 8 + 4 + 8 + 8 + 8;
-  if (file_size < kHead) return fail("truncated header (" + std::to_string(file_size) + " bytes)");
-  if (std::memcmp(bytes, kCacheMagic, 8) != 0) return fail("bad magic (not an occswitch LOD cache)");
-  Reader head(bytes + 8, kHead - 8);
-  uint32_t version = 0;
-  uint64_t key = 0, size = 0, hash = 0;
-  head.pod(version);
-  head.pod(key);
-  head.pod(size);
-  head.pod(hash);
-  if (version != kCacheVersion)
-    return fail("format version " + std::to_string(version) + ", expected " + std::to_string(kCacheVersion));
-  if (key != expected_key) return fail("stale (built for another scene, hierarchy or LOD parameters)");
-  if (size != file_size - kHead)
-    return fail("truncated or padded payload (" + std::to_string(file_size - kHead) + " bytes, header says " +
-                std::to_string(size) + ")");
+  const uint64_t key = head.key, hash = head.hash;
   const uint8_t* const payload = bytes + kHead;
   const size_t payload_size = file_size - kHead;
   {  // = payload_hash(payload, payload_size) (Hasher::bytes), in steps that drop what they read

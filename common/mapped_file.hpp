@@ -14,6 +14,8 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
+#include <optional>
 #include <string>
 
 #include "common/hash.hpp"
@@ -79,6 +81,48 @@ class MappedFile {
   const uint8_t* data_ = nullptr;
   size_t size_ = 0, dropped_ = 0;
 };
+
+// The header both binary caches start with: magic (8 bytes), format version (u32), key (u64),
+// payload size (u64), payload hash (u64); the payload follows.
+struct CacheHeader {
+  static constexpr size_t kSize = 8 + 4 + 8 + 8 + 8;
+  uint32_t version = 0;
+  uint64_t key = 0, size = 0, hash = 0;
+};
+
+// Checks the header of a mapped cache against what this build expects. nullopt when it fits,
+// else why not ("bad magic (not an occswitch <kind>)", "format version ...", `stale_why`, ...).
+// On success *out holds the header (its hash is for the caller's payload check).
+inline std::optional<std::string> check_cache_header(const MappedFile& f, const char (&magic)[8], const char* kind,
+                                                     uint32_t version, uint64_t key, const char* stale_why,
+                                                     CacheHeader* out) {
+  constexpr size_t kHead = CacheHeader::kSize;
+  if (f.size() < kHead) return "truncated header (" + std::to_string(f.size()) + " bytes)";
+  if (std::memcmp(f.data(), magic, 8) != 0) return std::string("bad magic (not an occswitch ") + kind + ")";
+  CacheHeader h;
+  std::memcpy(&h.version, f.data() + 8, 4);
+  std::memcpy(&h.key, f.data() + 12, 8);
+  std::memcpy(&h.size, f.data() + 20, 8);
+  std::memcpy(&h.hash, f.data() + 28, 8);
+  if (h.version != version)
+    return "format version " + std::to_string(h.version) + ", expected " + std::to_string(version);
+  if (h.key != key) return std::string(stale_why);
+  if (h.size != f.size() - kHead)
+    return "truncated or padded payload (" + std::to_string(f.size() - kHead) + " bytes, header says " +
+           std::to_string(h.size) + ")";
+  *out = h;
+  return std::nullopt;
+}
+
+// Moves a fully written temporary cache file to its place (atomic on one file system); on
+// failure removes the temporary and says why.
+inline std::optional<std::string> commit_cache_file(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (!ec) return std::nullopt;
+  std::filesystem::remove(tmp, ec);
+  return "cannot rename " + tmp + " to " + path;
+}
 
 // A hash of a byte stream that does not depend on how the stream is cut into pieces (unlike
 // Hasher::bytes, which hashes each call's length): 8-byte little-endian words, then the tail and

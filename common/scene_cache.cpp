@@ -18,7 +18,7 @@ namespace {
 
 constexpr uint32_t kSceneCacheVersion = 1;
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
-constexpr size_t kHead = 8 + 4 + 8 + 8 + 8;
+constexpr size_t kHead = CacheHeader::kSize;
 
 // Buffered file writer that hashes the payload as it goes.
 class Out {
@@ -186,12 +186,7 @@ struct SceneCacheIo {
       std::filesystem::remove(tmp, ec);
       return "cannot write " + tmp + " (disk full?)";
     }
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-      std::filesystem::remove(tmp, ec);
-      return "cannot rename " + tmp + " to " + path;
-    }
-    return std::nullopt;
+    return commit_cache_file(tmp, path);
   }
 
   static std::optional<CachedScene> load(const std::string& path, uint64_t key, std::string* why) {
@@ -201,20 +196,10 @@ struct SceneCacheIo {
     };
     MappedFile f;
     if (!f.open(path, why)) return std::nullopt;
-    if (f.size() < kHead) return fail("truncated header (" + std::to_string(f.size()) + " bytes)");
-    if (std::memcmp(f.data(), kMagic, 8) != 0) return fail("bad magic (not an occswitch scene cache)");
-    uint32_t version = 0;
-    uint64_t file_key = 0, size = 0, hash = 0;
-    std::memcpy(&version, f.data() + 8, 4);
-    std::memcpy(&file_key, f.data() + 12, 8);
-    std::memcpy(&size, f.data() + 20, 8);
-    std::memcpy(&hash, f.data() + 28, 8);
-    if (version != kSceneCacheVersion)
-      return fail("format version " + std::to_string(version) + ", expected " + std::to_string(kSceneCacheVersion));
-    if (file_key != key) return fail("stale (written for another scene spec, generator or hierarchy parameters)");
-    if (size != f.size() - kHead)
-      return fail("truncated or padded payload (" + std::to_string(f.size() - kHead) + " bytes, header says " +
-                  std::to_string(size) + ")");
+    CacheHeader head;
+    if (auto bad = check_cache_header(f, kMagic, "scene cache", kSceneCacheVersion, key,
+                                      "stale (written for another scene spec, generator or hierarchy parameters)", &head))
+      return fail(*bad);
     {
       StreamHash sh;
       constexpr size_t kStep = size_t(32) << 20;
@@ -222,7 +207,7 @@ struct SceneCacheIo {
         sh.feed(f.data() + off, std::min(kStep, f.size() - off));
         f.drop_before(off + std::min(kStep, f.size() - off), 0);
       }
-      if (sh.value() != hash) return fail("checksum mismatch (corrupt)");
+      if (sh.value() != head.hash) return fail("checksum mismatch (corrupt)");
       f.close();  // parse from a fresh mapping (the dropped pages come back from the page cache)
       if (!f.open(path, why)) return std::nullopt;
     }

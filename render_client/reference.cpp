@@ -82,7 +82,7 @@ int run_reference(const ClientOptions& o) {
     Image image;
     if (out.writes_images() || viewer) image = ctx->read_rgba();
     if (out.writes_images()) out.write_frame(f, image);
-    if (viewer) viewer->show(cam, std::move(image), {ms, st.nodes_drawn, all_leaves.size(), st.triangles, 0.0});
+    if (viewer) viewer->show(cam, std::move(image), {ms, st.nodes_drawn, all_leaves.size(), st.triangles, 0.0, -1, ""});
     std::vector<double> row{double(f), double(st.nodes_drawn), double(st.triangles), ms, double(st.queries), cpu_ms};
     if (o.exact) {
       renderer.begin_id_frame(cam);

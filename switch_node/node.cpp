@@ -462,8 +462,11 @@ class SwitchNode {
       std::optional<wire::Camera> peer_camera;
       uint32_t min_camera = last_camera_ ? *last_camera_ + 1 : 0;
       if (latest && frame > first) {
+        // Before or_start: this wait is not inside the OR's time window, so it is not in `waited`
+        // (subtracting it from the OR's time made or_us wrap round to ~4e9 in latest mode).
+        Clock::duration before_or{0};
         const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
-        std::optional<net::Received> r = next_from_peer(frame - 1, deadline, waited);
+        std::optional<net::Received> r = next_from_peer(frame - 1, deadline, before_or);
         if (!r) return await_instruction(frame, peer_lost_);
         auto* c = std::get_if<wire::Camera>(&r->message);
         if (!c)
@@ -520,7 +523,9 @@ class SwitchNode {
     or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
     or_tail_cpu_us_ = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0));
     or_tail_us_ = micros_since(tail_t0_);
-    or_us_ = micros_since(or_start) - uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
+    const uint32_t or_elapsed = micros_since(or_start),
+                   or_waited = uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
+    or_us_ = or_elapsed > or_waited ? or_elapsed - or_waited : 0;
   }
 
   // The next message of the other node's stream of `frame`, waiting until `deadline`. nullopt,

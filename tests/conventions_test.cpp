@@ -26,7 +26,7 @@ TEST(Conventions, EveryBinaryAndScriptHasTheSameVersion) {
     EXPECT_EQ(p.log().rfind(std::string(b) + " (occswitch) " + version(), 0), 0u) << p.log();
   }
   for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "bench.sh", "netlab.sh",
-                        "accuracy_sweep.sh", "video.sh"}) {
+                        "accuracy_sweep.sh", "video.sh", "scale_matrix.sh"}) {
     Proc p({"/bin/bash", script(s), "--version"}, dir / (std::string(s) + ".log"));
     EXPECT_EQ(p.wait(30s), 0) << s << ": " << p.log();
     EXPECT_EQ(p.log(), std::string(s) + " (occswitch) " + version() + "\n");

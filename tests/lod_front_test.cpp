@@ -114,7 +114,7 @@ TEST(Front, UpdatedCutEqualsFreshCutOnRandomCameras) {
     // States after the update: every node refined (satisfies, parent does not).
     for (uint32_t n : updated) {
       EXPECT_TRUE(b.satisfies(n));
-      if (w.h.node(n).parent != kNoNode) EXPECT_FALSE(b.satisfies(w.h.node(n).parent));
+      if (w.h.node(n).parent != kNoNode) { EXPECT_FALSE(b.satisfies(w.h.node(n).parent)); }
     }
   }
   EXPECT_GT(changed, 50);   // the cameras did move the cut ...
@@ -150,8 +150,8 @@ TEST(Front, CoarsenedVisibleFrontHasNoOverRefinedNodes) {
     EXPECT_EQ(nodes.size(), c.size());  // one representation per node
     for (uint32_t x : c) {
       const uint32_t n = r.node_of(x);
-      if (w.h.node(n).parent != kNoNode) EXPECT_FALSE(b.satisfies(w.h.node(n).parent)) << "over-refined " << n;
-      if (w.h.node(n).leaf()) EXPECT_GE(r.level_of(x), b.leaf_level(n));
+      if (w.h.node(n).parent != kNoNode) { EXPECT_FALSE(b.satisfies(w.h.node(n).parent)) << "over-refined " << n; }
+      if (w.h.node(n).leaf()) { EXPECT_GE(r.level_of(x), b.leaf_level(n)); }
     }
     // Every input node is inside exactly one output node (antichain, nothing lost).
     for (uint32_t x : v) {
@@ -280,7 +280,7 @@ TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
     std::sort(offered.begin(), offered.end());
     EXPECT_EQ(offered, near_first) << "camera " << k;
     EXPECT_EQ(nf.queries, lv.queries) << "the same nodes are tested, in another order";
-    if (near_first.size() > 4) EXPECT_GT(hook_calls, 1u) << "shells, not one batch";
+    if (near_first.size() > 4) { EXPECT_GT(hook_calls, 1u) << "shells, not one batch"; }
   }
 }
 
@@ -425,7 +425,7 @@ TEST(VisibilityHold, TwoNodesKeepFlickeringNodesConservativelyAndSendFewerIds) {
         std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
         std::sort(v.begin(), v.end());
         ASSERT_TRUE(std::includes(v.begin(), v.end(), fresh.begin(), fresh.end())) << "tau " << tau << " frame " << f;
-        if (!with_hold) EXPECT_EQ(v, fresh);
+        if (!with_hold) { EXPECT_EQ(v, fresh); }
         EXPECT_EQ(hc.held, v.size() - fresh.size());
         std::vector<uint8_t> in_v(h.size(), 0);
         for (uint32_t id : v) {

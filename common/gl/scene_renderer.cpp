@@ -65,7 +65,6 @@ flat out float v_cutoff;
 flat out uint v_id;
 #endif
 #ifdef LIT
-out vec3 v_position;
 out vec3 v_normal;
 #endif
 void main() {
@@ -78,7 +77,6 @@ void main() {
   vec3 base = vec3(in_normal_color[0].w, in_normal_color[1].w, in_normal_color[2].w) * in_vertex_color.rgb;
   v_color = vec4(base, alpha);
 #ifdef LIT
-  v_position = p.xyz;
   v_normal = mat3(in_normal_color[0].xyz, in_normal_color[1].xyz, in_normal_color[2].xyz) * in_normal;
 #endif
 #elif defined(MASK)
@@ -116,16 +114,17 @@ flat in uint v_id;
 out vec4 out_color;
 #endif
 #ifdef LIT
-in vec3 v_position;
 in vec3 v_normal;
 #endif
 void main() {
 #if defined(SHADED) || defined(MASK)
   vec4 c = v_color;
 #ifdef LIT
-  // Headlight: the light sits at the eye (view-space origin); two-sided.
-  float lambert = min(abs(dot(v_normal, v_position)) *
-                      inversesqrt(max(dot(v_normal, v_normal) * dot(v_position, v_position), 1e-36)), 1.0);
+  // Headlight: directional, along the view axis (view-space z), two-sided. One interpolant (the
+  // normal) instead of two: a light at the eye also needed the view-space position, and
+  // llvmpipe sets up every interpolant per triangle (saw 512^2 render ~10 % and duplex 1024^2
+  // ~5 % less time per frame, /tmp A/B of render_client --reference).
+  float lambert = min(abs(v_normal.z) * inversesqrt(max(dot(v_normal, v_normal), 1e-36)), 1.0);
   c.rgb *= 0.2 + 0.8 * lambert;
 #endif
 #ifdef TEXTURED

@@ -1,7 +1,8 @@
 // Draws the items of a Scene/Hierarchy (object x mesh cluster) in one of three modes:
 //   Shaded     the glTF material (materials in scene.hpp): base colour = factor x texture x
-//              COLOR_0, lit by a headlight per fragment (Lambert at the eye, |n.l| so back faces
-//              of double-sided and open CAD meshes read well) or unlit (KHR_materials_unlit);
+//              COLOR_0, lit by a headlight per fragment (a directional light along the view axis,
+//              like OpenSceneGraph's default headlight; |n.l| so back faces of double-sided and
+//              open CAD meshes read well) or unlit (KHR_materials_unlit);
 //              MASK discards fragments with alpha < cutoff; BLEND is drawn after everything
 //              opaque, back to front, with depth writes off. Geometry without a material gets a
 //              mild per-object colour from a hash of the object index (double-sided, opaque);
