@@ -83,6 +83,8 @@
 // nodes = 1 the receiving node alone does OR and HC of every frame (its peer is dropped). `epoch`
 // numbers the render client's resyncs (1, 2, ...). The node sends the same Resync back before its
 // first message of frame `frame`: whatever the render client received from it before is stale.
+// With nodes = 2 each node also sends it to the other node, as a marker on their link: what the
+// other node receives before it belongs to the old run of frames and is skipped.
 //     0  u32  frame
 //     4  u32  epoch             >= 1
 //     8  u32  nodes             1 or 2

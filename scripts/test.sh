@@ -6,7 +6,8 @@
 #   scripts/test.sh --tsan       TSan build in build-tsan/ of the threaded parts (transport, camera
 #                                buffer, the switch node's camera thread in one cluster run and the
 #                                strangers-at-the-ports test, the --serve nodes' busy door, a node
-#                                killed and one restarted, also with a cluster key), then
+#                                killed and one restarted, also with a cluster key and in latest
+#                                camera mode), then
 #                                those tests (ctest arguments replace the default selection)
 set -euo pipefail
 case "${1:-}" in  # before anything is installed or built
@@ -43,7 +44,7 @@ case "$MODE" in
     cmake --build build-tsan -j"$(nproc)" --target core_test net_transport_test cluster_test hard_faults_test \
       recovery_test membership_test switch_node render_client frame_diff link_relay occlusion_server
     if [ $# -eq 0 ]; then
-      set -- -R '^(CameraBuffer|Loopback|Handshake|Connect|Connection|Listener)\.|^Cluster\.CityWalkEqualsReference$|^HardFaults\.|^Serve\.|^Recovery\.(KilledNode1|RestartedNode0|KeyedRestartedNode)'
+      set -- -R '^(CameraBuffer|Loopback|Handshake|Connect|Connection|Listener)\.|^Cluster\.CityWalkEqualsReference$|^HardFaults\.|^Serve\.|^Recovery\.(KilledNode1|RestartedNode0|KeyedRestartedNode|LatestCameraMode)'
     fi
     ;;
   normal)

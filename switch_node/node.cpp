@@ -136,6 +136,7 @@ class SwitchNode {
     peer_addr_.clear();
     peer_fresh_ = single_ = false;
     peer_lost_.clear();
+    peer_epoch_wait_ = peer_resync_seen_ = 0;
     next_poll_ = Clock::time_point{};
     peer_sent_bytes_ = resyncs_ = single_frames_ = 0;
     or_triangles_ = 0;
@@ -358,6 +359,15 @@ class SwitchNode {
       }
     }
     peer_fresh_ = false;
+    // The switch again: the same Resync on the link marks where this node's new run starts (the
+    // other node skips what came before it, next_from_peer), and this node skips what the other
+    // sent before its own marker (unless that marker was already read).
+    peer_epoch_wait_ = 0;
+    if (r.nodes == 2) {
+      peer_epoch_wait_ = peer_resync_seen_ == r.epoch ? 0 : r.epoch;
+      if (auto err = peer_->send(r)) peer_lost_ = "frame " + std::to_string(r.frame) + ": the resync marker: " + *err;
+    }
+    peer_resync_seen_ = 0;
     std::cerr << who_ << ": resync at frame " << r.frame << " (render client's resync " << r.epoch << "): "
               << (r.nodes == 2 ? "the switch with " + other_ + " (" + peer_addr_ + ")" : std::string("serving alone"))
               << ", from empty visible sets\n";
@@ -531,14 +541,42 @@ class SwitchNode {
   // The next message of the other node's stream of `frame`, waiting until `deadline`. nullopt,
   // with peer_lost_ saying why, when the other node is gone or stalls, or the render client
   // finished meanwhile; throws Interrupted when the render client sent a Resync.
+  // The other node's Resync on the link marks where its new run of frames starts (follow()):
+  // what it sent before the marker this node waits for is stale and skipped. A marker of a newer
+  // resync means the other node already follows one this node has not received yet: it reads no
+  // further (those messages belong to the new run) until the render client's Resync arrives.
   std::optional<net::Received> next_from_peer(uint32_t frame, Clock::time_point deadline, Clock::duration& waited) {
     const std::string f = "frame " + std::to_string(frame) + ": ";
     for (;;) {
       if (cameras_in_->resync_pending()) throw Interrupted{};
       const Clock::time_point t0 = Clock::now();
+      if (peer_resync_seen_) {  // the other node is ahead: wait for ours
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        waited += Clock::now() - t0;
+        if (cameras_in_->done()) {
+          peer_lost_ = f + "started over (resync " + std::to_string(peer_resync_seen_) + ") before the render client ended";
+          return std::nullopt;
+        }
+        if (Clock::now() >= deadline) {
+          peer_lost_ = f + "started over (resync " + std::to_string(peer_resync_seen_) +
+                       "), but the render client's resync did not come within " + std::to_string(o_.timeout_ms) + " ms";
+          return std::nullopt;
+        }
+        continue;
+      }
       net::Received r = peer_->receive(Millis(50));
       waited += Clock::now() - t0;
-      if (r.ok()) return r;
+      if (r.ok()) {
+        if (const auto* rs = std::get_if<wire::Resync>(&r.message)) {
+          if (peer_epoch_wait_ && rs->epoch == peer_epoch_wait_)
+            peer_epoch_wait_ = 0;  // what follows is the new run's
+          else
+            peer_resync_seen_ = rs->epoch;
+          continue;
+        }
+        if (peer_epoch_wait_) continue;  // sent before the other node's marker: stale
+        return r;
+      }
       if (r.status == net::Received::Status::timeout) {
         if (cameras_in_->done()) peer_lost_ = f + "did not finish its stream before the render client ended";
         else if (Clock::now() >= deadline) peer_lost_ = f + "sent nothing for " + std::to_string(o_.timeout_ms) + " ms";
@@ -714,6 +752,8 @@ class SwitchNode {
   std::string peer_addr_;
   bool peer_fresh_ = false;  // peer_ connected since the last resync
   std::string peer_lost_;    // why the other node is gone (this run of frames)
+  uint32_t peer_epoch_wait_ = 0;   // the other node's messages are stale until its marker of this resync
+  uint32_t peer_resync_seen_ = 0;  // the other node's marker of a resync this node has not followed yet
   bool single_ = false;      // serving alone (no peer)
   Clock::time_point next_poll_;
   VisibleSet visible_;

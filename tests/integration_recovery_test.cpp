@@ -227,6 +227,60 @@ TEST(Recovery, RestartedNode1RejoinsAndTheSwitchResumes) { restarted_node_rejoin
 TEST(Recovery, RestartedNode0RejoinsAndTheSwitchResumes) { restarted_node_rejoins(0); }
 TEST(Recovery, KeyedRestartedNode1RejoinsAndStrangersAreRefused) { restarted_node_rejoins(1, true); }
 
+// Latest camera mode: node 1 killed and restarted. The nodes choose the cameras (the newest after
+// the previous frame's), so frames are compared with the reference renderer drawing exactly the
+// cameras the client's stats.csv says each frame used. The restarted node 1 and node 0 must not
+// take each other's messages of the old and the new run of frames for one another (the resync
+// marker on their link).
+TEST(Recovery, LatestCameraModeRestartedNode1RejoinsWithVerifiedFrames) {
+  const std::string path = "walk:1500";
+  const fs::path dir = fresh_dir("recovery_latest") / "cluster";
+  ClusterOptions o(kCity, path, kView);
+  o.all = {"--camera-mode", "latest"};
+  Cluster c(dir, o);
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  c.node1().kill_now();
+  const size_t killed_at = read_csv(c.stats())["frame"].size();
+  ASSERT_GE(wait_frames(c.stats(), killed_at + 30, 60s, &c.client()), killed_at + 30) << c.logs();
+  ASSERT_NE(c.restart_node(1), 0) << c.logs();
+  ASSERT_EQ(c.client().wait(300s), 0) << c.logs();
+  EXPECT_EQ(c.restarted(1).wait(30s), 0) << c.logs();
+  EXPECT_EQ(c.node0().wait(30s), 0) << c.logs();
+  EXPECT_NE(c.client().log().find("the switch resumes"), std::string::npos) << c.client().log();
+  const std::vector<std::string> m = modes(c.stats());
+  auto s = read_csv(c.stats());
+  const std::vector<double>& cams = s["camera"];
+  ASSERT_EQ(cams.size(), m.size());
+  ASSERT_FALSE(cams.empty());
+  EXPECT_EQ(cams.back(), 1499.0);
+  for (size_t i = 1; i < cams.size(); ++i) ASSERT_GT(cams[i], cams[i - 1]) << "frame " << i;  // never one camera twice
+  const size_t back = find_from(m, "resync", find_from(m, "single", 0));
+  ASSERT_LT(back, m.size()) << "the switch never resumed";
+  EXPECT_EQ(count(m, "resync"), 2u);
+  for (size_t i = back + 1; i < m.size(); ++i) ASSERT_EQ(m[i], "switch") << "frame " << i;
+  EXPECT_GT(m.size() - back, 100u);
+  // The reference on the cameras used: the path as CSV, one row per frame shown.
+  const fs::path csv = dir.parent_path() / "walk.csv", used = dir.parent_path() / "used.csv";
+  std::vector<std::string> flags = kView;
+  flags.insert(flags.end(), {"--save-path", csv.string(), "--no-images"});
+  const Outcome saved = run_reference(dir.parent_path() / "path", kCity, path, flags);
+  ASSERT_EQ(saved.code, 0) << saved.log;
+  {
+    std::ifstream in(csv);
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    ASSERT_EQ(lines.size(), 1501u);  // the header and 1500 cameras
+    std::ofstream out(used);
+    out << lines[0] << "\n";
+    for (size_t i = 0; i < cams.size(); ++i) {
+      const std::string& row = lines[1 + size_t(cams[i])];
+      out << i << row.substr(row.find(',')) << "\n";
+    }
+  }
+  expect_equals_reference(dir, used.string(), cams.size());
+}
+
 // The render client's link to node 1 stalls (link_relay): after its receive timeout the client
 // drops node 1 and node 0 serves alone; the path finishes with exit 0 and exact frames.
 TEST(Recovery, StalledLinkDegradesAfterTheTimeoutAndFramesEqualTheReference) {
