@@ -106,7 +106,15 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
   };
   constexpr uint64_t kNoQuery = ~uint64_t(0);
   std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
-  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples)
+  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples; 0: rejected by its geometry)
+  std::vector<std::pair<size_t, uint32_t>> geometry_pending;  // (index in visible, query handle)
+  const bool geometry = o.leaf_test == LeafTest::geometry && q.geometry_queries();
+  // What a visible leaf is drawn as: its coarsest representation where its query saw fewer than
+  // tau samples (4.7.2), else what the selector chooses.
+  auto leaf_renderable = [&](uint32_t id, uint64_t samples) {
+    const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
+    return few_pixels ? sel.coarsest(id) : sel.renderable(id);
+  };
   while (take_batch()) {
     pending.clear();
     visible.clear();
@@ -129,15 +137,39 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       }
     }
     if (!pending.empty()) ++st.levels;
+    auto learn = [&](uint32_t id, bool shows) {
+      if (skipper) skipper->record(id, shows);
+      if (o.budget) o.budget->queried(id, shows);
+    };
+    const size_t first_queried = visible.size();
     for (auto [id, handle] : pending) {
       const uint64_t samples = q.result(handle);
-      if (skipper) skipper->record(id, samples > 0);
-      if (o.budget) o.budget->queried(id, samples > 0);
-      if (samples > 0)
+      if (samples > 0) {
         visible.emplace_back(id, samples);
-      else
+      } else {
         ++st.occluded;
+        learn(id, false);
+      }
     }
+    if (geometry) {
+      // Leaves whose box passed: their own geometry, all issued before any result is read.
+      geometry_pending.clear();
+      for (size_t k = first_queried; k < visible.size(); ++k) {
+        const auto [id, samples] = visible[k];
+        if (!h.node(id).leaf()) continue;
+        const uint32_t handle = q.issue_geometry(leaf_renderable(id, samples));
+        if (handle == OcclusionQueries::kNoGeometryQuery) continue;  // BLEND: keep the box's answer
+        ++st.geometry_queries;
+        geometry_pending.emplace_back(k, handle);
+      }
+      for (auto [k, handle] : geometry_pending)
+        if (q.result(handle) == 0) {
+          visible[k].second = 0;  // rejected
+          ++st.geometry_occluded;
+        }
+    }
+    for (size_t k = first_queried; k < visible.size(); ++k) learn(visible[k].first, visible[k].second > 0);
+    std::erase_if(visible, [](const auto& v) { return v.second == 0; });
     q.end_batch();
     accepted.clear();
     std::sort(visible.begin(), visible.end());
@@ -146,7 +178,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
       uint32_t r = kNoNode;
       if (n.leaf()) {
-        r = few_pixels ? sel.coarsest(id) : sel.renderable(id);
+        r = leaf_renderable(id, samples);
         if (few_pixels && r != sel.renderable(id)) ++st.pixel_stops;
       } else if (sel.satisfies(id)) {
         r = id;
