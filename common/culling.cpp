@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 
 namespace occ {
@@ -11,6 +12,39 @@ bool visible_without_query(const Aabb& box, const Camera& cam) {
   // Distance from the eye to the farthest corner of the near rectangle, with a little slack.
   const double reach = cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-6);
   return box.distance2(cam.eye) <= reach * reach;
+}
+
+double projected_box_area_px(const Aabb& box, const Camera& cam, double viewport_height_px) {
+  const glm::dmat4 to_clip = cam.projection() * cam.view_rotation();
+  const double half_h = 0.5 * viewport_height_px, half_w = half_h * cam.aspect;
+  glm::dvec2 p[8];
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 corner((c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
+                            (c & 4) ? box.max.z : box.min.z);
+    const glm::dvec4 q = to_clip * glm::dvec4(corner - cam.eye, 1.0);
+    if (!(q.w > 0)) return std::numeric_limits<double>::infinity();
+    p[c] = {q.x / q.w * half_w, q.y / q.w * half_h};
+  }
+  // Convex hull (monotone chain), then its area (shoelace).
+  std::sort(std::begin(p), std::end(p), [](const glm::dvec2& a, const glm::dvec2& b) {
+    return a.x < b.x || (a.x == b.x && a.y < b.y);
+  });
+  auto cross = [](const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
+  glm::dvec2 hull[17];
+  int k = 0;
+  for (int i = 0; i < 8; ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (int i = 6, lower = k + 1; i >= 0; --i) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  double area2 = 0;
+  for (int i = 0; i + 1 < k; ++i) area2 += hull[i].x * hull[i + 1].y - hull[i + 1].x * hull[i].y;
+  return 0.5 * std::abs(area2);
 }
 
 std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats) {
@@ -157,6 +191,9 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       for (size_t k = first_queried; k < visible.size(); ++k) {
         const auto [id, samples] = visible[k];
         if (!h.node(id).leaf()) continue;
+        if (o.geometry_below < 1 &&
+            double(samples) >= o.geometry_below * projected_box_area_px(h.node(id).box, cam, sel.viewport_height_px()))
+          continue;  // most of its box shows: its geometry almost surely does
         const uint32_t handle = q.issue_geometry(leaf_renderable(id, samples));
         if (handle == OcclusionQueries::kNoGeometryQuery) continue;  // BLEND: keep the box's answer
         ++st.geometry_queries;

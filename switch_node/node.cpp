@@ -412,6 +412,7 @@ class SwitchNode {
     HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
                   hold_ ? &*hold_ : nullptr};
     local.leaf_test = o_.hc.leaf_test;
+    local.geometry_below = o_.hc.geometry_below;
     hc_camera_ = cam;
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {

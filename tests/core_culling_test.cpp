@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common/culling.hpp"
 #include "common/lod.hpp"
 #include "scene_fixtures.hpp"
@@ -130,6 +132,22 @@ TEST(Culling, BoxCrossingTheNearPlaneNextToTheEyeIsVisibleWithoutQuery) {
   EXPECT_TRUE(visible_without_query(Aabb{{0.5, 0.5, -2}, {3, 3, -0.9}}, cam));  // reaches inside near
   EXPECT_TRUE(visible_without_query(Aabb{{1.0, 1.0, -3}, {2, 2, -1.0}}, cam));  // touches near corner
   EXPECT_FALSE(visible_without_query(Aabb{{-1, -1, -3}, {1, 1, -2}}, cam));
+}
+
+TEST(Culling, ProjectedBoxAreaIsTheCoveredPixels) {
+  // 60 degrees, 480 px high: at 10 m a 2 x 2 m face spans 2 * 240 / (10 tan 30) = 83.1 px.
+  const Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, 1, 0.1, 100);
+  const double side = 480.0 / (10.0 * std::tan(glm::radians(30.0)));
+  EXPECT_NEAR(projected_box_area_px(Aabb{{-1, -1, -10}, {1, 1, -10}}, cam, 480), side * side, 1e-6 * side * side);
+  // A deep box shows its near face (at 9 m), which holds the far face's projection.
+  const double near_side = 480.0 / (9.0 * std::tan(glm::radians(30.0)));
+  EXPECT_NEAR(projected_box_area_px(Aabb{{-1, -1, -10}, {1, 1, -8}}, cam, 480), near_side * near_side * 81.0 / 64.0,
+              1e-6 * near_side * near_side);
+  // Off-axis: more than the face (a side shows too).
+  const double off = projected_box_area_px(Aabb{{3, -1, -10}, {5, 1, -8}}, cam, 480);
+  EXPECT_GT(off, side * side);
+  EXPECT_TRUE(std::isinf(projected_box_area_px(Aabb{{-1, -1, -1}, {1, 1, 1}}, cam, 480))) << "eye inside";
+  EXPECT_TRUE(std::isinf(projected_box_area_px(Aabb{{-1, -1, 1}, {1, 1, 2}}, cam, 480))) << "behind";
 }
 
 TEST(Culling, ItemsOfNodesAreSortedAndUnique) {

@@ -259,9 +259,9 @@ TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
 namespace {
 
 // A wall 5 m in front of the eye (4 x 4 m, four quads around a 1 x 1 m window) and, behind it:
-// "posts", one object of two small quads at x = +-1.2, 8 m away, hidden by the wall although its
-// box (x in [-1.4, 1.4]) shows through the window; "through", seen through the window, 9 m away;
-// "hidden", wholly behind the wall, box and all.
+// "posts", one object of two small quads at (-2.5, -2.5) and (2.5, 2.5), 8 m away, hidden by the
+// wall although its box shows through the window (8.8 % of the box's area: (1.6 / 5.4)^2);
+// "through", seen through the window, 9 m away; "hidden", wholly behind the wall, box and all.
 Scene window_scene() {
   Scene s;
   s.meshes.push_back(quad_mesh());
@@ -273,10 +273,10 @@ Scene window_scene() {
   quad({0, 1.25, -5}, {1, 1.5, 1}, "wall top");
   quad({0, -1.25, -5}, {1, 1.5, 1}, "wall bottom");
   Mesh posts;
-  for (double x : {-1.2, 1.2}) {
+  for (double x : {-2.5, 2.5}) {
     const uint32_t base = uint32_t(posts.positions.size());
     for (glm::vec3 c : {glm::vec3(-0.2f, -0.2f, 0), glm::vec3(0.2f, -0.2f, 0), glm::vec3(0.2f, 0.2f, 0), glm::vec3(-0.2f, 0.2f, 0)})
-      posts.positions.push_back(c + glm::vec3(float(x), 0, -8));
+      posts.positions.push_back(c + glm::vec3(float(x), float(x), -8));
     posts.indices.insert(posts.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
   }
   compute_normals(posts);
@@ -298,8 +298,9 @@ std::vector<std::string> object_names(const Scene& s, const Hierarchy& h, std::s
 
 // Geometry queries (--leaf-test geometry): a leaf whose box shows through a window while its
 // geometry is behind the wall is rejected; what shows through the window is kept; the result is
-// exactly the item buffer's objects. The occluders' own geometry passes its query, with the OR's
-// polygon offset and without it (GL_GEQUAL: equal depth passes).
+// exactly the item buffer's objects. Only leaves whose box showed in less than geometry_below of
+// its area are tested; with 1, every leaf whose box passed is, and the occluders' own geometry
+// passes its query, with the OR's polygon offset and without it (GL_GEQUAL: equal depth passes).
 TEST(GeometryQuerier, LeafWhoseBoxShowsThroughAWindowButNotItsGeometryIsRejected) {
   auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
   Scene scene = window_scene();
@@ -331,17 +332,26 @@ TEST(GeometryQuerier, LeafWhoseBoxShowsThroughAWindowButNotItsGeometryIsRejected
     BoxQuerier boxes(*ctx);
     GeometryQuerier q(*ctx, boxes, r, rs, [&] { boxes.begin(cam); });
     boxes.begin(cam);
-    CullStats box_st, geo_st;
+    CullStats box_st, geo_st, all_st, few_st;
     const auto by_box = hardware_cull_lod(h, cam, q, sel, {.stats = &box_st});
     const auto by_geometry = hardware_cull_lod(h, cam, q, sel, {.stats = &geo_st, .leaf_test = LeafTest::geometry});
+    const auto all_tested = hardware_cull_lod(h, cam, q, sel,
+                                              {.stats = &all_st, .leaf_test = LeafTest::geometry, .geometry_below = 1});
+    const auto few_tested = hardware_cull_lod(h, cam, q, sel,
+                                              {.stats = &few_st, .leaf_test = LeafTest::geometry, .geometry_below = 0.05});
     boxes.end();
     EXPECT_EQ(object_names(scene, h, by_box),
               (std::vector<std::string>{"posts", "through", "wall bottom", "wall left", "wall right", "wall top"}));
     EXPECT_EQ(object_names(scene, h, by_geometry), exact);
     EXPECT_EQ(box_st.geometry_queries, 0u);
-    EXPECT_EQ(geo_st.geometry_queries, 6u);  // every leaf whose box passed
+    EXPECT_EQ(geo_st.geometry_queries, 1u) << "the other boxes show whole";
     EXPECT_EQ(geo_st.geometry_occluded, 1u);
-    EXPECT_EQ(q.geometry_queries_issued(), 6u);
+    EXPECT_EQ(object_names(scene, h, all_tested), exact);
+    EXPECT_EQ(all_st.geometry_queries, 6u);  // every leaf whose box passed
+    EXPECT_EQ(all_st.geometry_occluded, 1u);
+    EXPECT_EQ(few_tested, by_box) << "8.8 % of the posts' box shows: not below 5 %";
+    EXPECT_EQ(few_st.geometry_queries, 0u);
+    EXPECT_EQ(q.geometry_queries_issued(), 7u);
     EXPECT_EQ(ctx->read_rgba().rgba, before.rgba) << "queries write no colour";
     EXPECT_EQ(ctx->gl().GetError(), GLenum(GL_NO_ERROR));
     // Handles of a finished batch are refused.
@@ -351,7 +361,7 @@ TEST(GeometryQuerier, LeafWhoseBoxShowsThroughAWindowButNotItsGeometryIsRejected
   // (a box query where they lie still fails, one through the window still passes).
   BoxQuerier boxes(*ctx);
   boxes.begin(cam);
-  EXPECT_EQ(boxes.result(boxes.issue(Aabb{{1.0, -0.2, -8.5}, {1.4, 0.2, -8.4}})), 0u);
+  EXPECT_EQ(boxes.result(boxes.issue(Aabb{{2.3, 2.3, -8.5}, {2.7, 2.7, -8.4}})), 0u);
   EXPECT_GT(boxes.result(boxes.issue(Aabb{{-0.1, -0.1, -8.5}, {0.1, 0.1, -8.4}})), 0u);
   boxes.end();
 }

@@ -67,9 +67,10 @@ struct HcChoices {
   // A leaf whose box query passed: accepted (box), or tested again with its own geometry
   // (LeafTest in common/culling.hpp; the switch node's GeometryQuerier).
   LeafTest leaf_test = LeafTest::box;
+  double geometry_below = 0.1;  // only leaves whose box showed less than this of its area (HcOptions)
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
-// --occluder-pixels-per-triangle, --leaf-test.
+// --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.

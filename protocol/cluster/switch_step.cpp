@@ -56,7 +56,8 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
                          .stats = &result.stats,
                          .order = local.order,
                          .occluders = local.occluders,
-                         .leaf_test = local.leaf_test});
+                         .leaf_test = local.leaf_test,
+                         .geometry_below = local.geometry_below});
   VisibleSet cur(visible.id_limit());
   for (uint32_t id : found) cur.insert(id);
   std::vector<uint32_t> held;

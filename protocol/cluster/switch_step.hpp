@@ -34,6 +34,7 @@ struct HcLocal {
   VisibilityHold* hold = nullptr;
   // Leaves whose box passed are tested with their geometry (needs q.geometry_queries()).
   LeafTest leaf_test = LeafTest::box;
+  double geometry_below = 0.1;  // HcOptions::geometry_below
 };
 
 struct HcFrame {

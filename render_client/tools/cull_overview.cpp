@@ -90,6 +90,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     // (No query budget: its choices follow the nodes' measured timings, which a replay cannot.)
     HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], nullptr, o.hc.order, nullptr};
     local.leaf_test = o.hc.leaf_test;
+    local.geometry_below = o.hc.geometry_below;
     current = path[f];
     if (o.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
