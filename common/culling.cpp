@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 
 namespace occ {
@@ -11,6 +12,39 @@ bool visible_without_query(const Aabb& box, const Camera& cam) {
   // Distance from the eye to the farthest corner of the near rectangle, with a little slack.
   const double reach = cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-6);
   return box.distance2(cam.eye) <= reach * reach;
+}
+
+double projected_box_area_px(const Aabb& box, const Camera& cam, double viewport_height_px) {
+  const glm::dmat4 to_clip = cam.projection() * cam.view_rotation();
+  const double half_h = 0.5 * viewport_height_px, half_w = half_h * cam.aspect;
+  glm::dvec2 p[8];
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 corner((c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
+                            (c & 4) ? box.max.z : box.min.z);
+    const glm::dvec4 q = to_clip * glm::dvec4(corner - cam.eye, 1.0);
+    if (!(q.w > 0)) return std::numeric_limits<double>::infinity();
+    p[c] = {q.x / q.w * half_w, q.y / q.w * half_h};
+  }
+  // Convex hull (monotone chain), then its area (shoelace).
+  std::sort(std::begin(p), std::end(p), [](const glm::dvec2& a, const glm::dvec2& b) {
+    return a.x < b.x || (a.x == b.x && a.y < b.y);
+  });
+  auto cross = [](const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
+  glm::dvec2 hull[17];
+  int k = 0;
+  for (int i = 0; i < 8; ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (int i = 6, lower = k + 1; i >= 0; --i) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  double area2 = 0;
+  for (int i = 0; i + 1 < k; ++i) area2 += hull[i].x * hull[i + 1].y - hull[i + 1].x * hull[i].y;
+  return 0.5 * std::abs(area2);
 }
 
 std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats) {
@@ -106,7 +140,15 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
   };
   constexpr uint64_t kNoQuery = ~uint64_t(0);
   std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
-  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples)
+  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples; 0: rejected by its geometry)
+  std::vector<std::pair<size_t, uint32_t>> geometry_pending;  // (index in visible, query handle)
+  const bool geometry = o.leaf_test == LeafTest::geometry && q.geometry_queries();
+  // What a visible leaf is drawn as: its coarsest representation where its query saw fewer than
+  // tau samples (4.7.2), else what the selector chooses.
+  auto leaf_renderable = [&](uint32_t id, uint64_t samples) {
+    const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
+    return few_pixels ? sel.coarsest(id) : sel.renderable(id);
+  };
   while (take_batch()) {
     pending.clear();
     visible.clear();
@@ -129,15 +171,42 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       }
     }
     if (!pending.empty()) ++st.levels;
+    auto learn = [&](uint32_t id, bool shows) {
+      if (skipper) skipper->record(id, shows);
+      if (o.budget) o.budget->queried(id, shows);
+    };
+    const size_t first_queried = visible.size();
     for (auto [id, handle] : pending) {
       const uint64_t samples = q.result(handle);
-      if (skipper) skipper->record(id, samples > 0);
-      if (o.budget) o.budget->queried(id, samples > 0);
-      if (samples > 0)
+      if (samples > 0) {
         visible.emplace_back(id, samples);
-      else
+      } else {
         ++st.occluded;
+        learn(id, false);
+      }
     }
+    if (geometry) {
+      // Leaves whose box passed: their own geometry, all issued before any result is read.
+      geometry_pending.clear();
+      for (size_t k = first_queried; k < visible.size(); ++k) {
+        const auto [id, samples] = visible[k];
+        if (!h.node(id).leaf()) continue;
+        if (o.geometry_below < 1 &&
+            double(samples) >= o.geometry_below * projected_box_area_px(h.node(id).box, cam, sel.viewport_height_px()))
+          continue;  // most of its box shows: its geometry almost surely does
+        const uint32_t handle = q.issue_geometry(leaf_renderable(id, samples));
+        if (handle == OcclusionQueries::kNoGeometryQuery) continue;  // BLEND: keep the box's answer
+        ++st.geometry_queries;
+        geometry_pending.emplace_back(k, handle);
+      }
+      for (auto [k, handle] : geometry_pending)
+        if (q.result(handle) == 0) {
+          visible[k].second = 0;  // rejected
+          ++st.geometry_occluded;
+        }
+    }
+    for (size_t k = first_queried; k < visible.size(); ++k) learn(visible[k].first, visible[k].second > 0);
+    std::erase_if(visible, [](const auto& v) { return v.second == 0; });
     q.end_batch();
     accepted.clear();
     std::sort(visible.begin(), visible.end());
@@ -146,7 +215,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
       uint32_t r = kNoNode;
       if (n.leaf()) {
-        r = few_pixels ? sel.coarsest(id) : sel.renderable(id);
+        r = leaf_renderable(id, samples);
         if (few_pixels && r != sel.renderable(id)) ++st.pixel_stops;
       } else if (sel.satisfies(id)) {
         r = id;

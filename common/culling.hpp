@@ -1,7 +1,7 @@
 // Culling logic, independent of GL: hierarchical frustum culling and the HC traversal of the
 // occlusion switch (paper Algorithm 4.1, breadth-first with a level of queries in flight at once,
 // 4.7.1). The occlusion test itself sits behind OcclusionQueries: the GL implementation renders
-// boxes against the depth buffer; tests use a CPU fake.
+// boxes (and, optionally, a leaf's own geometry) against the depth buffer; tests use a CPU fake.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -23,6 +23,18 @@ class OcclusionQueries {
   virtual uint64_t result(uint32_t handle) = 0;
   // Every result of the batch was read: handles may be recycled.
   virtual void end_batch() {}
+
+  // Geometry queries (HcOptions::leaf_test == LeafTest::geometry): a leaf whose box query passed
+  // is tested again with its own geometry, the renderable exactly as the OR draws it depth only
+  // (same vertices, programs, face culling and alpha test), with the depth test GL_GEQUAL
+  // (reverse-Z: ties pass) and no depth writes. Its handle's result() is the samples that passed.
+  // Implementations without them return false here (the traversal then keeps box results).
+  virtual bool geometry_queries() const { return false; }
+  static constexpr uint32_t kNoGeometryQuery = ~uint32_t(0);
+  // Starts a geometry query for renderable `renderable` (lod_select.hpp ids) in the current
+  // batch; kNoGeometryQuery when it cannot be tested (it holds BLEND items, which depth-only
+  // draws leave out although they show): the caller then keeps the box's answer.
+  virtual uint32_t issue_geometry(uint32_t /*renderable*/) { return kNoGeometryQuery; }
 };
 
 // True when a ray from the eye could enter `box` before reaching the near plane (the eye is in
@@ -30,6 +42,10 @@ class OcclusionQueries {
 // rasterise only far faces or nothing and could report 0 samples although the content shows, so
 // such boxes are visible without a query.
 bool visible_without_query(const Aabb& box, const Camera& cam);
+
+// The pixels `box` covers on screen (the area of the convex hull of its projected corners, not
+// clipped to the viewport); +inf when a corner lies at or behind the plane of the eye.
+double projected_box_area_px(const Aabb& box, const Camera& cam, double viewport_height_px);
 
 struct CullStats {
   uint32_t nodes_visited = 0;
@@ -42,6 +58,8 @@ struct CullStats {
   uint32_t hlods = 0;              // interior nodes accepted at their HLOD
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
   uint32_t whole = 0;              // subtrees accepted whole by a QueryBudget (no queries)
+  uint32_t geometry_queries = 0;   // leaves whose box passed, tested with their geometry
+  uint32_t geometry_occluded = 0;  // of those, leaves whose geometry showed no sample (rejected)
 };
 
 // Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
@@ -183,6 +201,16 @@ enum class HcOrder {
                // hide what the next shell holds
 };
 
+// How a leaf whose box query passed is decided.
+enum class LeafTest {
+  box,       // accepted on its box
+  geometry,  // tested again with its own geometry (OcclusionQueries::issue_geometry): accepted
+             // only if samples pass. Conservative, and exact at tau 0: the depth buffer holds
+             // real geometry only, pushed back by the OR's polygon offset, so every pixel where
+             // the leaf is the nearest surface passes. HLODs keep box queries; leaves decided
+             // without a query (near, skipped, held, accepted whole) are accepted as before.
+};
+
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {
   bool visible_pixel_lod = false;
@@ -198,6 +226,16 @@ struct HcOptions {
   // was just found visible hides what lies behind it in the same frame. Real geometry only adds
   // depth that is really there: the traversal stays conservative.
   std::function<void(std::span<const uint32_t>)> occluders = nullptr;
+  // geometry: a batch's geometry queries are issued after its box results are read (one more
+  // wait per batch), when q.geometry_queries(). The skipper and the budget learn the final
+  // answer (box and geometry), so a leaf hidden behind its box's window is not trusted.
+  LeafTest leaf_test = LeafTest::box;
+  // geometry: only leaves whose box query saw fewer samples than this fraction of the box's
+  // projected area (projected_box_area_px) are tested; the others are accepted on their box. A
+  // box that shows mostly has geometry that shows (saw orbit: 7 % of the leaves tested above 0.2
+  // were rejected, 60 % below 0.1), and a geometry query costs about what drawing the leaf does.
+  // 1 tests every leaf whose box passed (and more: boxes may show more than their hull's area).
+  double geometry_below = 0.1;
 };
 
 // HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like

@@ -87,6 +87,7 @@ class LodSelector {
   // The coarsest renderable of a node (visible-pixel LOD: fewer visible pixels than tau).
   uint32_t coarsest(uint32_t node) const;
   const Renderables& renderables() const { return r_; }
+  double viewport_height_px() const { return viewport_height_px_; }
 
  private:
   const Renderables& r_;

@@ -7,9 +7,11 @@
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
+#include "common/memory.hpp"
 #include "render_client/options.hpp"
 
 int main(int argc, char** argv) {
+  occ::use_huge_pages(argv);
   return occ::run_main([&] {
     occ::ClientOptions o;
     occ::Cli cli("render_client",

@@ -4,9 +4,11 @@
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
+#include "common/memory.hpp"
 #include "switch_node/node.hpp"
 
 int main(int argc, char** argv) {
+  occ::use_huge_pages(argv);
   return occ::run_main([&] {
     occ::NodeOptions o;
     occ::Cli cli("switch_node", "--id 0|1 [--peer HOST:PORT] [options]",

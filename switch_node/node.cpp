@@ -14,6 +14,7 @@
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
+#include "common/gl/geometry_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
 #include "common/hash.hpp"
@@ -128,8 +129,12 @@ class SwitchNode {
     if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
     if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
     step_.emplace(*g_.renderables, o_.config, o_.height);
+    geometry_.reset();
     querier_.reset();
     querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
+    if (o_.hc.leaf_test == LeafTest::geometry)  // after a batch's geometry: the box queries' state again
+      geometry_ = std::make_unique<GeometryQuerier>(*g_.ctx, *querier_, *g_.renderer, *g_.renderables,
+                                                    [this] { querier_->begin(hc_camera_); });
     visible_ = VisibleSet(g_.renderables->count());
     stream_ = DiffReceiver{};
     last_camera_.reset();
@@ -143,6 +148,7 @@ class SwitchNode {
     ms_per_query_ = ms_per_triangle_ = 0;
     tail_cpu0_ = hc_cpu0_ = 0;
     or_us_ = or_cpu_us_ = or_tail_cpu_us_ = or_tail_us_ = 0;
+    geometry_queries_ = geometry_occluded_ = 0;
     whole_ = frames_ = queries_ = skipped_ = pixel_stops_ = hlods_ = assumed_visible_ = held_ = 0;
   }
 
@@ -665,6 +671,9 @@ class SwitchNode {
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
     HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
                   hold_ ? &*hold_ : nullptr};
+    local.leaf_test = o_.hc.leaf_test;
+    local.geometry_below = o_.hc.geometry_below;
+    hc_camera_ = cam;
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
@@ -679,7 +688,8 @@ class SwitchNode {
         querier_->begin(cam);  // the renderer changed the GL state the queries need
       };
     querier_->begin(cam);
-    HcFrame hc = step_->hc(frame, visible_, cam, *querier_, local, out);
+    OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;
+    HcFrame hc = step_->hc(frame, visible_, cam, queries, local, out);
     querier_->end();
     hc.eof.or_us = or_us_;
     hc.eof.hc_us = micros_since(hc_start);
@@ -691,6 +701,8 @@ class SwitchNode {
     if (budget_) update_costs(hc.eof);
     ++frames_;
     queries_ += hc.stats.queries;
+    geometry_queries_ += hc.stats.geometry_queries;
+    geometry_occluded_ += hc.stats.geometry_occluded;
     assumed_visible_ += hc.stats.skipped;
     pixel_stops_ += hc.stats.pixel_stops;
     hlods_ += hc.stats.hlods;
@@ -724,7 +736,11 @@ class SwitchNode {
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
               << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
               << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << held_
-              << " renderables kept by the visibility hold), sent " << r.sent.bytes
+              << " renderables kept by the visibility hold; leaf test " << (o_.hc.leaf_test == LeafTest::geometry ? "geometry: " : "box")
+              << (o_.hc.leaf_test == LeafTest::geometry
+                      ? std::to_string(geometry_queries_) + " geometry queries, " + std::to_string(geometry_occluded_) + " leaves rejected"
+                      : std::string())
+              << "), sent " << r.sent.bytes
               << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     if (resyncs_)
       std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
@@ -743,6 +759,9 @@ class SwitchNode {
   wire::Hello mine_;
   std::optional<net::Listener> listener_;  // the whole run; during a session only the Door uses it
   std::unique_ptr<BoxQuerier> querier_;
+  std::unique_ptr<GeometryQuerier> geometry_;  // --leaf-test geometry: wraps querier_
+  Camera hc_camera_;                           // the current HC's camera (geometry_'s restore)
+  uint64_t geometry_queries_ = 0, geometry_occluded_ = 0;
   std::unique_ptr<net::Connection> peer_, rvg_;
   // peer_ (the pointer; the session thread writes it, the Door reads it) and rejoined_peer_ (a
   // restarted node 1 the Door let in, for the session to take).

@@ -143,3 +143,21 @@ TEST(Conventions, OneDefaultViewport) {
     EXPECT_NE(p.log().find("512"), std::string::npos) << b << ": " << p.log();
   }
 }
+
+// The processes run with huge pages for their large heap blocks (common/memory.hpp): they
+// re-execute themselves with glibc.malloc.hugetlb=1 in GLIBC_TUNABLES, unless OCC_HUGE_PAGES=0.
+TEST(Conventions, ProcessesAskForHugePagesUnlessTurnedOff) {
+  const fs::path dir = fresh_dir("hugepages");
+  for (bool on : {true, false}) {
+    if (!on) ::setenv("OCC_HUGE_PAGES", "0", 1);
+    const fs::path port = dir / (on ? "on.port" : "off.port");
+    Proc p({bin("switch_node"), "--id", "0", "--scene", "city:2x2:2:4:1", "--width", "32", "--height", "32",
+            "--port-file", port.string(), "--timeout-ms", "20000"},
+           dir / (on ? "on.log" : "off.log"));
+    ::unsetenv("OCC_HUGE_PAGES");
+    ASSERT_NE(wait_port(port, p), 0) << p.log();  // up and listening: past main's first line
+    const std::string env = read_file("/proc/" + std::to_string(p.pid()) + "/environ");
+    EXPECT_EQ(env.find("glibc.malloc.hugetlb=1") != std::string::npos, on) << (on ? "on" : "off");
+    p.kill_now();
+  }
+}

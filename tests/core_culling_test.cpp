@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common/culling.hpp"
 #include "common/lod.hpp"
 #include "scene_fixtures.hpp"
@@ -132,6 +134,22 @@ TEST(Culling, BoxCrossingTheNearPlaneNextToTheEyeIsVisibleWithoutQuery) {
   EXPECT_FALSE(visible_without_query(Aabb{{-1, -1, -3}, {1, 1, -2}}, cam));
 }
 
+TEST(Culling, ProjectedBoxAreaIsTheCoveredPixels) {
+  // 60 degrees, 480 px high: at 10 m a 2 x 2 m face spans 2 * 240 / (10 tan 30) = 83.1 px.
+  const Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, 1, 0.1, 100);
+  const double side = 480.0 / (10.0 * std::tan(glm::radians(30.0)));
+  EXPECT_NEAR(projected_box_area_px(Aabb{{-1, -1, -10}, {1, 1, -10}}, cam, 480), side * side, 1e-6 * side * side);
+  // A deep box shows its near face (at 9 m), which holds the far face's projection.
+  const double near_side = 480.0 / (9.0 * std::tan(glm::radians(30.0)));
+  EXPECT_NEAR(projected_box_area_px(Aabb{{-1, -1, -10}, {1, 1, -8}}, cam, 480), near_side * near_side * 81.0 / 64.0,
+              1e-6 * near_side * near_side);
+  // Off-axis: more than the face (a side shows too).
+  const double off = projected_box_area_px(Aabb{{3, -1, -10}, {5, 1, -8}}, cam, 480);
+  EXPECT_GT(off, side * side);
+  EXPECT_TRUE(std::isinf(projected_box_area_px(Aabb{{-1, -1, -1}, {1, 1, 1}}, cam, 480))) << "eye inside";
+  EXPECT_TRUE(std::isinf(projected_box_area_px(Aabb{{-1, -1, 1}, {1, 1, 2}}, cam, 480))) << "behind";
+}
+
 TEST(Culling, ItemsOfNodesAreSortedAndUnique) {
   Scene s = cube_grid(5, 3);
   Hierarchy h = Hierarchy::build(s, {});
@@ -188,4 +206,131 @@ TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
   EXPECT_GT(skip_stats.skipped, 0u);
   // The occluded half is queried every frame; the visible half mostly is not.
   EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
+}
+
+namespace {
+
+// Geometry queries (LeafTest::geometry): a box passes as in FakeQueries; a leaf's geometry shows
+// when its node's box holds one of `geometry_points` (where its geometry is the nearest surface).
+// Renderables in `blended` cannot be tested. Events: 'g' geometry issued, 'R' geometry result.
+struct GeometryFakeQueries : FakeQueries {
+  static constexpr uint32_t kBit = 0x80000000u;
+  const Hierarchy* h = nullptr;
+  std::vector<glm::dvec3> geometry_points;
+  std::vector<uint32_t> blended;
+  std::vector<uint32_t> tested;  // renderables, by geometry handle
+  bool geometry_queries() const override { return true; }
+  uint32_t issue_geometry(uint32_t renderable) override {
+    events.push_back('g');
+    if (std::find(blended.begin(), blended.end(), renderable) != blended.end()) return kNoGeometryQuery;
+    tested.push_back(renderable);
+    return kBit | uint32_t(tested.size() - 1);
+  }
+  uint64_t result(uint32_t handle) override {
+    if (!(handle & kBit)) return FakeQueries::result(handle);
+    events.push_back('R');
+    uint64_t n = 0;
+    for (auto& p : geometry_points) n += h->node(tested.at(handle & ~kBit)).box.contains(p);  // level-0 ids = nodes
+    return n;
+  }
+};
+
+struct GeometryGrid {
+  Scene s = cube_grid(12, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  Renderables r{h, nullptr};
+  Camera cam = overview(h.node(0).box);
+  LodSelector sel{r, cam, 480, 0.0};
+  // Three leaves whose boxes show; the geometry of the last one does not (behind a wall, its box
+  // seen through a window).
+  const std::vector<glm::dvec3> boxes_show = {{0.5, 0.5, 0.5}, {9.5, 0.5, 30.5}, {33.5, 0.5, 33.5}};
+  GeometryFakeQueries q;
+  GeometryGrid() {
+    q.h = &h;
+    q.visible_points = boxes_show;
+    q.geometry_points = {boxes_show[0], boxes_show[1]};
+  }
+  uint32_t leaf_of(glm::dvec3 p) const {
+    for (uint32_t id = 0; id < h.size(); ++id)
+      if (h.node(id).leaf() && h.node(id).item_count > 0 && h.node(id).box.contains(p)) return id;
+    return kNoNode;
+  }
+};
+
+}  // namespace
+
+TEST(GeometryQueries, LeafWhoseBoxPassesButGeometryDoesNotIsRejected) {
+  GeometryGrid g;
+  CullStats box_st, geo_st;
+  const auto by_box = hardware_cull_lod(g.h, g.cam, g.q, g.sel, {.stats = &box_st});
+  ASSERT_EQ(by_box.size(), 3u);
+  EXPECT_TRUE(g.q.tested.empty()) << "box: no geometry queries";
+  EXPECT_EQ(box_st.geometry_queries, 0u);
+  std::vector<uint32_t> streamed;
+  const auto by_geometry = hardware_cull_lod(g.h, g.cam, g.q, g.sel,
+                                             {.on_visible = [&](uint32_t id) { streamed.push_back(id); },
+                                              .stats = &geo_st,
+                                              .leaf_test = LeafTest::geometry});
+  const uint32_t hidden = g.leaf_of(g.boxes_show[2]);
+  ASSERT_NE(hidden, kNoNode);
+  std::vector<uint32_t> expected = by_box;
+  std::erase(expected, hidden);
+  EXPECT_EQ(by_geometry, expected);
+  std::sort(streamed.begin(), streamed.end());
+  EXPECT_EQ(streamed, by_geometry) << "a rejected leaf is never streamed";
+  EXPECT_EQ(geo_st.geometry_queries, 3u);  // the leaves whose boxes passed, each once
+  EXPECT_EQ(geo_st.geometry_occluded, 1u);
+  EXPECT_EQ(geo_st.queries, box_st.queries) << "the same box queries";
+  std::vector<uint32_t> tested = g.q.tested;
+  std::sort(tested.begin(), tested.end());
+  EXPECT_EQ(tested, by_box) << "only leaves whose box passed, never interior nodes";
+  // Queries without geometry support: the traversal keeps the box's answer.
+  FakeQueries plain;
+  plain.visible_points = g.boxes_show;
+  EXPECT_EQ(hardware_cull_lod(g.h, g.cam, plain, g.sel, {.leaf_test = LeafTest::geometry}), by_box);
+}
+
+TEST(GeometryQueries, AreIssuedAfterTheBatchsBoxResultsAndReadBeforeItEnds) {
+  GeometryGrid g;
+  hardware_cull_lod(g.h, g.cam, g.q, g.sel, {.leaf_test = LeafTest::geometry});
+  // Per batch: i..i r..r g..g R..R e.
+  std::string order = "irgRe";
+  size_t stage = 0, geometry_batches = 0;
+  for (char e : g.q.events) {
+    const size_t s = order.find(e);
+    ASSERT_NE(s, std::string::npos);
+    EXPECT_GE(s, stage) << "'" << e << "' after '" << order[stage] << "'";
+    if (e == 'g' && stage < 2) ++geometry_batches;
+    stage = e == 'e' ? 0 : std::max(stage, s);
+  }
+  EXPECT_GE(geometry_batches, 1u);
+}
+
+TEST(GeometryQueries, TheSkipperLearnsTheFinalResultSoAHiddenLeafIsNeverTrusted) {
+  GeometryGrid g;
+  const uint32_t hidden = g.leaf_of(g.boxes_show[2]), shown = g.leaf_of(g.boxes_show[0]);
+  QuerySkipper skipper(g.h.size());
+  CullStats st;
+  for (int frame = 0; frame < 12; ++frame) {
+    const auto v =
+        hardware_cull_lod(g.h, g.cam, g.q, g.sel, {.skipper = &skipper, .stats = &st, .leaf_test = LeafTest::geometry});
+    EXPECT_FALSE(std::binary_search(v.begin(), v.end(), hidden)) << "frame " << frame;
+    EXPECT_TRUE(std::binary_search(v.begin(), v.end(), shown)) << "frame " << frame;
+  }
+  EXPECT_GT(st.skipped, 0u) << "leaves whose geometry keeps showing are trusted";
+  EXPECT_EQ(st.geometry_occluded, 12u) << "the hidden leaf is tested every frame";
+  // Its box passes every time; the skipper was told it was occluded.
+  EXPECT_FALSE(skipper.skip(hidden));
+}
+
+TEST(GeometryQueries, ALeafHoldingBlendItemsIsAcceptedOnItsBox) {
+  GeometryGrid g;
+  const uint32_t glassy = g.leaf_of(g.boxes_show[2]);  // its geometry "does not show", but it is glass
+  g.q.blended = {glassy};
+  CullStats st;
+  const auto v = hardware_cull_lod(g.h, g.cam, g.q, g.sel, {.stats = &st, .leaf_test = LeafTest::geometry});
+  EXPECT_TRUE(std::binary_search(v.begin(), v.end(), glassy));
+  EXPECT_EQ(v.size(), 3u);
+  EXPECT_EQ(st.geometry_queries, 2u);
+  EXPECT_EQ(st.geometry_occluded, 0u);
 }

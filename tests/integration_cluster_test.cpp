@@ -41,6 +41,33 @@ void expect_cluster_equals_reference(const std::string& name, const std::string&
   for (double q : stats["queries"]) EXPECT_GT(q, 0);
 }
 
+// --leaf-test geometry: leaves whose box passed are tested with their own geometry. The frames
+// stay those of the reference (conservative, tau 0), and the visible sets are smaller than with
+// box tests on the same walk (same flags otherwise; lockstep runs are deterministic) — or, with
+// !fewer (box-shaped buildings: every box that shows has geometry that shows), no larger.
+void expect_geometry_tests_equal_reference_with_fewer_leaves(const std::string& name, const std::string& scene,
+                                                             const std::string& path, size_t frames, bool fewer) {
+  fs::path dir = fresh_dir(name);
+  ClusterOptions o = cluster(scene, path);
+  o.node0 = o.node1 = {"--leaf-test", "geometry"};
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, frames);
+  if (!r) return;
+  const size_t at = r->node0_log.find("leaf test geometry: ");
+  ASSERT_NE(at, std::string::npos) << r->node0_log;
+  EXPECT_GT(std::stoul(r->node0_log.substr(at + 20)), 0u) << "geometry queries issued";
+  o.node0 = o.node1 = {"--leaf-test", "box"};
+  o.client = {"--no-images"};
+  const ClusterRun box = run_cluster(dir / "box", o);
+  ASSERT_EQ(box.rvg_code, 0) << box.logs();
+  auto geometry_stats = read_csv(dir / "cluster" / "stats.csv"), box_stats = read_csv(dir / "box" / "stats.csv");
+  ASSERT_EQ(geometry_stats["visible"].size(), box_stats["visible"].size());
+  if (fewer) {
+    EXPECT_LT(sum(geometry_stats["visible"]), sum(box_stats["visible"]));
+  } else {
+    EXPECT_LE(sum(geometry_stats["visible"]), sum(box_stats["visible"]));
+  }
+}
+
 // Two switch nodes and no client, both refusing each other at the handshake (exit 1): their logs
 // (nothing when node 0 did not start).
 struct Refused {
@@ -71,6 +98,20 @@ TEST(Cluster, PlantWalkEqualsReference) {
 TEST(Cluster, DuplexWalkEqualsReference) {
   if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
   expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);
+}
+
+TEST(ClusterGeometryQueries, CityWalkEqualsReferenceWithNoMoreLeaves) {
+  expect_geometry_tests_equal_reference_with_fewer_leaves("geo_city", kCity, "walk:90", 90, false);
+}
+
+TEST(ClusterGeometryQueries, PlantWalkEqualsReferenceWithFewerLeaves) {
+  expect_geometry_tests_equal_reference_with_fewer_leaves("geo_plant", "plant:0.3", "walk:40", 40, true);
+}
+
+TEST(ClusterGeometryQueries, DuplexWalkEqualsReferenceWithFewerLeaves) {
+  if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
+  expect_geometry_tests_equal_reference_with_fewer_leaves("geo_duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"),
+                                                          "walk:60", 60, true);
 }
 
 TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {

@@ -86,6 +86,7 @@ class Proc {
   }
   void kill_now() { ::kill(pid_, SIGKILL); }
   void signal(int sig) { ::kill(pid_, sig); }
+  pid_t pid() const { return pid_; }
   std::string log() const { return read_file(log_); }
 
  private:

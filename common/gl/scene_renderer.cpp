@@ -628,22 +628,85 @@ DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const 
   }
   std::sort(order.begin(), order.end());
   DrawStats stats;
-  for (auto [key, id] : order) {
-    const uint32_t node = r.node_of(id), level = r.level_of(id);
-    const HNode& n = hierarchy_.node(node);
-    if (n.leaf() && level > 0 && !lod_draws_.empty()) {
-      for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) {
-        ItemDraw d = lod_draws_[item_slot_[i] * kLeafLodLevels + level - 1];
-        d.object = item_draws_[i].object;
-        add_draw(d, i + 1, mode, true, stats);
-      }
-    } else if (!n.leaf() && !hlod_draws_.empty() && hlod_of_node_[node] != kNoNode) {
-      add_draw(hlod_draws_[hlod_of_node_[node]], node + 1, mode, false, stats);  // its look: vertex colours
-    } else {
-      for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) add_item(i, i + 1, mode, stats);
-    }
-  }
+  for (auto [key, id] : order) add_renderable(r, id, mode, stats);
   return submit(mode, stats);
+}
+
+void SceneRenderer::add_renderable(const Renderables& r, uint32_t id, Mode mode, DrawStats& stats) {
+  const uint32_t node = r.node_of(id), level = r.level_of(id);
+  const HNode& n = hierarchy_.node(node);
+  if (n.leaf() && level > 0 && !lod_draws_.empty()) {
+    for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) {
+      ItemDraw d = lod_draws_[item_slot_[i] * kLeafLodLevels + level - 1];
+      d.object = item_draws_[i].object;
+      add_draw(d, i + 1, mode, true, stats);
+    }
+  } else if (!n.leaf() && !hlod_draws_.empty() && hlod_of_node_[node] != kNoNode) {
+    add_draw(hlod_draws_[hlod_of_node_[node]], node + 1, mode, false, stats);  // its look: vertex colours
+  } else {
+    for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) add_item(i, i + 1, mode, stats);
+  }
+}
+
+bool SceneRenderer::holds_blended(const Renderables& r, uint32_t id) const {
+  if (!has_blended_) return false;
+  if (id >= r.count())
+    throw std::out_of_range("SceneRenderer: renderable " + std::to_string(id) + " out of range (" +
+                            std::to_string(r.count()) + ")");
+  const uint32_t node = r.node_of(id);
+  const HNode& n = hierarchy_.node(node);
+  if (!n.leaf() && !hlod_draws_.empty() && hlod_of_node_[node] != kNoNode) return false;  // HLODs are opaque
+  for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i)
+    if (looks_[item_draws_[i].object].bits & kBlend) return true;
+  return false;
+}
+
+void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint32_t> ids,
+                                      std::span<const GLuint> queries) {
+  if (queries.size() != ids.size())
+    throw std::invalid_argument("SceneRenderer::query_renderables: " + std::to_string(ids.size()) + " renderables but " +
+                                std::to_string(queries.size()) + " queries");
+  if (ids.empty()) return;
+  // Each renderable's depth-only draws (BLEND items left out, as DepthOnly does), in batch-key
+  // order within the renderable; query_ends_[k] ends renderable k's draws.
+  pending_.clear();
+  query_ends_.clear();
+  DrawStats unused;
+  for (uint32_t id : ids) {
+    if (id >= r.count())
+      throw std::out_of_range("SceneRenderer: renderable " + std::to_string(id) + " out of range (" +
+                              std::to_string(r.count()) + ")");
+    const size_t begin = pending_.size();
+    add_renderable(r, id, Mode::DepthOnly, unused);
+    std::stable_sort(pending_.begin() + ptrdiff_t(begin), pending_.end(),
+                     [](const Pending& a, const Pending& b) { return a.key < b.key; });
+    query_ends_.push_back(pending_.size());
+  }
+  upload_draws(pending_);
+  // The occluders' state without their offset, depth writes off and ties passing: where this
+  // geometry lies on the depth it (or anything at the same depth) wrote, it still shows.
+  gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  gl_.DepthMask(GL_FALSE);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthFunc(GL_GEQUAL);
+  gl_.BindVertexArray(vao_);
+  gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
+  RunState bound;
+  bound.segment = segments_.size() > 1 ? ~0u : 0;
+  size_t b = 0;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    gl_.BeginQuery(GL_SAMPLES_PASSED, queries[k]);
+    draw_runs(pending_, b, query_ends_[k], Mode::DepthOnly, bound);
+    gl_.EndQuery(GL_SAMPLES_PASSED);
+    b = query_ends_[k];
+  }
+  pending_.clear();
+  if (bound.cull != kCullNone) {
+    gl_.Disable(GL_CULL_FACE);
+    gl_.FrontFace(GL_CCW);
+  }
+  gl_.DepthFunc(GL_GREATER);
+  gl_.DepthMask(GL_TRUE);
 }
 
 DrawStats SceneRenderer::draw_items(std::span<const uint32_t> item_indices, Mode mode) {
@@ -726,7 +789,7 @@ DrawStats SceneRenderer::draw_blended() {
   return stats;
 }
 
-void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool blended) {
+void SceneRenderer::upload_draws(std::span<const Pending> draws) {
   records_.clear();
   commands_.clear();
   for (const Pending& p : draws) {
@@ -751,7 +814,48 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
   }
   gl_.NamedBufferSubData(record_buf_, 0, GLsizeiptr(record_bytes), records_.data());
   gl_.NamedBufferSubData(indirect_buf_, 0, GLsizeiptr(command_bytes), commands_.data());
+}
 
+void SceneRenderer::draw_runs(std::span<const Pending> draws, size_t first, size_t last, Mode mode, RunState& bound) {
+  for (size_t b = first; b < last;) {
+    size_t e = b + 1;
+    const uint32_t segment = draws[b].draw.segment;
+    while (e < last && draws[e].key == draws[b].key && draws[e].draw.segment == segment) ++e;
+    if (segment != bound.segment) {
+      bind_segment(segment);
+      bound.segment = segment;
+    }
+    const uint64_t key = draws[b].key;
+    const unsigned bits = unsigned(key >> 40) & (kVariants - 1);
+    const int64_t texture = int64_t((key >> 8) & 0xffffffffu) - 1;
+    const int cull = int(key & 0xff);
+    if (bits != bound.bits) {
+      gl_.UseProgram(programs_[int(mode)][bits].id);
+      bound.bits = bits;
+    }
+    if (texture >= 0 && texture != bound.texture) {
+      gl_.BindTextureUnit(0, textures_[texture_image_[size_t(texture)]]);
+      gl_.BindSampler(0, samplers_[size_t(texture)]);
+      bound.texture = texture;
+    }
+    if (cull != bound.cull) {
+      if (cull == kCullNone) {
+        gl_.Disable(GL_CULL_FACE);
+      } else {
+        gl_.Enable(GL_CULL_FACE);
+        gl_.CullFace(GL_BACK);
+        gl_.FrontFace(cull == kCullBackCw ? GL_CW : GL_CCW);
+      }
+      bound.cull = cull;
+    }
+    gl_.MultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT,
+                                  reinterpret_cast<const void*>(b * sizeof(IndirectCommand)), GLsizei(e - b), 0);
+    b = e;
+  }
+}
+
+void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool blended) {
+  upload_draws(draws);
   const bool color = mode != Mode::DepthOnly;
   const bool offset = !color && occluder_offset_;  // see set_occluder_offset()
   if (offset) {
@@ -768,48 +872,12 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
   }
   gl_.BindVertexArray(vao_);
   gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
-  unsigned bound_bits = ~0u;
-  int64_t bound_texture = -1;
-  int bound_cull = -1;
-  uint32_t bound_segment = segments_.size() > 1 ? ~0u : 0;  // bound at construction
-  for (size_t b = 0; b < draws.size();) {
-    size_t e = b + 1;
-    const uint32_t segment = draws[b].draw.segment;
-    while (e < draws.size() && draws[e].key == draws[b].key && draws[e].draw.segment == segment) ++e;
-    if (segment != bound_segment) {
-      bind_segment(segment);
-      bound_segment = segment;
-    }
-    const uint64_t key = draws[b].key;
-    const unsigned bits = unsigned(key >> 40) & (kVariants - 1);
-    const int64_t texture = int64_t((key >> 8) & 0xffffffffu) - 1;
-    const int cull = int(key & 0xff);
-    if (bits != bound_bits) {
-      gl_.UseProgram(programs_[int(mode)][bits].id);
-      bound_bits = bits;
-    }
-    if (texture >= 0 && texture != bound_texture) {
-      gl_.BindTextureUnit(0, textures_[texture_image_[size_t(texture)]]);
-      gl_.BindSampler(0, samplers_[size_t(texture)]);
-      bound_texture = texture;
-    }
-    if (cull != bound_cull) {
-      if (cull == kCullNone) {
-        gl_.Disable(GL_CULL_FACE);
-      } else {
-        gl_.Enable(GL_CULL_FACE);
-        gl_.CullFace(GL_BACK);
-        gl_.FrontFace(cull == kCullBackCw ? GL_CW : GL_CCW);
-      }
-      bound_cull = cull;
-    }
-    gl_.MultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT,
-                                  reinterpret_cast<const void*>(b * sizeof(IndirectCommand)), GLsizei(e - b), 0);
-    b = e;
-  }
+  RunState bound;
+  bound.segment = segments_.size() > 1 ? ~0u : 0;  // bound at construction
+  draw_runs(draws, 0, draws.size(), mode, bound);
   // Leave the defaults for other GL users (BoxQuerier, HZB readback).
   if (offset) gl_.Disable(GL_POLYGON_OFFSET_FILL);  // never on query boxes or shaded frames
-  if (bound_cull != kCullNone) {
+  if (bound.cull != kCullNone) {
     gl_.Disable(GL_CULL_FACE);
     gl_.FrontFace(GL_CCW);
   }

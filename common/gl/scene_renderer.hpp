@@ -141,6 +141,16 @@ class SceneRenderer {
   // level-0 leaves exactly ascending item order, as everywhere else (z-ties resolve identically).
   // Without LOD data uploaded, LOD ids fall back to full detail.
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
+  // Occlusion queries with real geometry (geometry_query.hpp): for each renderable ids[k], a
+  // GL_SAMPLES_PASSED query queries[k] around its DepthOnly draws — the same programs, vertices,
+  // face culling and MASK alpha test as draw_renderables(..., DepthOnly), so its depth is
+  // bit-identical to the occluder pass's — with colour and depth writes off, depth test
+  // GL_GEQUAL (reverse-Z: ties pass) and no occluder offset. BLEND items are left out, as in
+  // DepthOnly (holds_blended() tells which renderables have them). All records and commands are
+  // uploaded once. Leaves depth writes on and the depth test GL_GREATER.
+  void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries);
+  // True when renderable `id` draws BLEND items (HLODs never do).
+  bool holds_blended(const Renderables& r, uint32_t id) const;
   // ItemIds rendering of whole nodes, each in colour node id + 1.
   DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);
   // Draws the BLEND items deferred since begin_frame(..., defer_blended = true), back to front
@@ -204,10 +214,20 @@ class SceneRenderer {
   void add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool lod, DrawStats& stats);
   uint64_t batch_key(uint32_t object, Mode mode, bool lod) const;
   const ObjectMatrices& object_matrices(uint32_t object);
+  void add_renderable(const Renderables& r, uint32_t id, Mode mode, DrawStats& stats);
   DrawStats submit(Mode mode, DrawStats stats);
   DrawStats draw_blended();
   // Uploads `draws` as records and commands and draws them in runs of equal key.
   void draw_batches(std::span<const Pending> draws, Mode mode, bool blended);
+  void upload_draws(std::span<const Pending> draws);  // draw i = record i = command i
+  struct RunState {  // GL state bound by draw_runs
+    unsigned bits = ~0u;
+    int64_t texture = -1;
+    int cull = -1;
+    uint32_t segment = ~0u;
+  };
+  // Draws uploaded draws [first, last) in runs of equal key and segment.
+  void draw_runs(std::span<const Pending> draws, size_t first, size_t last, Mode mode, RunState& bound);
   void compile(Mode mode, unsigned bits);
   void upload_textures(const Scene& scene, const std::vector<uint8_t>& used_textures);
 
@@ -247,6 +267,7 @@ class SceneRenderer {
   std::vector<std::pair<double, uint32_t>> blend_order_;
   std::vector<IndirectCommand> commands_;
   std::vector<DrawRecord> records_;
+  std::vector<size_t> query_ends_;  // query_renderables: end of each renderable's draws
 };
 
 // Distinct ids in an item buffer (pixel value - 1, zero pixels ignored), ascending.

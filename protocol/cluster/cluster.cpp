@@ -102,6 +102,13 @@ void add_hc_options(Cli& cli, HcChoices& c) {
   cli.option("occluder-pixels-per-triangle", &c.occluder_pixels_per_triangle, 0.0, 1e9,
              "OR and occluder fusion skip objects whose projected bounding sphere covers fewer pixels per "
              "triangle than this (dense small parts cost more to draw than they hide; 0: draw every one)");
+  cli.choice<LeafTest>("leaf-test", &c.leaf_test, {{"box", LeafTest::box}, {"geometry", LeafTest::geometry}},
+                       "a leaf whose box query passes: accepted (box), or accepted only if its own geometry, "
+                       "drawn depth-only, shows a sample (geometry: fewer leaves through doors and windows, "
+                       "a second query per such leaf)");
+  cli.option("leaf-test-below", &c.geometry_below, 0.0, 1.0,
+             "--leaf-test geometry tests only leaves whose box query saw less than this fraction of the box's "
+             "projected area (a box that shows mostly has geometry that shows; 1: every leaf whose box passed)");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }

@@ -64,9 +64,13 @@ struct HcChoices {
   // OR and fusion draw an object as an occluder only if it covers at least this many pixels per
   // triangle (OccluderSelection in common/culling.hpp; 0: every visible object).
   double occluder_pixels_per_triangle = 1.0;
+  // A leaf whose box query passed: accepted (box), or tested again with its own geometry
+  // (LeafTest in common/culling.hpp; the switch node's GeometryQuerier).
+  LeafTest leaf_test = LeafTest::box;
+  double geometry_below = 0.1;  // only leaves whose box showed less than this of its area (HcOptions)
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
-// --occluder-pixels-per-triangle.
+// --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.

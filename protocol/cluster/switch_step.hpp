@@ -32,6 +32,9 @@ struct HcLocal {
   // Hysteresis (culling.hpp VisibilityHold): hc() records what it found and keeps recently seen
   // renderables of V_{f-1} in V_f. The caller records the other node's additions.
   VisibilityHold* hold = nullptr;
+  // Leaves whose box passed are tested with their geometry (needs q.geometry_queries()).
+  LeafTest leaf_test = LeafTest::box;
+  double geometry_below = 0.1;  // HcOptions::geometry_below
 };
 
 struct HcFrame {

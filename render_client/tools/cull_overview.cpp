@@ -22,6 +22,7 @@
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
+#include "common/gl/geometry_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/image.hpp"
@@ -63,6 +64,9 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
   BoxQuerier querier(*ctx);
   const Renderables renderables(h, nullptr);
+  Camera current;  // HC's camera (the geometry querier's restore)
+  GeometryQuerier geometry(*ctx, querier, renderer, renderables, [&] { querier.begin(current); });
+  OcclusionQueries& queries = o.hc.leaf_test == LeafTest::geometry ? static_cast<OcclusionQueries&>(geometry) : querier;
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
   const SwitchStep step(renderables, config, o.height);
@@ -85,6 +89,9 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
     // (No query budget: its choices follow the nodes' measured timings, which a replay cannot.)
     HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], nullptr, o.hc.order, nullptr};
+    local.leaf_test = o.hc.leaf_test;
+    local.geometry_below = o.hc.geometry_below;
+    current = path[f];
     if (o.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
@@ -95,7 +102,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
         querier.begin(path[f]);
       };
     querier.begin(path[f]);
-    HcFrame hc = step.hc(f, visible, path[f], querier, local, nowhere);
+    HcFrame hc = step.hc(f, visible, path[f], queries, local, nowhere);
     querier.end();
     before = std::move(prev);
     last_stats = hc.stats;

@@ -131,6 +131,7 @@ int serve(const ServerOptions& o) {
 }  // namespace occ
 
 int main(int argc, char** argv) {
+  occ::use_huge_pages(argv);
   return occ::run_main([&] {
     occ::ServerOptions o;
     occ::Cli cli("occlusion_server", "[options]",
