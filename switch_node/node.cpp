@@ -12,7 +12,7 @@
 #include "common/cpu_time.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
-#include "common/gl/box_query.hpp"
+#include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
 #include "common/hash.hpp"
@@ -116,7 +116,7 @@ class SwitchNode {
     if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
     step_.emplace(*g_.renderables, o_.config, o_.height);
     querier_.reset();
-    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
+    querier_ = std::make_unique<HcQuerier>(*g_.ctx, o_.hc.test);
     peer_ended_cleanly_ = false;
     or_triangles_ = 0;
     ms_per_query_ = ms_per_triangle_ = 0;
@@ -415,7 +415,7 @@ class SwitchNode {
         select_.filter(fresh, *g_.renderables, cam, o_.height);
         if (fresh.empty()) return;
         g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
-        querier_->begin(cam);  // the renderer changed the GL state the queries need
+        querier_->depth_added();  // restores the GL state the queries need; the pyramid is stale
       };
     querier_->begin(cam);
     HcFrame hc = step_->hc(frame, visible, cam, *querier_, local, out);
@@ -464,6 +464,16 @@ class SwitchNode {
               << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << held_
               << " renderables kept by the visibility hold), sent " << r.sent.bytes
               << " B to the render client and " << p.sent.bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
+    if (querier_) {
+      const HcQuerier::Stats& q = querier_->stats();
+      static constexpr const char* kTest[] = {"queries", "pyramid", "auto"};
+      std::fprintf(stderr,
+                   "%s: HC test %s: %llu boxes tested (%llu occluded), %llu occlusion queries issued, %llu proven occluded "
+                   "by the depth pyramid (of %llu tested against it in %llu dispatches; %llu pyramid builds)\n",
+                   who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
+                   (unsigned long long)q.queries, (unsigned long long)q.pyramid_occluded,
+                   (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds);
+    }
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
                  "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
@@ -477,7 +487,7 @@ class SwitchNode {
   SceneGl g_;
   wire::Hello mine_;
   std::optional<net::Listener> listener_;
-  std::unique_ptr<BoxQuerier> querier_;
+  std::unique_ptr<HcQuerier> querier_;
   std::unique_ptr<net::Connection> peer_, rvg_;
   std::optional<CameraBuffer> cameras_;
   std::optional<CameraReceiver> cameras_in_;

@@ -64,9 +64,11 @@ struct HcChoices {
   // OR and fusion draw an object as an occluder only if it covers at least this many pixels per
   // triangle (OccluderSelection in common/culling.hpp; 0: every visible object).
   double occluder_pixels_per_triangle = 1.0;
+  // How each box is tested (common/gl/hzb_query.hpp): queries, or a GPU depth pyramid first.
+  HcTest test = HcTest::queries;
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
-// --occluder-pixels-per-triangle.
+// --occluder-pixels-per-triangle, --hc-test.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.

@@ -21,7 +21,7 @@
 #include "common/cli.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
-#include "common/gl/box_query.hpp"
+#include "common/gl/hzb_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/image.hpp"
@@ -61,7 +61,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
-  BoxQuerier querier(*ctx);
+  HcQuerier querier(*ctx, o.hc.test);
   const Renderables renderables(h, nullptr);
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
@@ -92,7 +92,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
           if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
         select.filter(fresh, renderables, path[f], o.height);
         renderer.draw_items(items_of_nodes(h, fresh), SceneRenderer::Mode::DepthOnly);
-        querier.begin(path[f]);
+        querier.depth_added();
       };
     querier.begin(path[f]);
     HcFrame hc = step.hc(f, visible, path[f], querier, local, nowhere);
