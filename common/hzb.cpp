@@ -90,13 +90,13 @@ uint32_t pyramid_level_count(const Viewport& vp) {
   return n;
 }
 
-uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels) {
+uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels, int span) {
   uint32_t l = 0;
-  while (l + 1 < levels && ((x1 >> l) - (x0 >> l) > 1 || (y1 >> l) - (y0 >> l) > 1)) ++l;
+  while (l + 1 < levels && ((x1 >> l) - (x0 >> l) >= span || (y1 >> l) - (y0 >> l) >= span)) ++l;
   return l;
 }
 
-PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad) {
+PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad, int span) {
   PyramidProbe p;
   if (box.empty()) {
     p.kind = PyramidProbe::Kind::no_samples;
@@ -133,7 +133,7 @@ PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& v
   const glm::dmat4 proj = cam.projection();
   const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / wmin;
   const double bound = zmax + 1e-3 * std::abs(zmax) + 1e-5 * terms;
-  const uint32_t level = pyramid_level_for(px0, py0, px1, py1, pyramid_level_count(vp));
+  const uint32_t level = pyramid_level_for(px0, py0, px1, py1, pyramid_level_count(vp), span);
   p.kind = PyramidProbe::Kind::probe;
   p.level = level;
   p.x0 = px0 >> level;

@@ -49,7 +49,7 @@ struct PyramidProbe {
     probe,       // occluded iff depth < every texel of [x0, x1] x [y0, y1] at `level`
   } kind = Kind::query;
   uint32_t level = 0;
-  int32_t x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // texels of `level` (at most 2 x 2), row 0 at the bottom
+  int32_t x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // texels of `level` (at most span x span), row 0 at the bottom
   float depth = 0;                           // bound on the nearest depth a query fragment can have
 };
 
@@ -83,8 +83,9 @@ class DepthPyramid {
 // Levels of a viewport's pyramid: level 0 is the viewport, level k+1 halves level k (rounding up)
 // until 1 x 1. Texel (x, y) of level k covers pixels [x 2^k, (x+1) 2^k) x [y 2^k, (y+1) 2^k).
 uint32_t pyramid_level_count(const Viewport& vp);
-// The lowest level (below `levels`) at which the inclusive pixel rectangle spans at most 2 x 2 texels.
-uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels);
-PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad);
+// The lowest level (below `levels`) at which the inclusive pixel rectangle spans at most
+// span x span texels.
+uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels, int span = 2);
+PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad, int span = 2);
 
 }  // namespace occ

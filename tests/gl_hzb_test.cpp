@@ -96,7 +96,7 @@ TEST(GpuDepthPyramid, LevelsEqualTheCpuPyramidOfTheSameDepth) {
 // sees no sample; the GPU agrees with its CPU twin (DepthPyramid::occludes); and it proves most of
 // what the queries find occluded (a pyramid that proves nothing would pass the first check).
 TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwin) {
-  for (Viewport vp : {Viewport{256, 256}, Viewport{203, 117}}) {
+  for (auto [vp, span] : {std::pair{Viewport{256, 256}, 2}, {Viewport{256, 256}, 16}, {Viewport{203, 117}, 16}}) {
     Plant p(vp.width, vp.height, "plant:0.05", 6);
     GpuDepthPyramid gpu(*p.ctx);
     BoxQuerier q(*p.ctx);
@@ -110,7 +110,7 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
       std::vector<PyramidProbe> batch;
       std::vector<size_t> index;
       for (size_t i = 0; i < boxes.size(); ++i) {
-        const PyramidProbe pr = pyramid_probe(boxes[i], cam, vp, BoxQuerier::kRelativePad);
+        const PyramidProbe pr = pyramid_probe(boxes[i], cam, vp, BoxQuerier::kRelativePad, span);
         if (pr.kind == PyramidProbe::Kind::probe) batch.push_back(pr), index.push_back(i);
       }
       std::vector<uint32_t> occluded;
@@ -135,8 +135,8 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
     EXPECT_GT(probes, total / 2) << "most boxes are probed (not near the eye, on screen)";
     EXPECT_GT(query_zero, probes / 10) << "the scene hides a good share of the boxes";
     EXPECT_GT(proven, query_zero / 3) << "the pyramid proves a good share of what the queries find occluded";
-    std::printf("viewport %dx%d: %zu boxes, %zu probed, %zu with 0 samples, %zu proven occluded by the pyramid\n",
-                vp.width, vp.height, total, probes, query_zero, proven);
+    std::printf("viewport %dx%d, span %d: %zu boxes, %zu probed, %zu with 0 samples, %zu proven occluded by the pyramid\n",
+                vp.width, vp.height, span, total, probes, query_zero, proven);
   }
 }
 
@@ -205,6 +205,35 @@ TEST(HcQuerier, PyramidAndAutoFindTheVisibleSetsOfQueriesOnAWalk) {
               (unsigned long long)au.pyramid_occluded, (unsigned long long)au.builds);
 }
 
+// Automatic mode where the pyramid proves nothing (nothing drawn: every box shows): after its first
+// frame it is used only every kRetryFrames frames; the answers stay those of the queries.
+TEST(HcQuerier, AutomaticStopsBuildingThePyramidWhereItProvesNothing) {
+  Plant p(128, 128, "plant:0.05", 1);
+  HcQuerier q(*p.ctx, HcTest::automatic);
+  const Camera& cam = p.path[0];
+  const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
+  p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
+  BoxQuerier reference(*p.ctx);
+  reference.begin(cam);
+  std::vector<uint64_t> expected;
+  for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
+  reference.end();
+  ASSERT_GT(std::count_if(expected.begin(), expected.end(), [](uint64_t s) { return s > 0; }), 100);
+  const int frames = 2 * int(HcQuerier::kRetryFrames) + 1;
+  for (int f = 0; f < frames; ++f) {
+    p.renderer->begin_frame(cam, false);
+    q.begin(cam);
+    std::vector<uint32_t> handles;
+    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "frame " << f << " box " << i;
+    q.end_batch();
+    q.end();
+  }
+  EXPECT_EQ(q.stats().pyramid_occluded, 0u);
+  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
+  EXPECT_EQ(q.stats().tests, uint64_t(frames) * boxes.size());
+}
+
 // Not a check (no timing assertions): what a build and a test dispatch cost at 1024 x 1024 here.
 TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   Plant p(1024, 1024, "plant:0.05", 2);
@@ -212,19 +241,26 @@ TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   p.draw_occluders(p.path[1]);
   p.ctx->gl().Finish();
   using Clock = std::chrono::steady_clock;
+  double build_ms = 1e9;  // the fastest of 20 (the machine is shared)
+  for (int i = 0; i < 20; ++i) {
+    const auto t = Clock::now();
+    gpu.build();
+    p.ctx->gl().Finish();
+    build_ms = std::min(build_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+  }
   auto t0 = Clock::now();
-  for (int i = 0; i < 5; ++i) gpu.build();
-  p.ctx->gl().Finish();
-  const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / 5;
   const std::vector<Aabb> boxes = test_boxes(p, p.path[1], 4000);
   std::vector<PyramidProbe> batch;
   for (const Aabb& b : boxes)
-    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad); pr.kind == PyramidProbe::Kind::probe)
+    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, HcQuerier::policy(HcTest::pyramid).span); pr.kind == PyramidProbe::Kind::probe)
       batch.push_back(pr);
   std::vector<uint32_t> occluded;
-  t0 = Clock::now();
-  gpu.test(batch, occluded);
-  const double test_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  double test_ms = 1e9;
+  for (int i = 0; i < 6; ++i) {  // the first one compiles the shader
+    const auto t = Clock::now();
+    gpu.test(batch, occluded);
+    if (i > 0) test_ms = std::min(test_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+  }
   BoxQuerier q(*p.ctx);
   q.begin(p.path[1]);
   t0 = Clock::now();

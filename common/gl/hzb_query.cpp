@@ -10,33 +10,58 @@
 namespace occ {
 namespace {
 
-// Level k (>= 1) from level k - 1: each texel the farthest (minimum) of the up to 2 x 2 texels
-// below it that exist (odd sizes: the last row / column has fewer), as DepthPyramid::build.
-// FROM_DEPTH: level 0 is the depth texture (texelFetch); otherwise an R32F image. The sizes are
-// the levels' own (the R32F mips are larger: GL halves rounding down, from a power of two here).
+// Levels k and k + 1 (k >= 1) from level k - 1: each texel the farthest (minimum) of the up to
+// 2 x 2 texels below it that exist, as DepthPyramid::build. One invocation per texel of level
+// k + 1 computes its up to 2 x 2 texels of level k and their minimum (u_two = 0: level k only).
+// FROM_DEPTH: level k - 1 is the depth texture, read with one textureGather per 2 x 2 block (the
+// sampler clamps to the edge, so where the last row or column has no partner the gather repeats
+// a texel of the same block: the minimum is unchanged); otherwise an R32F image. The sizes are the
+// levels' own (the R32F mips are larger: GL halves rounding down, here from a power of two).
 const char* const kBuildSource = R"(
 layout(local_size_x = 8, local_size_y = 8) in;
 #ifdef FROM_DEPTH
 layout(binding = 0) uniform sampler2D u_src;
-#define SRC(p) texelFetch(u_src, p, 0).r
 #else
 layout(binding = 0, r32f) uniform readonly image2D u_src;
-#define SRC(p) imageLoad(u_src, p).r
 #endif
 layout(binding = 1, r32f) uniform writeonly image2D u_dst;
+layout(binding = 2, r32f) uniform writeonly image2D u_dst2;
 uniform ivec2 u_src_size;
 uniform ivec2 u_dst_size;
+uniform int u_two;
+float reduce(ivec2 s, ivec2 src) {  // the up to 2 x 2 texels of level k - 1 at s
+#ifdef FROM_DEPTH
+  vec4 g = textureGather(u_src, (vec2(s) + 1.0) / vec2(src));
+  return min(min(g.x, g.y), min(g.z, g.w));
+#else
+  float m = imageLoad(u_src, s).r;
+  bool right = s.x + 1 < src.x, up = s.y + 1 < src.y;
+  if (right) m = min(m, imageLoad(u_src, s + ivec2(1, 0)).r);
+  if (up) m = min(m, imageLoad(u_src, s + ivec2(0, 1)).r);
+  if (right && up) m = min(m, imageLoad(u_src, s + ivec2(1, 1)).r);
+  return m;
+#endif
+}
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   ivec2 src = u_src_size, dst = u_dst_size;
-  if (p.x >= dst.x || p.y >= dst.y) return;
-  ivec2 s = 2 * p;
-  float m = SRC(s);
-  bool right = s.x + 1 < src.x, up = s.y + 1 < src.y;
-  if (right) m = min(m, SRC(s + ivec2(1, 0)));
-  if (up) m = min(m, SRC(s + ivec2(0, 1)));
-  if (right && up) m = min(m, SRC(s + ivec2(1, 1)));
-  imageStore(u_dst, p, vec4(m));
+  if (u_two == 0) {
+    if (p.x < dst.x && p.y < dst.y) imageStore(u_dst, p, vec4(reduce(2 * p, src)));
+    return;
+  }
+  ivec2 dst2 = (dst + 1) / 2;
+  if (p.x >= dst2.x || p.y >= dst2.y) return;
+  float m = 1.0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      ivec2 q = 2 * p + ivec2(i, j);
+      if (q.x < dst.x && q.y < dst.y) {
+        float v = reduce(2 * q, src);
+        imageStore(u_dst, q, vec4(v));
+        m = min(m, v);
+      }
+    }
+  imageStore(u_dst2, p, vec4(m));
 }
 )";
 
@@ -81,6 +106,12 @@ GpuDepthPyramid::GpuDepthPyramid(GlContext& ctx)
   build_from_level_ = link_compute_program(gl_, std::string("#version 450 core\n") + kBuildSource);
   test_ = link_compute_program(gl_, kTestSource);
   count_loc_ = gl_.GetUniformLocation(test_, "u_count");
+  for (int i = 0; i < 2; ++i) {
+    const GLuint prog = i == 0 ? build_from_depth_ : build_from_level_;
+    src_size_loc_[i] = gl_.GetUniformLocation(prog, "u_src_size");
+    dst_size_loc_[i] = gl_.GetUniformLocation(prog, "u_dst_size");
+    two_loc_[i] = gl_.GetUniformLocation(prog, "u_two");
+  }
   if (levels_ > 1) {
     // Level k is ceil(size / 2^k); GL's mip k of a base B is floor(B / 2^k). From a power-of-two
     // base at least level 1's size, every mip holds its level (and has enough mips).
@@ -92,9 +123,16 @@ GpuDepthPyramid::GpuDepthPyramid(GlContext& ctx)
   }
   gl_.CreateBuffers(1, &probes_buf_);
   gl_.CreateBuffers(1, &results_buf_);
+  gl_.CreateSamplers(1, &depth_sampler_);  // texel centres of level 0: nearest, clamped
+  gl_.SamplerParameteri(depth_sampler_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  gl_.SamplerParameteri(depth_sampler_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  gl_.SamplerParameteri(depth_sampler_, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl_.SamplerParameteri(depth_sampler_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  gl_.SamplerParameteri(depth_sampler_, GL_TEXTURE_COMPARE_MODE, GL_NONE);
 }
 
 GpuDepthPyramid::~GpuDepthPyramid() {
+  gl_.DeleteSamplers(1, &depth_sampler_);
   gl_.DeleteBuffers(1, &probes_buf_);
   gl_.DeleteBuffers(1, &results_buf_);
   if (pyramid_) gl_.DeleteTextures(1, &pyramid_);
@@ -104,25 +142,31 @@ GpuDepthPyramid::~GpuDepthPyramid() {
 }
 
 void GpuDepthPyramid::build() {
-  int w = vp_.width, h = vp_.height;
-  for (uint32_t level = 1; level < levels_; ++level) {
+  int w = vp_.width, h = vp_.height;  // level - 1's size
+  for (uint32_t level = 1; level < levels_; level += 2) {
     const GLuint prog = level == 1 ? build_from_depth_ : build_from_level_;
-    gl_.ProgramUniform2i(prog, gl_.GetUniformLocation(prog, "u_src_size"), w, h);
-    w = (w + 1) / 2;
-    h = (h + 1) / 2;
-    gl_.ProgramUniform2i(prog, gl_.GetUniformLocation(prog, "u_dst_size"), w, h);
+    const bool two = level + 1 < levels_;
+    const int dw = (w + 1) / 2, dh = (h + 1) / 2;
+    gl_.ProgramUniform2i(prog, src_size_loc_[level == 1 ? 0 : 1], w, h);
+    gl_.ProgramUniform2i(prog, dst_size_loc_[level == 1 ? 0 : 1], dw, dh);
+    gl_.ProgramUniform1i(prog, two_loc_[level == 1 ? 0 : 1], two ? 1 : 0);
+    gl_.UseProgram(prog);
     if (level == 1) {
-      gl_.UseProgram(build_from_depth_);
       gl_.BindTextureUnit(0, ctx_.depth_texture());
+      gl_.BindSampler(0, depth_sampler_);
     } else {
-      gl_.UseProgram(build_from_level_);
       gl_.BindImageTexture(0, pyramid_, GLint(level - 2), GL_FALSE, 0, GL_READ_ONLY, GL_R32F);
       gl_.MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);  // the level below is written
     }
     gl_.BindImageTexture(1, pyramid_, GLint(level - 1), GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-    gl_.DispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
+    gl_.BindImageTexture(2, pyramid_, GLint(two ? level : level - 1), GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    const int gw = two ? (dw + 1) / 2 : dw, gh = two ? (dh + 1) / 2 : dh;
+    gl_.DispatchCompute(GLuint((gw + 7) / 8), GLuint((gh + 7) / 8), 1);
+    w = two ? (dw + 1) / 2 : dw;
+    h = two ? (dh + 1) / 2 : dh;
   }
   gl_.BindTextureUnit(0, 0);
+  gl_.BindSampler(0, 0);
   gl_.MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
 }
 
@@ -169,11 +213,29 @@ std::vector<float> GpuDepthPyramid::read_level(uint32_t level) const {
   return out;
 }
 
-HcQuerier::HcQuerier(GlContext& ctx, HcTest test) : test_(test), ctx_(ctx), queries_(ctx) {
+HcQuerier::Policy HcQuerier::policy(HcTest test) {
+  Policy p;
+  if (test == HcTest::automatic) {
+    p.min_probes = 32;
+    p.min_proven_per_frame = 32;
+  }
+  return p;
+}
+
+HcQuerier::HcQuerier(GlContext& ctx, HcTest test, const Policy& policy)
+    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx) {
   if (test_ != HcTest::queries) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
 
 void HcQuerier::begin(const Camera& cam) {
+  // Automatic: the frame just ended proved that many boxes occluded; frames whose pyramid would
+  // not pay are all queries, with a frame with the pyramid every kRetryFrames to look again.
+  if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
+  use_pyramid_ = test_ != HcTest::queries &&
+                 (policy_.min_proven_per_frame == 0 || proven_avg_ < 0 ||
+                  proven_avg_ >= double(policy_.min_proven_per_frame) || ++frames_off_ % kRetryFrames == 0);
+  if (use_pyramid_) frames_off_ = 0;
+  proven_frame_ = 0;
   cam_ = cam;
   built_ = stale_ = false;
   queries_.begin(cam);
@@ -186,13 +248,13 @@ void HcQuerier::depth_added() {
 
 uint32_t HcQuerier::issue(const Aabb& box) {
   ++stats_.tests;
-  if (test_ == HcTest::queries) {
+  if (!use_pyramid_) {
     ++stats_.queries;
     return queries_.issue(box);
   }
   if (resolved_) throw std::logic_error("HcQuerier: issue() after result() in one batch (call end_batch() first)");
   boxes_.push_back(box);
-  probes_.push_back(pyramid_probe(box, cam_, pyramid_->viewport(), BoxQuerier::kRelativePad));
+  probes_.push_back(pyramid_probe(box, cam_, pyramid_->viewport(), BoxQuerier::kRelativePad, policy_.span));
   return uint32_t(boxes_.size() - 1);
 }
 
@@ -209,9 +271,8 @@ void HcQuerier::resolve() {
       batch_index_.push_back(uint32_t(i));
     }
   }
-  const bool automatic = test_ == HcTest::automatic;
-  if (!batch_.empty() && (!automatic || batch_.size() >= kAutoMinProbes)) {
-    if (!built_ || (stale_ && batch_.size() >= (automatic ? kAutoRebuildMinProbes : kRebuildMinProbes))) {
+  if (!batch_.empty() && batch_.size() >= policy_.min_probes) {
+    if (!built_ || (stale_ && batch_.size() >= policy_.rebuild_min_probes)) {
       pyramid_->build();
       built_ = true;
       stale_ = false;
@@ -224,6 +285,7 @@ void HcQuerier::resolve() {
       if (occluded_[j]) {
         handle_[batch_index_[j]] = kZero;
         ++stats_.pyramid_occluded;
+        ++proven_frame_;
       }
     queries_.begin(cam_);  // the dispatches changed the program
   }
@@ -236,7 +298,7 @@ void HcQuerier::resolve() {
 
 uint64_t HcQuerier::result(uint32_t handle) {
   uint64_t samples = 0;
-  if (test_ == HcTest::queries) {
+  if (!use_pyramid_) {
     samples = queries_.result(handle);
   } else {
     if (handle >= boxes_.size())
