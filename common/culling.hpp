@@ -183,10 +183,11 @@ enum class HcOrder {
                // hide what the next shell holds
 };
 
-// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): occlusion queries only, or a GPU depth
-// pyramid first with queries for the boxes it cannot prove occluded (every batch, or batches large
-// enough to pay for it). The answers are the same: only how many real queries they cost differs.
-enum class HcTest { queries, pyramid, automatic };
+// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each; a GPU depth
+// pyramid first with queries for the boxes it cannot prove occluded (every batch, or where it pays:
+// automatic); or a whole batch in one draw counting samples in a buffer (batch). The answers are
+// the same: only what they cost differs.
+enum class HcTest { queries, pyramid, automatic, batch };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {

@@ -466,7 +466,7 @@ class SwitchNode {
               << " B to the render client and " << p.sent.bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     if (querier_) {
       const HcQuerier::Stats& q = querier_->stats();
-      static constexpr const char* kTest[] = {"queries", "pyramid", "auto"};
+      static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch"};
       std::fprintf(stderr,
                    "%s: HC test %s: %llu boxes tested (%llu occluded), %llu occlusion queries issued, %llu proven occluded "
                    "by the depth pyramid (of %llu tested against it in %llu dispatches; %llu pyramid builds)\n",

@@ -140,10 +140,51 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
   }
 }
 
+// One draw per batch with per-box counters gives each box exactly its occlusion query's sample
+// count (same boxes, same triangles, same depth test), near boxes and empty ones included.
+TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
+  for (Viewport vp : {Viewport{256, 256}, Viewport{203, 117}}) {
+    Plant p(vp.width, vp.height, "plant:0.05", 4);
+    BoxQuerier q(*p.ctx);
+    BoxBatchCounter batch(*p.ctx);
+    size_t visible = 0, near = 0, total = 0;
+    for (const Camera& cam : p.path) {
+      p.draw_occluders(cam);
+      std::vector<Aabb> boxes = test_boxes(p, cam, 1000);
+      boxes.push_back(Aabb{});                                                       // empty
+      boxes.push_back({cam.eye - glm::dvec3(0.3), cam.eye + glm::dvec3(0.3)});  // around the eye
+      q.begin(cam);
+      std::vector<uint32_t> hq;
+      for (const Aabb& b : boxes) hq.push_back(q.issue(b));
+      std::vector<uint64_t> expected;
+      for (uint32_t hnd : hq) expected.push_back(q.result(hnd));
+      q.end_batch();
+      q.end();
+      batch.begin(cam);
+      std::vector<uint32_t> hb;
+      for (const Aabb& b : boxes) hb.push_back(batch.issue(b));
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        ASSERT_EQ(batch.result(hb[i]), expected[i]) << "box " << i << " of " << boxes.size();
+        visible += expected[i] > 0;
+        near += visible_without_query(boxes[i], cam);
+      }
+      batch.end_batch();
+      batch.end();
+      total += boxes.size();
+    }
+    EXPECT_GT(visible, total / 4);
+    EXPECT_LT(visible, total - total / 10);
+    EXPECT_GT(near, 0u);
+    EXPECT_EQ(batch.draws(), p.path.size());
+    EXPECT_EQ(p.ctx->gl().GetError(), GLenum(GL_NO_ERROR));
+  }
+}
+
 // The switch step over a walk, as a switch node runs it (near-first batches, occluder fusion
 // between batches, adaptive queries, visibility hold), once per --hc-test: the visible sets of
 // every frame are those of queries only (tau = 0), and the pyramid did prove boxes occluded.
-TEST(HcQuerier, PyramidAndAutoFindTheVisibleSetsOfQueriesOnAWalk) {
+// (--hc-test batch too: one draw per batch.)
+TEST(HcQuerier, PyramidAutoAndBatchFindTheVisibleSetsOfQueriesOnAWalk) {
   const int w = 256, hgt = 192, frames = 24;
   Plant p(w, hgt, "plant:0.3", frames);
   const Renderables renderables(p.h, nullptr);
@@ -183,14 +224,18 @@ TEST(HcQuerier, PyramidAndAutoFindTheVisibleSetsOfQueriesOnAWalk) {
     *stats = querier.stats();
     return sets;
   };
-  HcQuerier::Stats q{}, py{}, au{};
+  HcQuerier::Stats q{}, py{}, au{}, ba{};
   const auto reference = replay(HcTest::queries, &q);
   const auto pyramid = replay(HcTest::pyramid, &py);
   const auto automatic = replay(HcTest::automatic, &au);
+  const auto batch = replay(HcTest::batch, &ba);
   for (int f = 0; f < frames; ++f) {
     ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--hc-test pyramid, frame " << f;
     ASSERT_EQ(automatic[size_t(f)], reference[size_t(f)]) << "--hc-test auto, frame " << f;
+    ASSERT_EQ(batch[size_t(f)], reference[size_t(f)]) << "--hc-test batch, frame " << f;
   }
+  EXPECT_EQ(ba.tests, q.tests);
+  EXPECT_EQ(ba.occluded, q.occluded);
   EXPECT_EQ(q.queries, q.tests);
   EXPECT_EQ(q.pyramid_tested, 0u);
   EXPECT_EQ(py.tests, q.tests) << "the same boxes were tested";
@@ -269,6 +314,15 @@ TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   for (uint32_t hnd : handles) (void)q.result(hnd);
   const double query_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   q.end();
+  BoxBatchCounter bc(*p.ctx);
+  bc.begin(p.path[1]);
+  t0 = Clock::now();
+  handles.clear();
+  for (const Aabb& b : boxes) handles.push_back(bc.issue(b));
+  for (uint32_t hnd : handles) (void)bc.result(hnd);
+  const double batch_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  bc.end();
+  std::printf("1024x1024: the same boxes in one draw with counters: %.2f ms\n", batch_ms);
   std::printf("1024x1024: pyramid build %.2f ms; test of %zu probes %.2f ms; %zu queries %.2f ms\n", build_ms,
               batch.size(), test_ms, boxes.size(), query_ms);
   EXPECT_EQ(occluded.size(), batch.size());

@@ -223,34 +223,35 @@ HcQuerier::Policy HcQuerier::policy(HcTest test) {
 }
 
 HcQuerier::HcQuerier(GlContext& ctx, HcTest test, const Policy& policy)
-    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx) {
-  if (test_ != HcTest::queries) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
+    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx), counter_(ctx) {
+  batched_ = test_ == HcTest::batch;
+  if (test_ == HcTest::pyramid || test_ == HcTest::automatic) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
 
 void HcQuerier::begin(const Camera& cam) {
   // Automatic: the frame just ended proved that many boxes occluded; frames whose pyramid would
   // not pay are all queries, with a frame with the pyramid every kRetryFrames to look again.
   if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
-  use_pyramid_ = test_ != HcTest::queries &&
+  use_pyramid_ = pyramid_ &&
                  (policy_.min_proven_per_frame == 0 || proven_avg_ < 0 ||
                   proven_avg_ >= double(policy_.min_proven_per_frame) || ++frames_off_ % kRetryFrames == 0);
   if (use_pyramid_) frames_off_ = 0;
   proven_frame_ = 0;
   cam_ = cam;
   built_ = stale_ = false;
-  queries_.begin(cam);
+  q_begin(cam);
 }
 
 void HcQuerier::depth_added() {
   stale_ = built_;
-  queries_.begin(cam_);
+  q_begin(cam_);
 }
 
 uint32_t HcQuerier::issue(const Aabb& box) {
   ++stats_.tests;
   if (!use_pyramid_) {
     ++stats_.queries;
-    return queries_.issue(box);
+    return q_issue(box);
   }
   if (resolved_) throw std::logic_error("HcQuerier: issue() after result() in one batch (call end_batch() first)");
   boxes_.push_back(box);
@@ -287,11 +288,11 @@ void HcQuerier::resolve() {
         ++stats_.pyramid_occluded;
         ++proven_frame_;
       }
-    queries_.begin(cam_);  // the dispatches changed the program
+    q_begin(cam_);  // the dispatches changed the program
   }
   for (size_t i = 0; i < boxes_.size(); ++i)
     if (handle_[i] == kPending) {
-      handle_[i] = queries_.issue(boxes_[i]);
+      handle_[i] = q_issue(boxes_[i]);
       ++stats_.queries;
     }
 }
@@ -299,20 +300,27 @@ void HcQuerier::resolve() {
 uint64_t HcQuerier::result(uint32_t handle) {
   uint64_t samples = 0;
   if (!use_pyramid_) {
-    samples = queries_.result(handle);
+    samples = q_result(handle);
   } else {
     if (handle >= boxes_.size())
       throw std::out_of_range("HcQuerier: handle " + std::to_string(handle) + " not issued in this batch (" +
                               std::to_string(boxes_.size()) + " issued)");
     if (!resolved_) resolve();
-    samples = handle_[handle] == kZero ? 0 : queries_.result(handle_[handle]);
+    samples = handle_[handle] == kZero ? 0 : q_result(handle_[handle]);
   }
   stats_.occluded += samples == 0;
   return samples;
 }
 
+void HcQuerier::q_begin(const Camera& cam) {
+  if (batched_) counter_.begin(cam); else queries_.begin(cam);
+}
+uint32_t HcQuerier::q_issue(const Aabb& box) { return batched_ ? counter_.issue(box) : queries_.issue(box); }
+uint64_t HcQuerier::q_result(uint32_t h) { return batched_ ? counter_.result(h) : queries_.result(h); }
+
 void HcQuerier::end_batch() {
   queries_.reset();
+  counter_.reset();
   boxes_.clear();
   probes_.clear();
   resolved_ = false;

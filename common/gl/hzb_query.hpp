@@ -107,7 +107,7 @@ class HcQuerier final : public OcclusionQueries {
   uint64_t result(uint32_t handle) override;
   void end_batch() override;
   // Restores colour and depth writes.
-  void end() { queries_.end(); }
+  void end() { batched_ ? counter_.end() : queries_.end(); }
 
   const Stats& stats() const { return stats_; }
   BoxQuerier& box_querier() { return queries_; }
@@ -115,11 +115,16 @@ class HcQuerier final : public OcclusionQueries {
  private:
   enum : uint32_t { kPending = ~0u, kZero = ~0u - 1 };
   void resolve();
+  void q_begin(const Camera& cam);
+  uint32_t q_issue(const Aabb& box);
+  uint64_t q_result(uint32_t h);
 
   HcTest test_;
   Policy policy_;
   GlContext& ctx_;
   BoxQuerier queries_;
+  BoxBatchCounter counter_;
+  bool batched_ = false;
   std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid / automatic only
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
