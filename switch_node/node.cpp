@@ -116,7 +116,8 @@ class SwitchNode {
     if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
     step_.emplace(*g_.renderables, o_.config, o_.height);
     querier_.reset();
-    querier_ = std::make_unique<HcQuerier>(*g_.ctx, o_.hc.test);
+    // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
+    querier_ = std::make_unique<HcQuerier>(*g_.ctx, o_.hc.test, o_.config.visible_pixel_lod && o_.config.lod());
     peer_ended_cleanly_ = false;
     or_triangles_ = 0;
     ms_per_query_ = ms_per_triangle_ = 0;
@@ -468,10 +469,12 @@ class SwitchNode {
       const HcQuerier::Stats& q = querier_->stats();
       static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch"};
       std::fprintf(stderr,
-                   "%s: HC test %s: %llu boxes tested (%llu occluded), %llu occlusion queries issued, %llu proven occluded "
-                   "by the depth pyramid (of %llu tested against it in %llu dispatches; %llu pyramid builds)\n",
+                   "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
+                   "batch draws, %llu proven occluded by the depth pyramid (of %llu tested against it in %llu "
+                   "dispatches; %llu pyramid builds)\n",
                    who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
-                   (unsigned long long)q.queries, (unsigned long long)q.pyramid_occluded,
+                   (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
+                   (unsigned long long)q.pyramid_occluded,
                    (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds);
     }
     std::fprintf(stderr,

@@ -49,11 +49,19 @@ void main() {
 }
 )";
 
-const char* const kBatchFragment = R"(#version 450 core
+// EXACT: every fragment adds one (atomically); otherwise the first ones set the count to 1 (a load
+// per fragment, a store while it reads 0: far cheaper for boxes that cover much of the screen).
+const char* const kBatchFragment = R"(
 layout(early_fragment_tests) in;
 flat in int v_box;
 layout(std430, binding = 3) buffer Counts { uint counts[]; };
-void main() { atomicAdd(counts[v_box], 1u); }
+void main() {
+#ifdef EXACT
+  atomicAdd(counts[v_box], 1u);
+#else
+  if (counts[v_box] == 0u) counts[v_box] = 1u;
+#endif
+}
 )";
 
 // The box as both classes draw it: camera-relative, padded, rounded to float; `near` when the
@@ -161,8 +169,9 @@ void BoxQuerier::end() {
   gl_.Disable(GL_CULL_FACE);
 }
 
-BoxBatchCounter::BoxBatchCounter(GlContext& ctx) : gl_(ctx.gl()) {
-  program_ = link_program(gl_, kBatchVertex, kBatchFragment);
+BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact) : gl_(ctx.gl()), exact_(exact) {
+  program_ = link_program(gl_, kBatchVertex,
+                          std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment);
   view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
   first_loc_ = gl_.GetUniformLocation(program_, "u_first");
   gl_.CreateVertexArrays(1, &vao_);
@@ -229,6 +238,8 @@ void BoxBatchCounter::draw() {
   gl_.NamedBufferSubData(boxes_buf_, 0, GLsizeiptr(data.size() * sizeof(glm::vec4)), data.data());
   const std::vector<uint32_t> zeros(n, 0);
   gl_.NamedBufferSubData(counts_buf_, 0, GLsizeiptr(n * sizeof(uint32_t)), zeros.data());
+  gl_.UseProgram(program_);  // BoxQuerier's may be bound (HcQuerier issues both)
+  gl_.BindVertexArray(vao_);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, boxes_buf_);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, counts_buf_);
   if (far_count > 0) {

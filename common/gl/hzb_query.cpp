@@ -222,8 +222,8 @@ HcQuerier::Policy HcQuerier::policy(HcTest test) {
   return p;
 }
 
-HcQuerier::HcQuerier(GlContext& ctx, HcTest test, const Policy& policy)
-    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx), counter_(ctx) {
+HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
+    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx), counter_(ctx, sample_counts) {
   batched_ = test_ == HcTest::batch;
   if (test_ == HcTest::pyramid || test_ == HcTest::automatic) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
@@ -249,10 +249,7 @@ void HcQuerier::depth_added() {
 
 uint32_t HcQuerier::issue(const Aabb& box) {
   ++stats_.tests;
-  if (!use_pyramid_) {
-    ++stats_.queries;
-    return q_issue(box);
-  }
+  if (!use_pyramid_) return q_issue(box);
   if (resolved_) throw std::logic_error("HcQuerier: issue() after result() in one batch (call end_batch() first)");
   boxes_.push_back(box);
   probes_.push_back(pyramid_probe(box, cam_, pyramid_->viewport(), BoxQuerier::kRelativePad, policy_.span));
@@ -293,7 +290,6 @@ void HcQuerier::resolve() {
   for (size_t i = 0; i < boxes_.size(); ++i)
     if (handle_[i] == kPending) {
       handle_[i] = q_issue(boxes_[i]);
-      ++stats_.queries;
     }
 }
 
@@ -313,14 +309,40 @@ uint64_t HcQuerier::result(uint32_t handle) {
 }
 
 void HcQuerier::q_begin(const Camera& cam) {
-  if (batched_) counter_.begin(cam); else queries_.begin(cam);
+  if (batched_) counter_.begin(cam);
+  queries_.begin(cam);  // last: its program is bound for issue()
 }
-uint32_t HcQuerier::q_issue(const Aabb& box) { return batched_ ? counter_.issue(box) : queries_.issue(box); }
-uint64_t HcQuerier::q_result(uint32_t h) { return batched_ ? counter_.result(h) : queries_.result(h); }
+uint32_t HcQuerier::q_issue(const Aabb& box) {
+  if (batched_) {
+    // Boxes covering many pixels (or possibly the whole view) are cheaper as queries: every
+    // fragment of the batch draw that passes runs the counting shader.
+    const BoxFootprint fp = box_footprint(box, cam_, {ctx_.width(), ctx_.height()});
+    const bool big = fp.kind == BoxFootprint::Kind::NearPlane ||
+                     (fp.kind == BoxFootprint::Kind::OnScreen &&
+                      double(fp.x1 - fp.x0 + 1) * double(fp.y1 - fp.y0 + 1) > double(policy_.batch_max_pixels));
+    if (!big) {
+      ++stats_.batched;
+      return counter_.issue(box);
+    }
+  }
+  ++stats_.queries;
+  return queries_.issue(box) | kQueryBit;
+}
+
+uint64_t HcQuerier::q_result(uint32_t h) {
+  if (!batched_) return queries_.result(h & ~kQueryBit);
+  if (h & kQueryBit) {
+    if (!counter_.drawn()) counter_.draw();  // the batch draw first: one flush for both
+    return queries_.result(h & ~kQueryBit);
+  }
+  return counter_.result(h);
+}
 
 void HcQuerier::end_batch() {
   queries_.reset();
+  if (counter_.drawn()) queries_.begin(cam_);  // the batch draw bound its own program
   counter_.reset();
+  stats_.draws = counter_.draws();
   boxes_.clear();
   probes_.clear();
   resolved_ = false;

@@ -81,13 +81,18 @@ class HcQuerier final : public OcclusionQueries {
     // Probe rectangles span at most span x span texels (hzb.hpp): 2 proved a third of the boxes
     // the queries found occluded on a plant walk, 16 nearly two thirds (docs/scale.md).
     int span = 16;
+    // batch: boxes whose screen rectangle covers more pixels are queries (with the eye or the near
+    // plane in reach: always), smaller ones are counted by the batch draw.
+    double batch_max_pixels = 16384;
   };
   static constexpr uint32_t kRetryFrames = 8;
   static Policy policy(HcTest test);
 
   struct Stats {
     uint64_t tests = 0;            // issue() calls: boxes tested
-    uint64_t queries = 0;          // real occlusion queries issued
+    uint64_t queries = 0;          // real occlusion queries issued (query objects)
+    uint64_t batched = 0;          // boxes counted by batch draws (HcTest::batch) instead
+    uint64_t draws = 0;            // batch draws
     uint64_t pyramid_tested = 0;   // boxes tested against the pyramid
     uint64_t pyramid_occluded = 0; // of those, proven occluded (no query)
     uint64_t builds = 0;           // pyramid builds
@@ -95,8 +100,9 @@ class HcQuerier final : public OcclusionQueries {
     uint64_t occluded = 0;         // boxes answered 0 samples (by the pyramid or a query)
   };
 
-  HcQuerier(GlContext& ctx, HcTest test) : HcQuerier(ctx, test, policy(test)) {}
-  HcQuerier(GlContext& ctx, HcTest test, const Policy& policy);
+  // `sample_counts`: result() must be the number of samples (visible-pixel LOD), not just > 0.
+  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts = true) : HcQuerier(ctx, test, sample_counts, policy(test)) {}
+  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy);
   HcTest mode() const { return test_; }
 
   // A frame's tests against a freshly drawn depth buffer, from `cam`.
@@ -107,13 +113,13 @@ class HcQuerier final : public OcclusionQueries {
   uint64_t result(uint32_t handle) override;
   void end_batch() override;
   // Restores colour and depth writes.
-  void end() { batched_ ? counter_.end() : queries_.end(); }
+  void end() { queries_.end(); }
 
   const Stats& stats() const { return stats_; }
   BoxQuerier& box_querier() { return queries_; }
 
  private:
-  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1 };
+  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kQueryBit = 1u << 31 };
   void resolve();
   void q_begin(const Camera& cam);
   uint32_t q_issue(const Aabb& box);

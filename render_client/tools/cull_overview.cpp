@@ -61,7 +61,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
-  HcQuerier querier(*ctx, o.hc.test);
+  HcQuerier querier(*ctx, o.hc.test, false);  // tau = 0: no sample counts needed
   const Renderables renderables(h, nullptr);
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
