@@ -210,6 +210,11 @@ enum class LeafTest {
              // the leaf is the nearest surface passes. HLODs keep box queries; leaves decided
              // without a query (near, skipped, held, accepted whole) are accepted as before.
 };
+// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each; a GPU depth
+// pyramid first with queries for the boxes it cannot prove occluded (every batch, or where it pays:
+// automatic); or a whole batch in one draw counting samples in a buffer (batch). The answers are
+// the same: only what they cost differs.
+enum class HcTest { queries, pyramid, automatic, batch };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {

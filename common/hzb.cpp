@@ -75,4 +75,74 @@ bool DepthPyramid::may_be_visible(const BoxFootprint& fp) const {
   return false;
 }
 
+bool DepthPyramid::occludes(const PyramidProbe& p) const {
+  if (p.kind != PyramidProbe::Kind::probe || p.level >= levels_.size()) return false;
+  const Level& l = levels_[p.level];
+  for (int y = p.y0; y <= p.y1; ++y)
+    for (int x = p.x0; x <= p.x1; ++x)
+      if (!(p.depth < l.d[size_t(y) * l.w + x])) return false;
+  return true;
+}
+
+uint32_t pyramid_level_count(const Viewport& vp) {
+  uint32_t n = 1;
+  for (int w = vp.width, h = vp.height; w > 1 || h > 1; w = (w + 1) / 2, h = (h + 1) / 2) ++n;
+  return n;
+}
+
+uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels, int span) {
+  uint32_t l = 0;
+  while (l + 1 < levels && ((x1 >> l) - (x0 >> l) >= span || (y1 >> l) - (y0 >> l) >= span)) ++l;
+  return l;
+}
+
+PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad, int span) {
+  PyramidProbe p;
+  if (box.empty()) {
+    p.kind = PyramidProbe::Kind::no_samples;
+    return p;
+  }
+  // The box as BoxQuerier draws it: camera-relative, padded.
+  const glm::dvec3 lo = box.min - cam.eye, hi = box.max - cam.eye;
+  const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+  const double pad = relative_pad * std::max({far.x, far.y, far.z});
+  const glm::dvec3 plo = lo - pad, phi = hi + pad;
+  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300, wmin = 1e300;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec3 c{(i & 1) ? phi.x : plo.x, (i & 2) ? phi.y : plo.y, (i & 4) ? phi.z : plo.z};
+    const glm::dvec4 clip = vpm * glm::dvec4(c, 1.0);
+    // In front of the near plane with room to spare: no clipping at the near plane on the GPU.
+    if (!(clip.w >= cam.near_dist * (1.0 + 1e-3))) return p;
+    xmin = std::min(xmin, clip.x / clip.w);
+    xmax = std::max(xmax, clip.x / clip.w);
+    ymin = std::min(ymin, clip.y / clip.w);
+    ymax = std::max(ymax, clip.y / clip.w);
+    zmax = std::max(zmax, clip.z / clip.w);
+    wmin = std::min(wmin, clip.w);
+  }
+  if (!(xmax >= -1 && xmin <= 1 && ymax >= -1 && ymin <= 1 && zmax >= 0)) return p;  // a query decides
+  auto to_px = [](double ndc, int size) { return (ndc * 0.5 + 0.5) * size; };
+  const int px0 = std::max(0, int(std::floor(to_px(xmin, vp.width))) - 1);
+  const int px1 = std::min(vp.width - 1, int(std::ceil(to_px(xmax, vp.width))) + 1);
+  const int py0 = std::max(0, int(std::floor(to_px(ymin, vp.height))) - 1);
+  const int py1 = std::min(vp.height - 1, int(std::ceil(to_px(ymax, vp.height))) + 1);
+  if (px0 > px1 || py0 > py1) return p;
+  // The GPU computes clip z as the sum of terms of size |p22| and |p32| / w: its float rounding
+  // is relative to those, not to the (possibly much smaller) depth near the far plane.
+  const glm::dmat4 proj = cam.projection();
+  const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / wmin;
+  const double bound = zmax + 1e-3 * std::abs(zmax) + 1e-5 * terms;
+  const uint32_t level = pyramid_level_for(px0, py0, px1, py1, pyramid_level_count(vp), span);
+  p.kind = PyramidProbe::Kind::probe;
+  p.level = level;
+  p.x0 = px0 >> level;
+  p.y0 = py0 >> level;
+  p.x1 = px1 >> level;
+  p.y1 = py1 >> level;
+  // Rounded up to float (the pyramid holds floats): the bound stays a bound.
+  p.depth = std::nextafter(float(bound), 2.0f);
+  return p;
+}
+
 }  // namespace occ

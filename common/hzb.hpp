@@ -29,6 +29,30 @@ struct BoxFootprint {
 // viewport or the box lies beyond the far plane.
 BoxFootprint box_footprint(const Aabb& box, const Camera& cam, const Viewport& vp);
 
+// ---- The switch nodes' HC pyramid test (issue 16; GPU side in common/gl/hzb_query.*): the same
+// pyramid, built on the GPU from HC's own depth buffer, proves boxes occluded before any occlusion
+// query is issued; boxes it cannot prove occluded get a real query. Everything but the texel reads
+// is decided here, on the CPU and without GL, so that it is unit tested.
+//
+// Precision: a box is proven occluded only if no fragment of its occlusion query
+// (common/gl/box_query.hpp: the box padded by `relative_pad` of its farthest corner coordinate,
+// camera-relative, front faces, depth test GL_GREATER) could pass. Its fragments lie inside the
+// padded box's projected rectangle (widened by a pixel each side) and are at most as near as its
+// nearest corner; `depth` adds a margin (1e-3 relative plus the float rounding of the projection)
+// for the GPU's float transform and depth interpolation. A box is only probed when all 8 padded
+// corners are in front of the near plane by a margin (no near-plane clipping, which would create
+// fragments at depth 1); otherwise, or when its rectangle misses the viewport, a real query decides.
+struct PyramidProbe {
+  enum class Kind : uint8_t {
+    no_samples,  // an empty box: its query draws nothing (0 samples)
+    query,       // the pyramid cannot decide: a real occlusion query
+    probe,       // occluded iff depth < every texel of [x0, x1] x [y0, y1] at `level`
+  } kind = Kind::query;
+  uint32_t level = 0;
+  int32_t x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // texels of `level` (at most span x span), row 0 at the bottom
+  float depth = 0;                           // bound on the nearest depth a query fragment can have
+};
+
 class DepthPyramid {
  public:
   // depth: width*height floats, row 0 at the bottom (glReadPixels order).
@@ -39,6 +63,9 @@ class DepthPyramid {
   bool may_be_visible(const Aabb& box, const Camera& cam) const {
     return may_be_visible(box_footprint(box, cam, {width(), height()}));
   }
+  // The CPU twin of the GPU pyramid test (common/gl/hzb_query.*): true when every texel of the
+  // probe's rectangle at its level lies strictly in front of probe.depth. Only for Kind::probe.
+  bool occludes(const PyramidProbe& p) const;
   int width() const { return levels_.empty() ? 0 : levels_[0].w; }
   int height() const { return levels_.empty() ? 0 : levels_[0].h; }
   size_t level_count() const { return levels_.size(); }
@@ -52,5 +79,13 @@ class DepthPyramid {
   };
   std::vector<Level> levels_;
 };
+
+// Levels of a viewport's pyramid: level 0 is the viewport, level k+1 halves level k (rounding up)
+// until 1 x 1. Texel (x, y) of level k covers pixels [x 2^k, (x+1) 2^k) x [y 2^k, (y+1) 2^k).
+uint32_t pyramid_level_count(const Viewport& vp);
+// The lowest level (below `levels`) at which the inclusive pixel rectangle spans at most
+// span x span texels.
+uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels, int span = 2);
+PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad, int span = 2);
 
 }  // namespace occ

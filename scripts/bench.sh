@@ -23,16 +23,17 @@
 # --keep-frames. Prints figures; asserts nothing about speed.
 #
 #   scripts/bench.sh --scene S [--path P] [--frames N] [--width W --height H] [--out DIR]
-#                    [--model-delay-ms D] [--keep-frames]
+#                    [--model-delay-ms D] [--keep-frames] [--hc-test queries|pyramid|auto]
 #
 # --path walk|orbit|fly gets --frames frames (default walk, 200); the viewport defaults to 512x512 as
-# everywhere.
+# everywhere. --hc-test goes to the switch nodes (how HC tests boxes; switch_node --help); without
+# it they use their default.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
-scene="" path="walk" frames=200 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/bench" model_delay_ms=0 keep_frames=0
+scene="" path="walk" frames=200 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/bench" model_delay_ms=0 keep_frames=0 hc_test=""
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene|--path|--frames|--width|--height|--out|--model-delay-ms) occ_set "$@"; shift 2 ;;
+    --scene|--path|--frames|--width|--height|--out|--model-delay-ms|--hc-test) occ_set "$@"; shift 2 ;;
     --keep-frames) keep_frames=1; shift ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_unexpected "$1" ;;
@@ -44,6 +45,8 @@ occ_require_bins render_client switch_node occlusion_server frame_diff
 mkdir -p "$out"
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 view=(--width "$width" --height "$height")
+switch_flags=()
+[ -z "$hc_test" ] || switch_flags=(--hc-test "$hc_test")
 log() { echo "bench: $*" >&2; }
 # wrong DIR BRUTE_FORCE_FRAMES [FRAMES]: frame_diff (per frame, then its summary line) into DIR/wrong.txt
 wrong() { "$BIN/frame_diff" "$2" "${3:-$1}" >"$1/wrong.txt"; }
@@ -97,14 +100,14 @@ wrong "$out/gigawalk" "$out/none" "$out/gigawalk_frames"
 drop_frames "$out/gigawalk_frames"
 
 log "switch (3 processes)"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --on-node-failure exit --no-images --out "$out/switch" >/dev/null
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --no-images --out "$out/switch" >/dev/null
 cp "$out/switch/render_client.log" "$out/switch/log.txt"
 log "switch, frames for the comparison"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --on-node-failure exit --out "$out/switch_frames" >/dev/null
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --out "$out/switch_frames" >/dev/null
 wrong "$out/switch" "$out/none" "$out/switch_frames"
 drop_frames "$out/switch_frames"
 log "switch --full-sets"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" --on-node-failure exit --no-images --full-sets \
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --no-images --full-sets \
   --out "$out/switch_full" >/dev/null
 
 # OpenSceneGraph on the same cameras (the path as CSV) and viewport, each mode against OSG's own

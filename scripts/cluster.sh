@@ -13,7 +13,7 @@
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --query-budget,
-# --occluder-pixels-per-triangle, --visibility-hold, --leaf-test, --leaf-test-below), which go where they belong. OCC_BIN overrides the binaries' folder;
+# --occluder-pixels-per-triangle, --visibility-hold, --leaf-test, --leaf-test-below, --hc-test), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
@@ -46,7 +46,7 @@ while [ $# -gt 0 ]; do
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --lookahead|--on-node-failure) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold|--leaf-test|--leaf-test-below) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
     --*) occ_need_value "$@"; common+=("$1" "$2"); shift 2 ;;
@@ -220,5 +220,5 @@ while [ ${#running[@]} -gt 0 ]; do
 done
 cleanup
 grep -h "^summary:" "$out/render_client.log" || true
-grep -h "HC frames" "$out/node0.log" "$out/node1.log" || true
+grep -hE "HC frames|HC test" "$out/node0.log" "$out/node1.log" || true
 exit $status

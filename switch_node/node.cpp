@@ -13,8 +13,8 @@
 #include "common/cpu_time.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
-#include "common/gl/box_query.hpp"
 #include "common/gl/geometry_query.hpp"
+#include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
 #include "common/hash.hpp"
@@ -131,7 +131,8 @@ class SwitchNode {
     step_.emplace(*g_.renderables, o_.config, o_.height);
     geometry_.reset();
     querier_.reset();
-    querier_ = std::make_unique<BoxQuerier>(*g_.ctx);
+    // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
+    querier_ = std::make_unique<HcQuerier>(*g_.ctx, o_.hc.test, o_.config.visible_pixel_lod && o_.config.lod());
     if (o_.hc.leaf_test == LeafTest::geometry)  // after a batch's geometry: the box queries' state again
       geometry_ = std::make_unique<GeometryQuerier>(*g_.ctx, *querier_, *g_.renderer, *g_.renderables,
                                                     [this] { querier_->begin(hc_camera_); });
@@ -685,7 +686,7 @@ class SwitchNode {
         select_.filter(fresh, *g_.renderables, cam, o_.height);
         if (fresh.empty()) return;
         g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
-        querier_->begin(cam);  // the renderer changed the GL state the queries need
+        querier_->depth_added();  // restores the GL state the queries need; the pyramid is stale
       };
     querier_->begin(cam);
     OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;
@@ -745,6 +746,18 @@ class SwitchNode {
     if (resyncs_)
       std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
                 << " HC frames served alone\n";
+    if (querier_) {
+      const HcQuerier::Stats& q = querier_->stats();
+      static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch"};
+      std::fprintf(stderr,
+                   "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
+                   "batch draws, %llu proven occluded by the depth pyramid (of %llu tested against it in %llu "
+                   "dispatches; %llu pyramid builds)\n",
+                   who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
+                   (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
+                   (unsigned long long)q.pyramid_occluded,
+                   (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds);
+    }
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
                  "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
@@ -758,7 +771,7 @@ class SwitchNode {
   SceneGl g_;
   wire::Hello mine_;
   std::optional<net::Listener> listener_;  // the whole run; during a session only the Door uses it
-  std::unique_ptr<BoxQuerier> querier_;
+  std::unique_ptr<HcQuerier> querier_;
   std::unique_ptr<GeometryQuerier> geometry_;  // --leaf-test geometry: wraps querier_
   Camera hc_camera_;                           // the current HC's camera (geometry_'s restore)
   uint64_t geometry_queries_ = 0, geometry_occluded_ = 0;

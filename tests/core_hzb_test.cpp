@@ -87,3 +87,113 @@ TEST(Hzb, FootprintFlagsBoxesAtTheNearPlaneAndOffscreen) {
   // Nearest corner at distance 4 with near 1, far 100: reverse-Z depth n(f-d)/(d(f-n)).
   EXPECT_NEAR(fp.nearest_depth, 1.0 * (100 - 4) / (4 * 99.0), 1e-6);
 }
+
+// ---- The HC pyramid probe (issue 16): level choice, rectangle, depth bound; GL-free.
+
+TEST(HzbProbe, LevelCountHalvesRoundingUpToOneTexel) {
+  EXPECT_EQ(pyramid_level_count({1, 1}), 1u);
+  EXPECT_EQ(pyramid_level_count({2, 1}), 2u);
+  EXPECT_EQ(pyramid_level_count({1024, 1024}), 11u);
+  EXPECT_EQ(pyramid_level_count({1025, 3}), 12u);  // 1025 513 257 129 65 33 17 9 5 3 2 1
+  EXPECT_EQ(pyramid_level_count({203, 117}), 9u);  // 203 102 51 26 13 7 4 2 1
+  DepthPyramid p;
+  p.build(std::vector<float>(203 * 117, 0.5f), 203, 117);
+  EXPECT_EQ(p.level_count(), pyramid_level_count({203, 117}));
+}
+
+TEST(HzbProbe, LevelForIsTheLowestWhereTheRectangleSpansAtMostSpanTexels) {
+  const uint32_t levels = pyramid_level_count({256, 256});
+  for (int span : {2, 4, 16})
+    for (int x0 = 0; x0 < 256; x0 += 7)
+      for (int w = 1; x0 + w <= 256; w += 5) {
+        const int x1 = x0 + w - 1, y0 = (x0 * 3) % 200, y1 = std::min(255, y0 + w / 2);
+        const uint32_t l = pyramid_level_for(x0, y0, x1, y1, levels, span);
+        ASSERT_LT(l, levels);
+        EXPECT_LE((x1 >> l) - (x0 >> l) + 1, span) << x0 << ".." << x1 << " level " << l;
+        EXPECT_LE((y1 >> l) - (y0 >> l) + 1, span);
+        if (l > 0) {  // one level lower it would span more
+          EXPECT_TRUE((x1 >> (l - 1)) - (x0 >> (l - 1)) + 1 > span || (y1 >> (l - 1)) - (y0 >> (l - 1)) + 1 > span);
+        }
+      }
+  EXPECT_EQ(pyramid_level_for(5, 5, 5, 5, levels, 2), 0u);
+  EXPECT_EQ(pyramid_level_for(0, 0, 255, 255, levels, 2), 7u);  // 2 x 2 texels of 128 pixels
+  EXPECT_EQ(pyramid_level_for(127, 0, 128, 0, levels, 2), 0u);  // 2 pixels across the middle
+  EXPECT_EQ(pyramid_level_for(126, 0, 129, 0, levels, 2), 1u);  // 63..64
+  EXPECT_EQ(pyramid_level_for(63, 0, 192, 0, levels, 2), 7u);   // 130 pixels straddling 128: 0..1 at 128
+  EXPECT_EQ(pyramid_level_for(63, 0, 192, 0, levels, 4), 6u);   // 0..3 at 64
+}
+
+TEST(HzbProbe, ProbeCoversTheBoxFootprintAndBoundsItsDepth) {
+  const Viewport vp{160, 120};
+  Camera cam = Camera::look_at({3, 1, 2}, {3, 1, -10}, {0, 1, 0}, 60, double(vp.width) / vp.height, 0.1, 100);
+  int probes = 0;
+  for (int i = 0; i < 2000; ++i) {
+    glm::dvec3 c(3 + rnd() * 40 - 20, 1 + rnd() * 30 - 15, 2 - (0.05 + rnd() * 80));
+    glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 0.01 + (i % 2) * rnd() * 3);
+    const Aabb box{c - e, c + e};
+    const BoxFootprint fp = box_footprint(box, cam, vp);
+    for (int span : {2, 16}) {
+      const PyramidProbe p = pyramid_probe(box, cam, vp, 1e-5, span);
+      if (fp.kind == BoxFootprint::Kind::NearPlane) {
+        EXPECT_EQ(p.kind, PyramidProbe::Kind::query) << "near plane: a query decides";
+        continue;
+      }
+      if (p.kind != PyramidProbe::Kind::probe) continue;
+      ++probes;
+      ASSERT_EQ(fp.kind, BoxFootprint::Kind::OnScreen);
+      // The probe's texels cover every pixel of the (unpadded) footprint.
+      EXPECT_LE(p.x0 << p.level, fp.x0);
+      EXPECT_LE(p.y0 << p.level, fp.y0);
+      EXPECT_GE(((p.x1 + 1) << p.level) - 1, fp.x1);
+      EXPECT_GE(((p.y1 + 1) << p.level) - 1, fp.y1);
+      EXPECT_LE(p.x1 - p.x0 + 1, span);
+      EXPECT_LE(p.y1 - p.y0 + 1, span);
+      // Its depth bound is at least the nearest corner's depth, and not much more.
+      EXPECT_GE(p.depth, fp.nearest_depth);
+      EXPECT_LE(p.depth, fp.nearest_depth * 1.002f + 1e-6f);
+    }
+  }
+  EXPECT_GT(probes, 1000);
+}
+
+TEST(HzbProbe, EmptyBoxesHaveNoSamplesAndBoxesAtTheEyeOrOffScreenAreQueried) {
+  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90, 1, 1, 100);
+  EXPECT_EQ(pyramid_probe(Aabb{}, cam, {64, 64}, 1e-5).kind, PyramidProbe::Kind::no_samples);
+  EXPECT_EQ(pyramid_probe({{-1, -1, -2}, {1, 1, 1}}, cam, {64, 64}, 1e-5).kind, PyramidProbe::Kind::query);  // eye inside
+  EXPECT_EQ(pyramid_probe({{-1, -1, 5}, {1, 1, 6}}, cam, {64, 64}, 1e-5).kind, PyramidProbe::Kind::query);   // behind
+  // Just beyond the near plane (1): within the margin, a query decides (the GPU might clip it).
+  EXPECT_EQ(pyramid_probe({{-0.1, -0.1, -1.2}, {0.1, 0.1, -1.0005}}, cam, {64, 64}, 1e-5).kind, PyramidProbe::Kind::query);
+  EXPECT_EQ(pyramid_probe({{-0.1, -0.1, -1.2}, {0.1, 0.1, -1.01}}, cam, {64, 64}, 1e-5).kind, PyramidProbe::Kind::probe);
+  EXPECT_EQ(pyramid_probe({{50, -1, -6}, {60, 1, -5}}, cam, {64, 64}, 1e-5).kind, PyramidProbe::Kind::query);  // off screen
+}
+
+// The probe test on a CPU depth buffer against brute force over the padded box's pixels: never
+// "occluded" where a pixel of the footprint is not strictly in front of the box; and finer spans
+// prove at least as much as coarser ones.
+TEST(HzbProbe, OccludesNeverWhereBruteForceSeesAPixelAndFinerSpansProveMore) {
+  const int w = 160, h = 120;
+  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
+  int brute_hidden = 0, proven2 = 0, proven16 = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    auto d = random_depth(w, h, 20);
+    DepthPyramid p;
+    p.build(d, w, h);
+    for (int i = 0; i < 250; ++i) {
+      glm::dvec3 c(rnd() * 40 - 20, rnd() * 30 - 15, -(0.2 + rnd() * 60));
+      glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 3);
+      const Aabb box{c - e, c + e};
+      const BoxFootprint fp = box_footprint(box, cam, {w, h});
+      const bool brute = brute_visible(d, w, fp);
+      const PyramidProbe p2 = pyramid_probe(box, cam, {w, h}, 1e-5, 2), p16 = pyramid_probe(box, cam, {w, h}, 1e-5, 16);
+      const bool o2 = p.occludes(p2), o16 = p.occludes(p16);
+      ASSERT_TRUE(!brute || (!o2 && !o16)) << "false cull at trial " << trial << " box " << i;
+      EXPECT_TRUE(!o2 || o16) << "span 16 proves what span 2 proves";
+      brute_hidden += !brute;
+      proven2 += o2;
+      proven16 += o16;
+    }
+  }
+  EXPECT_GT(brute_hidden, 100);
+  EXPECT_GT(proven16, proven2);
+  EXPECT_GT(proven2, brute_hidden / 4);
+}

@@ -9,3 +9,6 @@ occ_test(image_test unit LIBS occ_common SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/image_png_test.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/image_frame_diff_test.cpp)
 add_dependencies(image_test frame_diff)
+
+# The HC depth pyramid on the GPU against occlusion queries and the switch step (issue 16).
+occ_test(gl_hzb_test gl LIBS occ_gl occ_cluster SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/gl_hzb_test.cpp)

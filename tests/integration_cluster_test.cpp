@@ -95,6 +95,25 @@ TEST(Cluster, PlantWalkEqualsReference) {
   expect_cluster_equals_reference("plant", "plant:0.3", "walk:40", 40, true);
 }
 
+// Issue 16: HC with the GPU depth pyramid in front of the queries (node 0 every batch, node 1
+// automatic) draws the reference's frames, and the pyramid did prove boxes occluded on both nodes.
+TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
+  fs::path dir = fresh_dir("plant_pyramid");
+  ClusterOptions o = cluster("plant:0.3", "walk:40");
+  o.node0 = {"--hc-test", "pyramid"};
+  o.node1 = {"--hc-test", "auto"};
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  if (!r) return;
+  for (const auto& [log, test] : {std::pair{r->node0_log, "pyramid"}, {r->node1_log, "auto"}}) {
+    const size_t at = log.find(std::string("HC test ") + test + ": ");
+    ASSERT_NE(at, std::string::npos) << log;
+    const size_t proven = log.find(" proven occluded by the depth pyramid", at);
+    ASSERT_NE(proven, std::string::npos) << log;
+    const size_t num = log.rfind(", ", proven);
+    EXPECT_GT(std::stoul(log.substr(num + 2, proven - num - 2)), 0u) << log.substr(at, proven - at + 40);
+  }
+}
+
 TEST(Cluster, DuplexWalkEqualsReference) {
   if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
   expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);

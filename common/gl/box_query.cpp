@@ -30,6 +30,74 @@ const char* const kBoxFragment = R"(#version 450 core
 void main() {}
 )";
 
+// BoxBatchCounter: the same boxes (same corners, same triangles), read from a buffer, box
+// u_first + gl_VertexID / 36; every fragment that passes the depth test (early fragment tests: the
+// shader runs only for those) adds one to its box's count.
+const char* const kBatchVertex = R"(#version 450 core
+uniform mat4 u_view_projection;
+uniform int u_first;
+layout(std430, binding = 2) readonly buffer Boxes { vec4 boxes[]; };  // min, max per box
+flat out int v_box;
+const int kCorners[36] = int[36](0, 3, 1, 0, 2, 3,  4, 7, 6, 4, 5, 7,  0, 5, 4, 0, 1, 5,
+                                 2, 7, 3, 2, 6, 7,  0, 6, 2, 0, 4, 6,  1, 7, 5, 1, 3, 7);
+void main() {
+  int b = u_first + gl_VertexID / 36;
+  int c = kCorners[gl_VertexID % 36];
+  bvec3 upper = bvec3((c & 1) != 0, (c & 2) != 0, (c & 4) != 0);
+  v_box = b;
+  gl_Position = u_view_projection * vec4(mix(boxes[2 * b].xyz, boxes[2 * b + 1].xyz, upper), 1.0);
+}
+)";
+
+// EXACT: every fragment adds one (atomically); otherwise the first ones set the count to 1 (a load
+// per fragment, a store while it reads 0: far cheaper for boxes that cover much of the screen).
+const char* const kBatchFragment = R"(
+layout(early_fragment_tests) in;
+flat in int v_box;
+layout(std430, binding = 3) buffer Counts { uint counts[]; };
+void main() {
+#ifdef EXACT
+  atomicAdd(counts[v_box], 1u);
+#else
+  if (counts[v_box] == 0u) counts[v_box] = 1u;
+#endif
+}
+)";
+
+// The box as both classes draw it: camera-relative, padded, rounded to float; `near` when the
+// padded box is within reach of the near rectangle (both sides are drawn then).
+struct DrawnBox {
+  glm::vec3 lo, hi;
+  bool near;
+};
+DrawnBox drawn_box(const Aabb& box, const glm::dvec3& eye, double reach) {
+  const glm::dvec3 lo = box.min - eye, hi = box.max - eye;
+  const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+  const double pad = BoxQuerier::kRelativePad * std::max({far.x, far.y, far.z});
+  const glm::dvec3 gap = glm::max(glm::max(lo - pad, -(hi + pad)), glm::dvec3(0.0));
+  return {glm::vec3(float(lo.x - pad), float(lo.y - pad), float(lo.z - pad)),
+          glm::vec3(float(hi.x + pad), float(hi.y + pad), float(hi.z + pad)), glm::dot(gap, gap) <= reach * reach};
+}
+
+// As visible_without_query, with more slack: the GPU box is padded and rounded to float.
+double near_reach(const Camera& cam) {
+  const double ty = std::tan(cam.fovy_rad * 0.5), tx = ty * cam.aspect;
+  return cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-3);
+}
+
+// Colour and depth writes off, reverse-Z depth test, back faces culled.
+void query_state(const GlApi& gl, GLuint program, GLuint vao) {
+  gl.UseProgram(program);
+  gl.BindVertexArray(vao);
+  gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  gl.DepthMask(GL_FALSE);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_GREATER);
+  gl.Enable(GL_CULL_FACE);
+  gl.CullFace(GL_BACK);
+  gl.FrontFace(GL_CCW);
+}
+
 }  // namespace
 
 BoxQuerier::BoxQuerier(GlContext& ctx) : gl_(ctx.gl()) {
@@ -48,20 +116,10 @@ BoxQuerier::~BoxQuerier() {
 
 void BoxQuerier::begin(const Camera& cam) {
   eye_ = cam.eye;
-  // As visible_without_query, with more slack: the GPU box is padded and rounded to float.
-  const double ty = std::tan(cam.fovy_rad * 0.5), tx = ty * cam.aspect;
-  reach_ = cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-3);
+  reach_ = near_reach(cam);
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
-  gl_.UseProgram(program_);
-  gl_.BindVertexArray(vao_);
-  gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-  gl_.DepthMask(GL_FALSE);
-  gl_.Enable(GL_DEPTH_TEST);
-  gl_.DepthFunc(GL_GREATER);
-  gl_.Enable(GL_CULL_FACE);
-  gl_.CullFace(GL_BACK);
-  gl_.FrontFace(GL_CCW);
+  query_state(gl_, program_, vao_);
 }
 
 uint32_t BoxQuerier::issue(const Aabb& box) {
@@ -74,18 +132,14 @@ uint32_t BoxQuerier::issue(const Aabb& box) {
   ++queries_issued_;
   gl_.BeginQuery(GL_SAMPLES_PASSED, pool_[handle]);
   if (!box.empty()) {
-    const glm::dvec3 lo = box.min - eye_, hi = box.max - eye_;
-    const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
-    const double pad = kRelativePad * std::max({far.x, far.y, far.z});
-    gl_.ProgramUniform3f(program_, min_loc_, float(lo.x - pad), float(lo.y - pad), float(lo.z - pad));
-    gl_.ProgramUniform3f(program_, max_loc_, float(hi.x + pad), float(hi.y + pad), float(hi.z + pad));
+    const DrawnBox b = drawn_box(box, eye_, reach_);
+    gl_.ProgramUniform3f(program_, min_loc_, b.lo.x, b.lo.y, b.lo.z);
+    gl_.ProgramUniform3f(program_, max_loc_, b.hi.x, b.hi.y, b.hi.z);
     // The padded box within reach of the near rectangle: its front faces may be clipped where
     // the back faces are not (or the eye may be inside it): draw both sides, as without culling.
-    const glm::dvec3 gap = glm::max(glm::max(lo - pad, -(hi + pad)), glm::dvec3(0.0));
-    const bool near = glm::dot(gap, gap) <= reach_ * reach_;
-    if (near) gl_.Disable(GL_CULL_FACE);
+    if (b.near) gl_.Disable(GL_CULL_FACE);
     gl_.DrawArrays(GL_TRIANGLES, 0, 36);
-    if (near) gl_.Enable(GL_CULL_FACE);
+    if (b.near) gl_.Enable(GL_CULL_FACE);
   }
   gl_.EndQuery(GL_SAMPLES_PASSED);
   return handle;
@@ -110,6 +164,116 @@ bool BoxQuerier::ready(uint32_t handle) const {
 void BoxQuerier::reset() { next_ = 0; }
 
 void BoxQuerier::end() {
+  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Disable(GL_CULL_FACE);
+}
+
+BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact) : gl_(ctx.gl()), exact_(exact) {
+  program_ = link_program(gl_, kBatchVertex,
+                          std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment);
+  view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
+  first_loc_ = gl_.GetUniformLocation(program_, "u_first");
+  gl_.CreateVertexArrays(1, &vao_);
+  gl_.CreateBuffers(1, &boxes_buf_);
+  gl_.CreateBuffers(1, &counts_buf_);
+}
+
+BoxBatchCounter::~BoxBatchCounter() {
+  gl_.DeleteBuffers(1, &boxes_buf_);
+  gl_.DeleteBuffers(1, &counts_buf_);
+  gl_.DeleteVertexArrays(1, &vao_);
+  gl_.DeleteProgram(program_);
+}
+
+void BoxBatchCounter::begin(const Camera& cam) {
+  eye_ = cam.eye;
+  reach_ = near_reach(cam);
+  const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
+  gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
+  query_state(gl_, program_, vao_);
+}
+
+uint32_t BoxBatchCounter::issue(const Aabb& box) {
+  if (drawn_) throw std::logic_error("BoxBatchCounter: issue() after result() in one batch (call reset() first)");
+  ++queries_issued_;
+  boxes_.push_back(box);
+  return uint32_t(boxes_.size() - 1);
+}
+
+void BoxBatchCounter::draw() {
+  drawn_ = true;
+  counts_.assign(boxes_.size(), 0);
+  // Buffer slots: the culled (far) boxes first, then those drawn on both sides; empty ones none.
+  slot_.assign(boxes_.size(), ~0u);
+  std::vector<glm::vec4> data;
+  data.reserve(2 * boxes_.size());
+  std::vector<DrawnBox> near;
+  std::vector<uint32_t> near_index;
+  uint32_t n = 0;
+  for (uint32_t i = 0; i < boxes_.size(); ++i) {
+    if (boxes_[i].empty()) continue;
+    const DrawnBox b = drawn_box(boxes_[i], eye_, reach_);
+    if (b.near) {
+      near.push_back(b);
+      near_index.push_back(i);
+      continue;
+    }
+    slot_[i] = n++;
+    data.emplace_back(b.lo, 0.0f);
+    data.emplace_back(b.hi, 0.0f);
+  }
+  const uint32_t far_count = n;
+  for (size_t k = 0; k < near.size(); ++k) {
+    slot_[near_index[k]] = n++;
+    data.emplace_back(near[k].lo, 0.0f);
+    data.emplace_back(near[k].hi, 0.0f);
+  }
+  if (n == 0) return;
+  if (n > capacity_) {
+    capacity_ = std::max<size_t>(n, 2 * capacity_);
+    gl_.NamedBufferData(boxes_buf_, GLsizeiptr(capacity_ * 2 * sizeof(glm::vec4)), nullptr, GL_STREAM_DRAW);
+    gl_.NamedBufferData(counts_buf_, GLsizeiptr(capacity_ * sizeof(uint32_t)), nullptr, GL_STREAM_READ);
+  }
+  gl_.NamedBufferSubData(boxes_buf_, 0, GLsizeiptr(data.size() * sizeof(glm::vec4)), data.data());
+  const std::vector<uint32_t> zeros(n, 0);
+  gl_.NamedBufferSubData(counts_buf_, 0, GLsizeiptr(n * sizeof(uint32_t)), zeros.data());
+  gl_.UseProgram(program_);  // BoxQuerier's may be bound (HcQuerier issues both)
+  gl_.BindVertexArray(vao_);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, boxes_buf_);
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, counts_buf_);
+  if (far_count > 0) {
+    gl_.ProgramUniform1i(program_, first_loc_, 0);
+    gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * far_count));
+  }
+  if (n > far_count) {
+    gl_.Disable(GL_CULL_FACE);
+    gl_.ProgramUniform1i(program_, first_loc_, GLint(far_count));
+    gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * (n - far_count)));
+    gl_.Enable(GL_CULL_FACE);
+  }
+  ++draws_;
+  gl_.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<uint32_t> got(n);
+  gl_.GetNamedBufferSubData(counts_buf_, 0, GLsizeiptr(n * sizeof(uint32_t)), got.data());
+  for (uint32_t i = 0; i < boxes_.size(); ++i)
+    if (slot_[i] != ~0u) counts_[i] = got[slot_[i]];
+}
+
+uint64_t BoxBatchCounter::result(uint32_t handle) {
+  if (handle >= boxes_.size())
+    throw std::out_of_range("BoxBatchCounter: handle " + std::to_string(handle) + " not issued in this batch (" +
+                            std::to_string(boxes_.size()) + " issued)");
+  if (!drawn_) draw();
+  return counts_[handle];
+}
+
+void BoxBatchCounter::reset() {
+  boxes_.clear();
+  drawn_ = false;
+}
+
+void BoxBatchCounter::end() {
   gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   gl_.DepthMask(GL_TRUE);
   gl_.Disable(GL_CULL_FACE);

@@ -67,4 +67,51 @@ class BoxQuerier final : public OcclusionQueries {
   uint64_t queries_issued_ = 0;
 };
 
+// The same test for a whole batch in one draw (issue 16, "tighter batching"): issue() records the
+// box; the first result() draws every recorded box in one or two draw calls (boxes within reach of
+// the near rectangle without culling, as BoxQuerier) from a buffer, with a fragment shader that
+// runs only for fragments passing the depth test (early fragment tests) and counts them in its
+// box's counter in a shader storage buffer; the counters are read back once. Same boxes, same
+// triangles, same depth test as BoxQuerier (a single-sampled framebuffer; depth writes off, so
+// boxes of a batch do not hide each other): with `exact`, each count equals GL_SAMPLES_PASSED of
+// that box's query; without, it is 1 where that is > 0 (and 0 where it is 0) - enough for HC
+// unless it needs sample counts (visible-pixel LOD). No query objects: llvmpipe bins the begin and
+// the end of every query into every tile of the framebuffer, at 1024 x 1024 a large part of a
+// query's cost.
+class BoxBatchCounter final : public OcclusionQueries {
+ public:
+  BoxBatchCounter(GlContext& ctx, bool exact);
+  bool exact() const { return exact_; }
+  ~BoxBatchCounter() override;
+  BoxBatchCounter(const BoxBatchCounter&) = delete;
+  BoxBatchCounter& operator=(const BoxBatchCounter&) = delete;
+
+  void begin(const Camera& cam);
+  uint32_t issue(const Aabb& box) override;
+  uint64_t result(uint32_t handle) override;
+  void reset();
+  void end_batch() override { reset(); }
+  void end();
+
+  uint64_t queries_issued() const { return queries_issued_; }  // boxes, since construction
+  uint64_t draws() const { return draws_; }                    // batches drawn
+  // Draws the batch (the first result() does it); its counts are then read back.
+  void draw();
+  bool drawn() const { return drawn_; }
+
+ private:
+  const GlApi& gl_;
+  bool exact_;
+  GLuint program_ = 0, vao_ = 0, boxes_buf_ = 0, counts_buf_ = 0;
+  GLint view_projection_loc_ = -1, first_loc_ = -1;
+  size_t capacity_ = 0;
+  glm::dvec3 eye_{0.0};
+  double reach_ = 0;
+  std::vector<Aabb> boxes_;
+  std::vector<uint32_t> slot_;
+  std::vector<uint64_t> counts_;
+  bool drawn_ = false;
+  uint64_t queries_issued_ = 0, draws_ = 0;
+};
+
 }  // namespace occ

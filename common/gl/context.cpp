@@ -76,11 +76,13 @@ GlContext::GlContext(std::unique_ptr<gl_detail::Surface> surface, int width, int
 
   gl_.CreateRenderbuffers(1, &color_rb_);
   gl_.NamedRenderbufferStorage(color_rb_, GL_RGBA8, width, height);
-  gl_.CreateRenderbuffers(1, &depth_rb_);
-  gl_.NamedRenderbufferStorage(depth_rb_, GL_DEPTH_COMPONENT32F, width, height);
+  // Depth is a texture, not a renderbuffer, so that compute shaders can read it (the HC depth
+  // pyramid, hzb_query.hpp); rendering into it is the same.
+  gl_.CreateTextures(GL_TEXTURE_2D, 1, &depth_tex_);
+  gl_.TextureStorage2D(depth_tex_, 1, GL_DEPTH_COMPONENT32F, width, height);
   gl_.CreateFramebuffers(1, &fbo_);
   gl_.NamedFramebufferRenderbuffer(fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_rb_);
-  gl_.NamedFramebufferRenderbuffer(fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb_);
+  gl_.NamedFramebufferTexture(fbo_, GL_DEPTH_ATTACHMENT, depth_tex_, 0);
   gl_.NamedFramebufferReadBuffer(fbo_, GL_COLOR_ATTACHMENT0);
   const GLenum status = gl_.CheckNamedFramebufferStatus(fbo_, GL_FRAMEBUFFER);
   if (status != GL_FRAMEBUFFER_COMPLETE) {

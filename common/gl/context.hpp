@@ -1,7 +1,7 @@
 // A headless OpenGL 4.5 core context with its own offscreen framebuffer (no window system).
 // Back ends: EGL (Mesa surfaceless platform, else the EGL device platform: a GPU driver or
 // llvmpipe) and OSMesa as a fallback. The framebuffer object is RGBA8 colour plus
-// GL_DEPTH_COMPONENT32F depth and stays bound; reverse-Z is set up once for occ::Camera's
+// GL_DEPTH_COMPONENT32F depth (a texture) and stays bound; reverse-Z is set up once for occ::Camera's
 // projection: glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE), depth test GL_GREATER, depth cleared
 // to 0 (= far). Depth clamp stays off: clamping would rasterise geometry in front of the near
 // plane at depth 1 instead of clipping it, and occlusion boxes crossing the near plane are
@@ -53,6 +53,9 @@ class GlContext {
   Image read_rgba() const;
   // The depth buffer (reverse-Z: 1 = near, 0 = far), row 0 at the bottom (waits for rendering).
   std::vector<float> read_depth() const;
+  // The depth attachment: a GL_DEPTH_COMPONENT32F texture (one level), sampled by compute
+  // shaders (texelFetch(...).r is the depth) while it stays attached.
+  GLuint depth_texture() const { return depth_tex_; }
 
  private:
   GlContext(std::unique_ptr<gl_detail::Surface> surface, int width, int height);
@@ -61,7 +64,7 @@ class GlContext {
   std::unique_ptr<gl_detail::Surface> surface_;
   GlApi gl_;
   int width_, height_;
-  GLuint fbo_ = 0, color_rb_ = 0, depth_rb_ = 0;
+  GLuint fbo_ = 0, color_rb_ = 0, depth_tex_ = 0;
 };
 
 }  // namespace occ

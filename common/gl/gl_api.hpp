@@ -3,7 +3,8 @@
 // Nothing calls gl* symbols directly: with libEGL and libOSMesa both linked, link order would
 // otherwise decide which library answers. Types and enums come from <GL/glcorearb.h> without
 // GL_GLEXT_PROTOTYPES, so it declares no functions. Requires an OpenGL 4.5 core context
-// (glClipControl, direct state access, multi-draw indirect, shader storage buffers).
+// (glClipControl, direct state access, multi-draw indirect, shader storage buffers, compute
+// shaders and image load/store: the HC depth pyramid, common/gl/hzb_query.hpp).
 #pragma once
 #include <functional>
 #include <string>
@@ -90,7 +91,17 @@ namespace occ {
   X(DELETEQUERIES, DeleteQueries)                             \
   X(BEGINQUERY, BeginQuery)                                   \
   X(ENDQUERY, EndQuery)                                       \
-  X(GETQUERYOBJECTUI64V, GetQueryObjectui64v)
+  X(GETQUERYOBJECTUI64V, GetQueryObjectui64v)                 \
+  X(NAMEDFRAMEBUFFERTEXTURE, NamedFramebufferTexture)         \
+  X(TEXTUREPARAMETERI, TextureParameteri)                     \
+  X(GETTEXTUREIMAGE, GetTextureImage)                         \
+  X(PROGRAMUNIFORM1I, ProgramUniform1i)                       \
+  X(PROGRAMUNIFORM2I, ProgramUniform2i)                       \
+  X(DISPATCHCOMPUTE, DispatchCompute)                         \
+  X(MEMORYBARRIER, MemoryBarrier)                             \
+  X(BINDIMAGETEXTURE, BindImageTexture)                       \
+  X(BINDBUFFERBASE, BindBufferBase)                           \
+  X(GETNAMEDBUFFERSUBDATA, GetNamedBufferSubData)
 
 struct GlApi {
 #define OCC_GL_MEMBER(upper, name) PFNGL##upper##PROC name = nullptr;

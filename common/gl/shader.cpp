@@ -1,6 +1,7 @@
 #include "common/gl/shader.hpp"
 
 #include <algorithm>
+#include <initializer_list>
 #include <stdexcept>
 
 namespace occ {
@@ -19,10 +20,30 @@ GLuint compile(const GlApi& gl, GLenum stage, const std::string& src) {
     std::string log(size_t(std::max(len, 1)), '\0');
     gl.GetShaderInfoLog(sh, len, nullptr, log.data());
     gl.DeleteShader(sh);
-    throw std::runtime_error(std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+    throw std::runtime_error(std::string(stage == GL_VERTEX_SHADER     ? "vertex"
+                                         : stage == GL_COMPUTE_SHADER ? "compute"
+                                                                      : "fragment") +
                              " shader does not compile: " + log.c_str());
   }
   return sh;
+}
+
+GLuint link(const GlApi& gl, std::initializer_list<GLuint> shaders) {
+  GLuint prog = gl.CreateProgram();
+  for (GLuint sh : shaders) gl.AttachShader(prog, sh);
+  gl.LinkProgram(prog);
+  for (GLuint sh : shaders) gl.DeleteShader(sh);  // flagged for deletion; freed with the program
+  GLint ok = GL_FALSE;
+  gl.GetProgramiv(prog, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    gl.GetProgramiv(prog, GL_INFO_LOG_LENGTH, &len);
+    std::string log(size_t(std::max(len, 1)), '\0');
+    gl.GetProgramInfoLog(prog, len, nullptr, log.data());
+    gl.DeleteProgram(prog);
+    throw std::runtime_error(std::string("program does not link: ") + log.c_str());
+  }
+  return prog;
 }
 
 }  // namespace
@@ -36,23 +57,11 @@ GLuint link_program(const GlApi& gl, const std::string& vertex_src, const std::s
     gl.DeleteShader(vs);
     throw;
   }
-  GLuint prog = gl.CreateProgram();
-  gl.AttachShader(prog, vs);
-  gl.AttachShader(prog, fs);
-  gl.LinkProgram(prog);
-  gl.DeleteShader(vs);  // flagged for deletion; freed with the program
-  gl.DeleteShader(fs);
-  GLint ok = GL_FALSE;
-  gl.GetProgramiv(prog, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    gl.GetProgramiv(prog, GL_INFO_LOG_LENGTH, &len);
-    std::string log(size_t(std::max(len, 1)), '\0');
-    gl.GetProgramInfoLog(prog, len, nullptr, log.data());
-    gl.DeleteProgram(prog);
-    throw std::runtime_error(std::string("program does not link: ") + log.c_str());
-  }
-  return prog;
+  return link(gl, {vs, fs});
+}
+
+GLuint link_compute_program(const GlApi& gl, const std::string& compute_src) {
+  return link(gl, {compile(gl, GL_COMPUTE_SHADER, compute_src)});
 }
 
 }  // namespace occ

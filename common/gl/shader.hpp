@@ -9,5 +9,7 @@ namespace occ {
 
 // Links a program from vertex and fragment shader sources (full text including #version).
 GLuint link_program(const GlApi& gl, const std::string& vertex_src, const std::string& fragment_src);
+// Links a program from one compute shader source.
+GLuint link_compute_program(const GlApi& gl, const std::string& compute_src);
 
 }  // namespace occ

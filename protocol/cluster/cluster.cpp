@@ -109,6 +109,14 @@ void add_hc_options(Cli& cli, HcChoices& c) {
   cli.option("leaf-test-below", &c.geometry_below, 0.0, 1.0,
              "--leaf-test geometry tests only leaves whose box query saw less than this fraction of the box's "
              "projected area (a box that shows mostly has geometry that shows; 1: every leaf whose box passed)");
+  cli.choice<HcTest>("hc-test", &c.test,
+                     {{"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"auto", HcTest::automatic},
+                      {"batch", HcTest::batch}},
+                     "how HC tests a box: queries = an occlusion query each; pyramid = a depth pyramid built on the "
+                     "GPU from HC's depth buffer first proves boxes occluded (one compute dispatch per batch), "
+                     "queries only for the rest; auto = the pyramid for batches of 32 boxes or more in frames where "
+                     "it proves enough; batch = each batch's boxes in one draw that counts their samples in a "
+                     "buffer (no query objects). Same results");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }

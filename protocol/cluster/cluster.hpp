@@ -68,9 +68,11 @@ struct HcChoices {
   // (LeafTest in common/culling.hpp; the switch node's GeometryQuerier).
   LeafTest leaf_test = LeafTest::box;
   double geometry_below = 0.1;  // only leaves whose box showed less than this of its area (HcOptions)
+  // How each box is tested (common/gl/hzb_query.hpp): queries, or a GPU depth pyramid first.
+  HcTest test = HcTest::queries;
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
-// --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below.
+// --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below, --hc-test.
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.

@@ -23,6 +23,7 @@
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
 #include "common/gl/geometry_query.hpp"
+#include "common/gl/hzb_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/image.hpp"
@@ -62,7 +63,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
-  BoxQuerier querier(*ctx);
+  HcQuerier querier(*ctx, o.hc.test, false);  // tau = 0: no sample counts needed
   const Renderables renderables(h, nullptr);
   Camera current;  // HC's camera (the geometry querier's restore)
   GeometryQuerier geometry(*ctx, querier, renderer, renderables, [&] { querier.begin(current); });
@@ -99,7 +100,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
           if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
         select.filter(fresh, renderables, path[f], o.height);
         renderer.draw_items(items_of_nodes(h, fresh), SceneRenderer::Mode::DepthOnly);
-        querier.begin(path[f]);
+        querier.depth_added();
       };
     querier.begin(path[f]);
     HcFrame hc = step.hc(f, visible, path[f], queries, local, nowhere);

@@ -1,0 +1,148 @@
+// HC's occlusion tests with a GPU depth pyramid in front of the occlusion queries (issue 16).
+//
+// GpuDepthPyramid: a hierarchical depth pyramid of farthest depths (reverse-Z: the MIN of 2 x 2
+// texels), built by a compute shader from the context's depth texture (GlContext::depth_texture),
+// two levels per dispatch, and never read back; level 0 is the depth texture itself, levels 1.. live in one R32F texture
+// (its mip k-1 holds level k). test() runs a batch of PyramidProbes (common/hzb.hpp: rectangle,
+// level and depth bound computed on the CPU) in one compute dispatch and reads back one word per
+// probe from a small shader storage buffer. Level contents equal DepthPyramid::build on the same
+// depth (min is exact), so the CPU DepthPyramid::occludes is the shader's specification.
+//
+// HcQuerier: the OcclusionQueries HC uses (switch nodes, cull_overview), by HcTest:
+//   queries    every box is a real occlusion query (BoxQuerier), as before;
+//   pyramid    each batch's boxes are first tested against the pyramid in one dispatch; only those
+//              it cannot prove occluded become real queries (issued together, then read);
+//   automatic  the pyramid for batches of at least 32 probe-able boxes (a dispatch and its
+//              read-back cost more than a few queries), and only in frames where it pays: while
+//              the pyramid proved fewer than 32 boxes a frame (a running average), frames are all
+//              queries, with one frame with the pyramid every kRetryFrames to look again.
+// The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"): the results,
+// and so the visible sets, are those of `queries`.
+//
+// Which depth the pyramid holds: begin() starts a frame's tests against a depth buffer drawn
+// since the last build (the OR): the pyramid is built before its first use in the frame.
+// depth_added() says more depth was drawn into the same buffer within the frame (occluder
+// fusion). Depth only ever gets nearer then (GL_GREATER, depth writes on), so the pyramid built
+// before it still proves only true occlusion: it stays in use (conservative; it just proves a
+// little less) and is rebuilt only for batches of at least Policy::rebuild_min_probes probes (a
+// build at 1024 x 1024 costs about as much as a hundred queries here, and rebuilding for every
+// batch proved only a few per cent more boxes: docs/scale.md).
+// Contracts: the GlContext is current on the calling thread and outlives the querier; nothing
+// draws into the depth buffer between begin()/depth_added() and the batch's results but the
+// querier itself (its queries write no depth).
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "common/culling.hpp"
+#include "common/gl/box_query.hpp"
+#include "common/gl/context.hpp"
+#include "common/hzb.hpp"
+
+namespace occ {
+
+class GpuDepthPyramid {
+ public:
+  explicit GpuDepthPyramid(GlContext& ctx);
+  ~GpuDepthPyramid();
+  GpuDepthPyramid(const GpuDepthPyramid&) = delete;
+  GpuDepthPyramid& operator=(const GpuDepthPyramid&) = delete;
+
+  Viewport viewport() const { return vp_; }
+  uint32_t level_count() const { return levels_; }
+  // Rebuilds levels 1.. from the depth texture (one dispatch per level, nothing read back).
+  void build();
+  // occluded[i] = 1 when probes[i] (Kind::probe) is proven occluded, 0 otherwise. One dispatch.
+  void test(const std::vector<PyramidProbe>& probes, std::vector<uint32_t>& occluded);
+  // Level `level` (>= 1) read back, row 0 at the bottom (tests only).
+  std::vector<float> read_level(uint32_t level) const;
+
+ private:
+  const GlApi& gl_;
+  GlContext& ctx_;
+  Viewport vp_;
+  uint32_t levels_ = 1;
+  GLuint build_from_depth_ = 0, build_from_level_ = 0, test_ = 0;
+  GLuint depth_sampler_ = 0;
+  GLuint pyramid_ = 0;              // R32F, levels_ - 1 mip levels (none for a 1 x 1 viewport)
+  GLuint probes_buf_ = 0, results_buf_ = 0;
+  size_t capacity_ = 0;             // probes the buffers hold
+  GLint count_loc_ = -1, src_size_loc_[2] = {-1, -1}, dst_size_loc_[2] = {-1, -1}, two_loc_[2] = {-1, -1};
+};
+
+class HcQuerier final : public OcclusionQueries {
+ public:
+  // When the pyramid is used, and how it tests (defaults per HcTest: policy()).
+  struct Policy {
+    size_t min_probes = 1;             // batches with fewer probe-able boxes are all queries
+    size_t rebuild_min_probes = 256;   // rebuild a stale pyramid (depth_added) for batches this large
+    size_t min_proven_per_frame = 0;   // > 0: frames whose pyramid proves fewer (average) are all queries
+    // Probe rectangles span at most span x span texels (hzb.hpp): 2 proved a third of the boxes
+    // the queries found occluded on a plant walk, 16 nearly two thirds (docs/scale.md).
+    int span = 16;
+    // batch: boxes whose screen rectangle covers more pixels are queries (with the eye or the near
+    // plane in reach: always), smaller ones are counted by the batch draw.
+    double batch_max_pixels = 16384;
+  };
+  static constexpr uint32_t kRetryFrames = 8;
+  static Policy policy(HcTest test);
+
+  struct Stats {
+    uint64_t tests = 0;            // issue() calls: boxes tested
+    uint64_t queries = 0;          // real occlusion queries issued (query objects)
+    uint64_t batched = 0;          // boxes counted by batch draws (HcTest::batch) instead
+    uint64_t draws = 0;            // batch draws
+    uint64_t pyramid_tested = 0;   // boxes tested against the pyramid
+    uint64_t pyramid_occluded = 0; // of those, proven occluded (no query)
+    uint64_t builds = 0;           // pyramid builds
+    uint64_t dispatches = 0;       // test dispatches
+    uint64_t occluded = 0;         // boxes answered 0 samples (by the pyramid or a query)
+  };
+
+  // `sample_counts`: result() must be the number of samples (visible-pixel LOD), not just > 0.
+  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts = true) : HcQuerier(ctx, test, sample_counts, policy(test)) {}
+  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy);
+  HcTest mode() const { return test_; }
+
+  // A frame's tests against a freshly drawn depth buffer, from `cam`.
+  void begin(const Camera& cam);
+  // More depth was drawn into this frame's buffer (occluder fusion); restores the query state.
+  void depth_added();
+  uint32_t issue(const Aabb& box) override;
+  uint64_t result(uint32_t handle) override;
+  void end_batch() override;
+  // Restores colour and depth writes.
+  void end() { queries_.end(); }
+
+  const Stats& stats() const { return stats_; }
+  BoxQuerier& box_querier() { return queries_; }
+
+ private:
+  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kQueryBit = 1u << 31 };
+  void resolve();
+  void q_begin(const Camera& cam);
+  uint32_t q_issue(const Aabb& box);
+  uint64_t q_result(uint32_t h);
+
+  HcTest test_;
+  Policy policy_;
+  GlContext& ctx_;
+  BoxQuerier queries_;
+  BoxBatchCounter counter_;
+  bool batched_ = false;
+  std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid / automatic only
+  Camera cam_;
+  bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
+  uint64_t proven_frame_ = 0;   // boxes the pyramid proved occluded in this frame
+  double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
+  uint32_t frames_off_ = 0;     // frames without the pyramid since it was last used
+  std::vector<Aabb> boxes_;             // this batch's boxes
+  std::vector<PyramidProbe> probes_;    // and their probes
+  std::vector<uint32_t> handle_;        // per box: its query handle, kZero (0 samples) or kPending
+  std::vector<PyramidProbe> batch_;     // probes sent to the GPU
+  std::vector<uint32_t> batch_index_, occluded_;
+  Stats stats_;
+};
+
+}  // namespace occ

@@ -1,0 +1,335 @@
+// HC's GPU depth pyramid (issue 16, common/gl/hzb_query.hpp) on a real GL context: its levels equal
+// the CPU pyramid's, it never proves a box occluded whose occlusion query passes, and the switch
+// step finds the same visible sets with --hc-test pyramid / auto as with queries.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "common/camera_path.hpp"
+#include "common/gl/context.hpp"
+#include "common/gl/hzb_query.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "common/hierarchy.hpp"
+#include "common/hzb.hpp"
+#include "common/scene_io.hpp"
+#include "protocol/cluster/switch_step.hpp"
+
+using namespace occ;
+
+namespace {
+
+uint64_t rng_state = 12345;
+double rnd() {
+  rng_state = rng_state * 6364136223846793005ULL + 1442695040888963407ULL;
+  return double(rng_state >> 11) / double(1ULL << 53);
+}
+
+// A generated plant, its hierarchy and a walk through it, rendered at w x h.
+struct Plant {
+  std::unique_ptr<GlContext> ctx;
+  Scene scene;
+  Hierarchy h;
+  std::unique_ptr<SceneRenderer> renderer;
+  std::vector<Camera> path;
+
+  Plant(int w, int hgt, const std::string& spec, int frames)
+      : ctx(GlContext::create(GlBackend::Auto, w, hgt)), scene(load_scene(spec)), h(Hierarchy::build(scene, {})) {
+    renderer = std::make_unique<SceneRenderer>(*ctx, scene, h);
+    renderer->set_occluder_offset(true);  // as the switch nodes' OR
+    path = load_camera_path("walk:" + std::to_string(frames), scene.bounds(), {w, hgt});
+  }
+  // Depth only: the visible leaves of an exact cull, a few of them left out so that boxes behind
+  // the holes are visible and their neighbours are not.
+  void draw_occluders(const Camera& cam) {
+    renderer->begin_frame(cam, false);
+    std::vector<uint32_t> items;
+    for (uint32_t i = 0; i < h.items().size(); ++i)
+      if (i % 7 != 3) items.push_back(i);
+    renderer->draw_items(items, SceneRenderer::Mode::DepthOnly);
+  }
+};
+
+// Random boxes around the camera's view: big and small, near and far, flat ones lying on the
+// scene's surfaces (the hierarchy's boxes), some crossing the near plane.
+std::vector<Aabb> test_boxes(const Plant& p, const Camera& cam, size_t n) {
+  std::vector<Aabb> boxes;
+  const Aabb b = p.scene.bounds();
+  for (uint32_t id = 0; id < p.h.size() && boxes.size() < n / 2; id += 1 + uint32_t(rnd() * 3))
+    boxes.push_back(p.h.node(id).box);
+  while (boxes.size() < n) {
+    const double d = std::pow(10.0, rnd() * 3 - 1) * (cam.near_dist < 1 ? 1.0 : cam.near_dist);
+    const glm::dvec3 dir = cam.forward() + (rnd() - 0.5) * 1.2 * cam.right() + (rnd() - 0.5) * 1.2 * cam.up();
+    const glm::dvec3 c = cam.eye + d * glm::normalize(dir);
+    const glm::dvec3 e = glm::dvec3(rnd(), rnd(), rnd()) * (0.01 + rnd() * 0.05) * b.diagonal();
+    boxes.push_back({c - e, c + e});
+  }
+  return boxes;
+}
+
+}  // namespace
+
+TEST(GpuDepthPyramid, LevelsEqualTheCpuPyramidOfTheSameDepth) {
+  // Odd, non-square: the last row and column of every level have fewer texels below them.
+  Plant p(203, 117, "plant:0.05", 3);
+  GpuDepthPyramid gpu(*p.ctx);
+  ASSERT_EQ(gpu.level_count(), pyramid_level_count({203, 117}));
+  for (const Camera& cam : p.path) {
+    p.draw_occluders(cam);
+    gpu.build();
+    DepthPyramid cpu;
+    cpu.build(p.ctx->read_depth(), 203, 117);
+    ASSERT_EQ(cpu.level_count(), gpu.level_count());
+    for (uint32_t l = 1; l < gpu.level_count(); ++l) {
+      const std::vector<float> got = gpu.read_level(l);
+      const int w = (203 + (1 << l) - 1) >> l, h = (117 + (1 << l) - 1) >> l;
+      ASSERT_EQ(got.size(), size_t(w) * h) << "level " << l;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) ASSERT_EQ(got[size_t(y) * w + x], cpu.texel(l, x, y)) << "level " << l << " texel " << x << "," << y;
+    }
+  }
+  EXPECT_EQ(p.ctx->gl().GetError(), GLenum(GL_NO_ERROR));
+}
+
+// The pyramid's answer against the occlusion query's, box by box: "occluded" only where the query
+// sees no sample; the GPU agrees with its CPU twin (DepthPyramid::occludes); and it proves most of
+// what the queries find occluded (a pyramid that proves nothing would pass the first check).
+TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwin) {
+  for (auto [vp, span] : {std::pair{Viewport{256, 256}, 2}, {Viewport{256, 256}, 16}, {Viewport{203, 117}, 16}}) {
+    Plant p(vp.width, vp.height, "plant:0.05", 6);
+    GpuDepthPyramid gpu(*p.ctx);
+    BoxQuerier q(*p.ctx);
+    size_t query_zero = 0, proven = 0, probes = 0, total = 0;
+    for (const Camera& cam : p.path) {
+      p.draw_occluders(cam);
+      gpu.build();
+      DepthPyramid cpu;
+      cpu.build(p.ctx->read_depth(), vp.width, vp.height);
+      const std::vector<Aabb> boxes = test_boxes(p, cam, 1500);
+      std::vector<PyramidProbe> batch;
+      std::vector<size_t> index;
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        const PyramidProbe pr = pyramid_probe(boxes[i], cam, vp, BoxQuerier::kRelativePad, span);
+        if (pr.kind == PyramidProbe::Kind::probe) batch.push_back(pr), index.push_back(i);
+      }
+      std::vector<uint32_t> occluded;
+      gpu.test(batch, occluded);
+      q.begin(cam);
+      std::vector<uint32_t> handles;
+      for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+      for (size_t j = 0; j < batch.size(); ++j) {
+        const uint64_t samples = q.result(handles[index[j]]);
+        ASSERT_EQ(occluded[j] != 0, cpu.occludes(batch[j])) << "GPU and CPU pyramids disagree on box " << index[j];
+        ASSERT_TRUE(occluded[j] == 0 || samples == 0)
+            << "box " << index[j] << " proven occluded but its query saw " << samples << " samples (level "
+            << batch[j].level << ", depth " << batch[j].depth << ")";
+        query_zero += samples == 0;
+        proven += occluded[j] != 0;
+      }
+      q.end_batch();
+      q.end();
+      probes += batch.size();
+      total += boxes.size();
+    }
+    EXPECT_GT(probes, total / 2) << "most boxes are probed (not near the eye, on screen)";
+    EXPECT_GT(query_zero, probes / 10) << "the scene hides a good share of the boxes";
+    EXPECT_GT(proven, query_zero / 3) << "the pyramid proves a good share of what the queries find occluded";
+    std::printf("viewport %dx%d, span %d: %zu boxes, %zu probed, %zu with 0 samples, %zu proven occluded by the pyramid\n",
+                vp.width, vp.height, span, total, probes, query_zero, proven);
+  }
+}
+
+// One draw per batch with per-box counters gives each box exactly its occlusion query's sample
+// count (same boxes, same triangles, same depth test), near boxes and empty ones included; without
+// exact counts, 1 where the query counts any sample and 0 where it counts none.
+TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
+  for (auto [vp, exact] : {std::pair{Viewport{256, 256}, true}, {Viewport{203, 117}, true}, {Viewport{203, 117}, false}}) {
+    Plant p(vp.width, vp.height, "plant:0.05", 4);
+    BoxQuerier q(*p.ctx);
+    BoxBatchCounter batch(*p.ctx, exact);
+    size_t visible = 0, near = 0, total = 0;
+    for (const Camera& cam : p.path) {
+      p.draw_occluders(cam);
+      std::vector<Aabb> boxes = test_boxes(p, cam, 1000);
+      boxes.push_back(Aabb{});                                                       // empty
+      boxes.push_back({cam.eye - glm::dvec3(0.3), cam.eye + glm::dvec3(0.3)});  // around the eye
+      q.begin(cam);
+      std::vector<uint32_t> hq;
+      for (const Aabb& b : boxes) hq.push_back(q.issue(b));
+      std::vector<uint64_t> expected;
+      for (uint32_t hnd : hq) expected.push_back(q.result(hnd));
+      q.end_batch();
+      q.end();
+      batch.begin(cam);
+      std::vector<uint32_t> hb;
+      for (const Aabb& b : boxes) hb.push_back(batch.issue(b));
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        ASSERT_EQ(batch.result(hb[i]), exact ? expected[i] : uint64_t(expected[i] > 0)) << "box " << i << " of " << boxes.size();
+        visible += expected[i] > 0;
+        near += visible_without_query(boxes[i], cam);
+      }
+      batch.end_batch();
+      batch.end();
+      total += boxes.size();
+    }
+    EXPECT_GT(visible, total / 4);
+    EXPECT_LT(visible, total - total / 10);
+    EXPECT_GT(near, 0u);
+    EXPECT_EQ(batch.draws(), p.path.size());
+    EXPECT_EQ(p.ctx->gl().GetError(), GLenum(GL_NO_ERROR));
+  }
+}
+
+// The switch step over a walk, as a switch node runs it (near-first batches, occluder fusion
+// between batches, adaptive queries, visibility hold), once per --hc-test: the visible sets of
+// every frame are those of queries only (tau = 0), and the pyramid did prove boxes occluded.
+// (--hc-test batch too: one draw per batch.)
+TEST(HcQuerier, PyramidAutoAndBatchFindTheVisibleSetsOfQueriesOnAWalk) {
+  const int w = 256, hgt = 192, frames = 24;
+  Plant p(w, hgt, "plant:0.3", frames);
+  const Renderables renderables(p.h, nullptr);
+  ClusterConfig config;
+  auto replay = [&](HcTest test, HcQuerier::Stats* stats) {
+    HcQuerier querier(*p.ctx, test, false);  // tau = 0: no sample counts needed
+    const SwitchStep step(renderables, config, hgt);
+    QuerySkipper skipper(p.h.size());
+    VisibilityHold hold(p.h.size(), 2);
+    DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
+    VisibleSet visible(renderables.count());
+    std::vector<std::vector<uint32_t>> sets;
+    std::vector<uint8_t> drawn;
+    for (int f = 0; f < frames; ++f) {
+      const Camera& cam = p.path[size_t(f)];
+      std::vector<uint32_t> occluders(visible.ids().begin(), visible.ids().end());
+      std::sort(occluders.begin(), occluders.end());
+      drawn.assign(renderables.count(), 0);
+      for (uint32_t id : occluders) drawn[id] = 1;
+      p.renderer->begin_frame(cam, false);
+      p.renderer->draw_renderables(renderables, occluders, SceneRenderer::Mode::DepthOnly);
+      HcLocal local{&skipper, nullptr, HcOrder::near_first, nullptr, &hold};
+      local.occluders = [&](std::span<const uint32_t> found) {
+        std::vector<uint32_t> fresh;
+        for (uint32_t id : found)
+          if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
+        p.renderer->draw_renderables(renderables, fresh, SceneRenderer::Mode::DepthOnly);
+        querier.depth_added();
+      };
+      querier.begin(cam);
+      step.hc(uint32_t(f), visible, cam, querier, local, nowhere);
+      querier.end();
+      std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
+      std::sort(v.begin(), v.end());
+      sets.push_back(std::move(v));
+    }
+    *stats = querier.stats();
+    return sets;
+  };
+  HcQuerier::Stats q{}, py{}, au{}, ba{};
+  const auto reference = replay(HcTest::queries, &q);
+  const auto pyramid = replay(HcTest::pyramid, &py);
+  const auto automatic = replay(HcTest::automatic, &au);
+  const auto batch = replay(HcTest::batch, &ba);
+  for (int f = 0; f < frames; ++f) {
+    ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--hc-test pyramid, frame " << f;
+    ASSERT_EQ(automatic[size_t(f)], reference[size_t(f)]) << "--hc-test auto, frame " << f;
+    ASSERT_EQ(batch[size_t(f)], reference[size_t(f)]) << "--hc-test batch, frame " << f;
+  }
+  EXPECT_EQ(ba.tests, q.tests);
+  EXPECT_EQ(ba.occluded, q.occluded);
+  EXPECT_EQ(ba.batched + ba.queries, ba.tests) << "batch: small boxes in the draws, big ones queries";
+  EXPECT_GT(ba.batched, 2 * ba.queries);
+  EXPECT_GE(ba.draws, uint64_t(frames));
+  EXPECT_EQ(q.queries, q.tests);
+  EXPECT_EQ(q.pyramid_tested, 0u);
+  EXPECT_EQ(py.tests, q.tests) << "the same boxes were tested";
+  EXPECT_GT(py.pyramid_occluded, 0u);
+  EXPECT_EQ(py.queries + py.pyramid_occluded, py.tests) << "every box is a query or proven occluded (none empty)";
+  EXPECT_GT(py.builds, uint64_t(frames) - 1) << "at least one build per frame with tests";
+  EXPECT_LE(au.queries, q.queries);
+  std::printf("%d frames: %llu boxes tested; pyramid: %llu queries, %llu proven occluded, %llu builds; auto: %llu "
+              "queries, %llu proven occluded, %llu builds\n",
+              frames, (unsigned long long)q.tests, (unsigned long long)py.queries,
+              (unsigned long long)py.pyramid_occluded, (unsigned long long)py.builds, (unsigned long long)au.queries,
+              (unsigned long long)au.pyramid_occluded, (unsigned long long)au.builds);
+}
+
+// Automatic mode where the pyramid proves nothing (nothing drawn: every box shows): after its first
+// frame it is used only every kRetryFrames frames; the answers stay those of the queries.
+TEST(HcQuerier, AutomaticStopsBuildingThePyramidWhereItProvesNothing) {
+  Plant p(128, 128, "plant:0.05", 1);
+  HcQuerier q(*p.ctx, HcTest::automatic);
+  const Camera& cam = p.path[0];
+  const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
+  p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
+  BoxQuerier reference(*p.ctx);
+  reference.begin(cam);
+  std::vector<uint64_t> expected;
+  for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
+  reference.end();
+  ASSERT_GT(std::count_if(expected.begin(), expected.end(), [](uint64_t s) { return s > 0; }), 100);
+  const int frames = 2 * int(HcQuerier::kRetryFrames) + 1;
+  for (int f = 0; f < frames; ++f) {
+    p.renderer->begin_frame(cam, false);
+    q.begin(cam);
+    std::vector<uint32_t> handles;
+    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "frame " << f << " box " << i;
+    q.end_batch();
+    q.end();
+  }
+  EXPECT_EQ(q.stats().pyramid_occluded, 0u);
+  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
+  EXPECT_EQ(q.stats().tests, uint64_t(frames) * boxes.size());
+}
+
+// Not a check (no timing assertions): what a build and a test dispatch cost at 1024 x 1024 here.
+TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
+  Plant p(1024, 1024, "plant:0.05", 2);
+  GpuDepthPyramid gpu(*p.ctx);
+  p.draw_occluders(p.path[1]);
+  p.ctx->gl().Finish();
+  using Clock = std::chrono::steady_clock;
+  double build_ms = 1e9;  // the fastest of 20 (the machine is shared)
+  for (int i = 0; i < 20; ++i) {
+    const auto t = Clock::now();
+    gpu.build();
+    p.ctx->gl().Finish();
+    build_ms = std::min(build_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+  }
+  auto t0 = Clock::now();
+  const std::vector<Aabb> boxes = test_boxes(p, p.path[1], 4000);
+  std::vector<PyramidProbe> batch;
+  for (const Aabb& b : boxes)
+    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, HcQuerier::policy(HcTest::pyramid).span); pr.kind == PyramidProbe::Kind::probe)
+      batch.push_back(pr);
+  std::vector<uint32_t> occluded;
+  double test_ms = 1e9;
+  for (int i = 0; i < 6; ++i) {  // the first one compiles the shader
+    const auto t = Clock::now();
+    gpu.test(batch, occluded);
+    if (i > 0) test_ms = std::min(test_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+  }
+  BoxQuerier q(*p.ctx);
+  q.begin(p.path[1]);
+  t0 = Clock::now();
+  std::vector<uint32_t> handles;
+  for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+  for (uint32_t hnd : handles) (void)q.result(hnd);
+  const double query_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  q.end();
+  for (bool exact : {true, false}) {
+    BoxBatchCounter bc(*p.ctx, exact);
+    bc.begin(p.path[1]);
+    t0 = Clock::now();
+    handles.clear();
+    for (const Aabb& b : boxes) handles.push_back(bc.issue(b));
+    for (uint32_t hnd : handles) (void)bc.result(hnd);
+    const double batch_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    bc.end();
+    std::printf("1024x1024: the same boxes in one draw with %s counters: %.2f ms\n", exact ? "exact" : "0/1", batch_ms);
+  }
+  std::printf("1024x1024: pyramid build %.2f ms; test of %zu probes %.2f ms; %zu queries %.2f ms\n", build_ms,
+              batch.size(), test_ms, boxes.size(), query_ms);
+  EXPECT_EQ(occluded.size(), batch.size());
+}
