@@ -223,8 +223,9 @@ HcQuerier::Policy HcQuerier::policy(HcTest test) {
 }
 
 HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
-    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx), counter_(ctx, sample_counts) {
+    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx) {
   batched_ = test_ == HcTest::batch;
+  if (batched_) counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);
   if (test_ == HcTest::pyramid || test_ == HcTest::automatic) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
 
@@ -309,7 +310,7 @@ uint64_t HcQuerier::result(uint32_t handle) {
 }
 
 void HcQuerier::q_begin(const Camera& cam) {
-  if (batched_) counter_.begin(cam);
+  if (batched_) counter_->begin(cam);
   queries_.begin(cam);  // last: its program is bound for issue()
 }
 uint32_t HcQuerier::q_issue(const Aabb& box) {
@@ -322,7 +323,7 @@ uint32_t HcQuerier::q_issue(const Aabb& box) {
                       double(fp.x1 - fp.x0 + 1) * double(fp.y1 - fp.y0 + 1) > double(policy_.batch_max_pixels));
     if (!big) {
       ++stats_.batched;
-      return counter_.issue(box);
+      return counter_->issue(box);
     }
   }
   ++stats_.queries;
@@ -332,17 +333,19 @@ uint32_t HcQuerier::q_issue(const Aabb& box) {
 uint64_t HcQuerier::q_result(uint32_t h) {
   if (!batched_) return queries_.result(h & ~kQueryBit);
   if (h & kQueryBit) {
-    if (!counter_.drawn()) counter_.draw();  // the batch draw first: one flush for both
+    if (!counter_->drawn()) counter_->draw();  // the batch draw first: one flush for both
     return queries_.result(h & ~kQueryBit);
   }
-  return counter_.result(h);
+  return counter_->result(h);
 }
 
 void HcQuerier::end_batch() {
   queries_.reset();
-  if (counter_.drawn()) queries_.begin(cam_);  // the batch draw bound its own program
-  counter_.reset();
-  stats_.draws = counter_.draws();
+  if (batched_) {
+    if (counter_->drawn()) queries_.begin(cam_);  // the batch draw bound its own program
+    counter_->reset();
+    stats_.draws = counter_->draws();
+  }
   boxes_.clear();
   probes_.clear();
   resolved_ = false;

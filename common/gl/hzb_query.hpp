@@ -10,14 +10,18 @@
 //
 // HcQuerier: the OcclusionQueries HC uses (switch nodes, cull_overview), by HcTest:
 //   queries    every box is a real occlusion query (BoxQuerier), as before;
+//   batch      a batch's boxes are counted by one draw (BoxBatchCounter, no query objects), except
+//              those covering more than Policy::batch_max_pixels pixels or within reach of the near
+//              plane, which stay queries (the counting shader runs for every passing fragment);
 //   pyramid    each batch's boxes are first tested against the pyramid in one dispatch; only those
 //              it cannot prove occluded become real queries (issued together, then read);
 //   automatic  the pyramid for batches of at least 32 probe-able boxes (a dispatch and its
 //              read-back cost more than a few queries), and only in frames where it pays: while
 //              the pyramid proved fewer than 32 boxes a frame (a running average), frames are all
 //              queries, with one frame with the pyramid every kRetryFrames to look again.
-// The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"): the results,
-// and so the visible sets, are those of `queries`.
+// The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision") and the batch
+// draw counts the same samples: the results, and so the visible sets, are those of `queries`
+// (without `sample_counts` a batch-counted box answers 1 for any number of samples).
 //
 // Which depth the pyramid holds: begin() starts a frame's tests against a depth buffer drawn
 // since the last build (the OR): the pyramid is built before its first use in the frame.
@@ -129,7 +133,7 @@ class HcQuerier final : public OcclusionQueries {
   Policy policy_;
   GlContext& ctx_;
   BoxQuerier queries_;
-  BoxBatchCounter counter_;
+  std::unique_ptr<BoxBatchCounter> counter_;  // batch only
   bool batched_ = false;
   std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid / automatic only
   Camera cam_;
