@@ -17,6 +17,8 @@
 #include <functional>
 #include <vector>
 
+#include <stdexcept>
+
 #include "common/culling.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -26,7 +28,9 @@ namespace occ {
 
 class GeometryQuerier final : public OcclusionQueries {
  public:
-  static constexpr uint32_t kGeometryBit = 0x80000000u;
+  // Marks this querier's geometry handles. Bit 30: the wrapped box querier's handles are batch
+  // indices, possibly with bit 31 set (HcQuerier marks its real queries so), never bit 30.
+  static constexpr uint32_t kGeometryBit = 0x40000000u;
 
   GeometryQuerier(GlContext& ctx, OcclusionQueries& boxes, SceneRenderer& renderer, const Renderables& r,
                   std::function<void()> restore);
@@ -34,7 +38,11 @@ class GeometryQuerier final : public OcclusionQueries {
   GeometryQuerier(const GeometryQuerier&) = delete;
   GeometryQuerier& operator=(const GeometryQuerier&) = delete;
 
-  uint32_t issue(const Aabb& box) override { return boxes_.issue(box); }
+  uint32_t issue(const Aabb& box) override {
+    const uint32_t h = boxes_.issue(box);
+    if (h & kGeometryBit) throw std::logic_error("GeometryQuerier: a box handle uses the geometry bit");
+    return h;
+  }
   // Box handles: the wrapped querier's result. Geometry handles: draws the batch's geometry
   // queries first if they are not drawn yet. Throws std::out_of_range for a geometry handle not
   // issued in this batch.
