@@ -183,3 +183,18 @@ TEST(HardCases, HugeViewports) {
   expect_cluster_equals_reference("vp4096x512", kWalls, two, View{4096, 512});
   expect_cluster_equals_reference("vp2048", kWalls, {all[1]}, View{2048, 2048});
 }
+
+// A box edge a thousandth of a pixel off a pixel centre: on city:6x6:3:10:1 (cameras 315-316 of
+// its walk:2000, 96x72), a building's side wall seen almost edge-on covers one pixel column (8
+// px) because the rasteriser snaps the wall's edge onto the pixel centres, while the building's
+// exact box edge, 0.002 px outside, covered none: HC culled the building and the frame missed
+// the column. Boxes are now padded by sub-pixel steps on screen (box_query.hpp kPadSubpixels).
+TEST(HardCases, ABoxEdgeSnappedOntoPixelCentresStillCoversThem) {
+  const std::vector<Camera> p = {
+      cam({-118.3407703851926, 1.7, 0.70050851583035256}, {-117.36197277275105, 1.7, 0.90533828387862547},
+          59.999999999999993, 0.0040342357458452091, 403.42357458452091),
+      cam({-118.16788394197098, 1.7, 0.70202336936051157}, {-117.1892022882563, 1.7, 0.90740647646109407},
+          59.999999999999993, 0.0040327825518567343, 403.2782551856734),
+  };
+  expect_cluster_equals_reference("snapped_edge", "city:6x6:3:10:1", p, View{96, 72});
+}

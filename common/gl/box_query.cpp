@@ -1,5 +1,6 @@
 #include "common/gl/box_query.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -66,14 +67,23 @@ void main() {
 
 // The box as both classes draw it: camera-relative, padded, rounded to float; `near` when the
 // padded box is within reach of the near rectangle (both sides are drawn then).
+//
+// The pad is the larger of a relative epsilon (float rounding of the corners) and
+// BoxQuerier::kPadSubpixels sub-pixel steps at the distance of the box's farthest corner: moving
+// every corner outwards by `pad` on each axis moves each silhouette edge at least `pad` across
+// the view ray, i.e. at least that many sub-pixel steps on screen. Without it, a face of the content seen nearly
+// edge-on whose edge the rasteriser snaps onto a pixel centre (sub-pixel grid, tie rules) can
+// cover that pixel while the box's own edge, a thousandth of a pixel outside, does not: a
+// one-pixel sliver went missing (city:6x6:3:10:1, docs/hard_cases.md).
 struct DrawnBox {
   glm::vec3 lo, hi;
   bool near;
 };
-DrawnBox drawn_box(const Aabb& box, const glm::dvec3& eye, double reach) {
+DrawnBox drawn_box(const Aabb& box, const glm::dvec3& eye, double reach, double pad_per_distance) {
   const glm::dvec3 lo = box.min - eye, hi = box.max - eye;
   const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
-  const double pad = BoxQuerier::kRelativePad * std::max({far.x, far.y, far.z});
+  const double pad = std::max(BoxQuerier::kRelativePad * std::max({far.x, far.y, far.z}),
+                              pad_per_distance * glm::length(far));
   const glm::dvec3 gap = glm::max(glm::max(lo - pad, -(hi + pad)), glm::dvec3(0.0));
   return {glm::vec3(float(lo.x - pad), float(lo.y - pad), float(lo.z - pad)),
           glm::vec3(float(hi.x + pad), float(hi.y + pad), float(hi.z + pad)), glm::dot(gap, gap) <= reach * reach};
@@ -83,6 +93,17 @@ DrawnBox drawn_box(const Aabb& box, const glm::dvec3& eye, double reach) {
 double near_reach(const Camera& cam) {
   const double ty = std::tan(cam.fovy_rad * 0.5), tx = ty * cam.aspect;
   return cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-3);
+}
+
+// The pad in world units per unit of distance from the eye: kPadSubpixels steps of the
+// rasteriser's sub-pixel grid (GL_SUBPIXEL_BITS, at least 4 by the GL spec; 8 on llvmpipe: 1/64
+// px), for the current viewport's height.
+double pad_per_unit_distance(const GlApi& gl, const Camera& cam) {
+  GLint viewport[4] = {0, 0, 0, 0}, subpixel_bits = 4;
+  gl.GetIntegerv(GL_VIEWPORT, viewport);
+  gl.GetIntegerv(GL_SUBPIXEL_BITS, &subpixel_bits);
+  const double pixels = BoxQuerier::kPadSubpixels / double(1u << std::clamp(subpixel_bits, 1, 16));
+  return pixels * 2.0 * std::tan(cam.fovy_rad * 0.5) / std::max(1, viewport[3]);
 }
 
 // Colour and depth writes off, reverse-Z depth test, back faces culled.
@@ -117,6 +138,7 @@ BoxQuerier::~BoxQuerier() {
 void BoxQuerier::begin(const Camera& cam) {
   eye_ = cam.eye;
   reach_ = near_reach(cam);
+  pixel_pad_ = pad_per_unit_distance(gl_, cam);
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
   query_state(gl_, program_, vao_);
@@ -132,7 +154,7 @@ uint32_t BoxQuerier::issue(const Aabb& box) {
   ++queries_issued_;
   gl_.BeginQuery(GL_SAMPLES_PASSED, pool_[handle]);
   if (!box.empty()) {
-    const DrawnBox b = drawn_box(box, eye_, reach_);
+    const DrawnBox b = drawn_box(box, eye_, reach_, pixel_pad_);
     gl_.ProgramUniform3f(program_, min_loc_, b.lo.x, b.lo.y, b.lo.z);
     gl_.ProgramUniform3f(program_, max_loc_, b.hi.x, b.hi.y, b.hi.z);
     // The padded box within reach of the near rectangle: its front faces may be clipped where
@@ -189,6 +211,7 @@ BoxBatchCounter::~BoxBatchCounter() {
 void BoxBatchCounter::begin(const Camera& cam) {
   eye_ = cam.eye;
   reach_ = near_reach(cam);
+  pixel_pad_ = pad_per_unit_distance(gl_, cam);
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
   query_state(gl_, program_, vao_);
@@ -213,7 +236,7 @@ void BoxBatchCounter::draw() {
   uint32_t n = 0;
   for (uint32_t i = 0; i < boxes_.size(); ++i) {
     if (boxes_[i].empty()) continue;
-    const DrawnBox b = drawn_box(boxes_[i], eye_, reach_);
+    const DrawnBox b = drawn_box(boxes_[i], eye_, reach_, pixel_pad_);
     if (b.near) {
       near.push_back(b);
       near_index.push_back(i);

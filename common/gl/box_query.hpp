@@ -1,10 +1,13 @@
 // Occlusion queries on axis-aligned boxes against the current depth buffer (the GL side of
 // HardwareCull, common/culling.hpp). Each box is drawn as its front faces (12 triangles wound
-// counter-clockwise from outside, back faces culled) with colour and depth writes off and the reverse-Z depth test GL_GREATER, inside a GL_SAMPLES_PASSED query (one pool
+// counter-clockwise from outside, back faces culled) with colour and depth writes off and the
+// reverse-Z depth test GL_GREATER, inside a GL_SAMPLES_PASSED query (one pool
 // per query target: a GL query object is tied to its first target, and this class only counts
 // samples). Boxes are drawn camera-relative: min/max - eye in double, then float, enlarged by a
-// relative epsilon (1e-5 of the corner's distance from the eye) so the result stays
-// conservative: geometry lying on a box face still shows through it.
+// relative epsilon (1e-5 of the corner's distance from the eye) and by at least kPadSubpixels
+// sub-pixel steps on screen, so the result stays conservative: geometry lying on a box face
+// still shows through it, and content whose edge the rasteriser snaps onto a pixel centre is
+// still covered.
 //
 // Front faces suffice: with the eye outside the box they cover its whole silhouette and lie in
 // front of its back faces, so a back-face fragment passes the depth test only where a front-face
@@ -33,6 +36,11 @@ namespace occ {
 class BoxQuerier final : public OcclusionQueries {
  public:
   static constexpr double kRelativePad = 1e-5;
+  // Boxes are also enlarged on screen by at least this many steps of the rasteriser's sub-pixel
+  // grid (GL_SUBPIXEL_BITS): vertices are snapped to it (half a step each way) and ties on pixel
+  // centres are broken by edge rules, so content seen edge-on can cover a pixel its exact box
+  // only grazes. 4 steps: 1/64 px on llvmpipe (8 bits).
+  static constexpr double kPadSubpixels = 4;
 
   explicit BoxQuerier(GlContext& ctx);
   ~BoxQuerier() override;
@@ -64,6 +72,7 @@ class BoxQuerier final : public OcclusionQueries {
   uint32_t next_ = 0;         // first unused query of the pool in this batch
   glm::dvec3 eye_{0.0};
   double reach_ = 0;  // eye to the near rectangle's corners, with slack
+  double pixel_pad_ = 0;  // pad per unit of distance from the eye (kPadSubpixels)
   uint64_t queries_issued_ = 0;
 };
 
@@ -107,6 +116,7 @@ class BoxBatchCounter final : public OcclusionQueries {
   size_t capacity_ = 0;
   glm::dvec3 eye_{0.0};
   double reach_ = 0;
+  double pixel_pad_ = 0;
   std::vector<Aabb> boxes_;
   std::vector<uint32_t> slot_;
   std::vector<uint64_t> counts_;
