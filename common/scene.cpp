@@ -1,5 +1,7 @@
 #include "common/scene.hpp"
 
+#include <meshoptimizer.h>
+
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
@@ -147,10 +149,38 @@ void split_range(const Mesh& m, const std::vector<glm::dvec3>& centroid, std::ve
 
 }  // namespace
 
+// Merges vertices equal in every attribute (position, normal, uv, colour), keeping first-use
+// order (meshoptimizer's remap): exporters often repeat them per face or per primitive, and a
+// repeated vertex is shaded again even when its index would have hit the vertex cache.
+void weld_vertices(Mesh& m) {
+  const size_t n = m.positions.size();
+  if (n == 0 || m.indices.empty() || m.normals.size() != n) return;
+  std::vector<meshopt_Stream> streams = {{m.positions.data(), sizeof(glm::vec3), sizeof(glm::vec3)},
+                                         {m.normals.data(), sizeof(glm::vec3), sizeof(glm::vec3)}};
+  if (m.uvs.size() == n) streams.push_back({m.uvs.data(), sizeof(glm::vec2), sizeof(glm::vec2)});
+  if (m.colors.size() == n) streams.push_back({m.colors.data(), sizeof(uint32_t), sizeof(uint32_t)});
+  std::vector<unsigned int> remap(n);
+  const size_t unique = meshopt_generateVertexRemapMulti(remap.data(), m.indices.data(), m.indices.size(), n,
+                                                         streams.data(), streams.size());
+  if (unique == n) return;
+  meshopt_remapIndexBuffer(m.indices.data(), m.indices.data(), m.indices.size(), remap.data());
+  auto shrink = [&](auto& v) {
+    if (v.size() != n) return;
+    meshopt_remapVertexBuffer(v.data(), v.data(), n, sizeof(v[0]), remap.data());
+    v.resize(unique);
+    v.shrink_to_fit();
+  };
+  shrink(m.positions);
+  shrink(m.normals);
+  shrink(m.uvs);
+  shrink(m.colors);
+}
+
 void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
   max_triangles = std::max<uint32_t>(max_triangles, 1);
   for (Mesh& m : scene.meshes) {
     m.clusters.clear();
+    weld_vertices(m);
     const size_t tris = m.indices.size() / 3;
     if (tris == 0) continue;
     std::vector<std::pair<size_t, size_t>> ranges;
@@ -165,11 +195,20 @@ void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
       std::vector<uint32_t> order(tris);
       std::iota(order.begin(), order.end(), 0u);
       split_range(m, centroid, order, 0, tris, max_triangles, ranges);
+      // nth_element left each cluster's triangles in no order: back to the file's order first
+      // (deterministic), the vertex cache order below starts from it.
+      for (auto [b, e] : ranges) std::sort(order.begin() + std::ptrdiff_t(b), order.begin() + std::ptrdiff_t(e));
       std::vector<uint32_t> reordered(m.indices.size());
       for (size_t i = 0; i < tris; ++i)
         std::copy_n(m.indices.begin() + 3 * order[i], 3, reordered.begin() + 3 * i);
       m.indices.swap(reordered);
     }
+    // Each cluster's triangles in vertex cache order (meshoptimizer): llvmpipe shades a vertex
+    // again whenever its index misses a small direct-mapped cache of recent indices, and the
+    // order above (or a file's own) may reuse vertices far apart.
+    for (auto [b, e] : ranges)
+      meshopt_optimizeVertexCache(m.indices.data() + 3 * b, m.indices.data() + 3 * b, 3 * (e - b),
+                                  m.positions.size());
     for (auto [b, e] : ranges) {
       MeshCluster c{uint32_t(3 * b), uint32_t(3 * (e - b)), {}};
       for (size_t i = 3 * b; i < 3 * e; ++i) c.box.grow(glm::dvec3(m.positions[m.indices[i]]));

@@ -118,9 +118,10 @@ struct Scene {
 // Smooth per-vertex normals from area-weighted face normals (for meshes without NORMAL).
 void compute_normals(Mesh& mesh);
 
-// Reorders each mesh's triangles into spatial clusters of at most max_triangles triangles
-// (recursive median split on triangle centroids, deterministic) and fills Mesh::clusters.
-// Meshes at or under the threshold get one cluster.
+// Prepares each mesh for drawing, deterministically: merges vertices equal in every attribute,
+// reorders its triangles into spatial clusters of at most max_triangles triangles (recursive
+// median split on triangle centroids) and fills Mesh::clusters (meshes at or under the threshold
+// get one cluster), then orders each cluster's triangles for the vertex cache (meshoptimizer).
 void split_mesh_clusters(Scene& scene, uint32_t max_triangles);
 
 }  // namespace occ
