@@ -2,25 +2,11 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include "common/gl/box_query.hpp"
 #include "common/gl/shader.hpp"
 
 namespace occ {
 namespace {
-
-// As box_query.cpp: corner c is (c & 1, c >> 1 & 1, c >> 2 & 1) between min and max, 12
-// triangles counter-clockwise seen from outside.
-const char* const kVertex = R"(#version 450 core
-uniform mat4 u_view_projection;
-uniform vec3 u_min;
-uniform vec3 u_max;
-const int kCorners[36] = int[36](0, 3, 1, 0, 2, 3,  4, 7, 6, 4, 5, 7,  0, 5, 4, 0, 1, 5,
-                                 2, 7, 3, 2, 6, 7,  0, 6, 2, 0, 4, 6,  1, 7, 5, 1, 3, 7);
-void main() {
-  int c = kCorners[gl_VertexID];
-  bvec3 upper = bvec3((c & 1) != 0, (c & 2) != 0, (c & 4) != 0);
-  gl_Position = u_view_projection * vec4(mix(u_min, u_max, upper), 1.0);
-}
-)";
 
 const char* const kFragment = R"(#version 450 core
 out vec4 o_colour;
@@ -30,7 +16,7 @@ void main() { o_colour = vec4(1.0, 110.0 / 255.0, 0.0, 0.3); }
 }  // namespace
 
 BoxOverlay::BoxOverlay(GlContext& ctx) : gl_(ctx.gl()) {
-  program_ = link_program(gl_, kVertex, kFragment);
+  program_ = link_program(gl_, kBoxVertexShader, kFragment);
   view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
   min_loc_ = gl_.GetUniformLocation(program_, "u_min");
   max_loc_ = gl_.GetUniformLocation(program_, "u_max");

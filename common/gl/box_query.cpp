@@ -12,9 +12,11 @@
 namespace occ {
 namespace {
 
+}  // namespace
+
 // Corner c of the box is (c & 1, c >> 1 & 1, c >> 2 & 1) between min and max; 6 faces x 2
 // triangles, each counter-clockwise seen from outside the box (faces -z, +z, -y, +y, -x, +x).
-const char* const kBoxVertex = R"(#version 450 core
+const char* const kBoxVertexShader = R"(#version 450 core
 uniform mat4 u_view_projection;
 uniform vec3 u_min;
 uniform vec3 u_max;
@@ -26,6 +28,8 @@ void main() {
   gl_Position = u_view_projection * vec4(mix(u_min, u_max, upper), 1.0);
 }
 )";
+
+namespace {
 
 const char* const kBoxFragment = R"(#version 450 core
 void main() {}
@@ -122,7 +126,7 @@ void query_state(const GlApi& gl, GLuint program, GLuint vao) {
 }  // namespace
 
 BoxQuerier::BoxQuerier(GlContext& ctx) : gl_(ctx.gl()) {
-  program_ = link_program(gl_, kBoxVertex, kBoxFragment);
+  program_ = link_program(gl_, kBoxVertexShader, kBoxFragment);
   view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
   min_loc_ = gl_.GetUniformLocation(program_, "u_min");
   max_loc_ = gl_.GetUniformLocation(program_, "u_max");

@@ -33,6 +33,10 @@
 
 namespace occ {
 
+// The vertex shader drawing one box (uniforms u_view_projection, u_min, u_max) as 36 vertices
+// from gl_VertexID, no attributes; also the culling overlay's (box_overlay.hpp).
+extern const char* const kBoxVertexShader;
+
 class BoxQuerier final : public OcclusionQueries {
  public:
   static constexpr double kRelativePad = 1e-5;
