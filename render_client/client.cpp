@@ -37,6 +37,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using net::Millis;
 
+// How often a client waiting for one switch node looks at the other node's connection.
+constexpr Millis kWatchOther{20};
+
 double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
@@ -165,13 +168,40 @@ class Client {
                   ": " + *err);
   }
 
+  // The next message from switch node `node`, waiting up to --timeout-ms. Meanwhile the other
+  // node's connection is watched: when it ends (the node died: reset or EOF, or it said Bye), the
+  // other node is dropped at once (NodeFault for it), without waiting out the timeout. The node
+  // waited for may be waiting for the dead one itself: a node killed between queuing its last
+  // frame to this client and to its peer leaves that frame complete here but not on the peer,
+  // which then drops its peer and waits for this client's resync, while this client waited for
+  // the peer's next frame; both waited out --timeout-ms and the client dropped the healthy node too.
   net::Received receive_from(int node, uint32_t frame) {
-    net::Received r = nodes_[node].conn->receive(Millis(o_.timeout_ms));
+    const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
+    const int other = 1 - node;
+    net::Received r;
+    for (;;) {
+      const Millis left = std::max(Millis(0), std::chrono::duration_cast<Millis>(deadline - Clock::now()));
+      r = nodes_[node].conn->receive(std::min(left, kWatchOther));
+      if (r.status != net::Received::Status::timeout || left <= kWatchOther) break;
+      if (nodes_[other].conn && !nodes_[other].conn->is_open())
+        throw NodeFault(other, "frame " + std::to_string(frame) + ": " + node_name(other) + " " + end_of(other) +
+                                   " (noticed while waiting for " + node_name(node) + ")");
+    }
     if (r.ok()) return r;
     std::string what = r.status == net::Received::Status::timeout
                            ? "sent nothing for " + std::to_string(o_.timeout_ms) + " ms"
                            : (r.status == net::Received::Status::closed ? "closed the connection: " : "failed: ") + r.reason;
     throw NodeFault(node, "frame " + std::to_string(frame) + ": " + node_name(node) + " " + what);
+  }
+
+  // Why switch node k's connection ended (it has): its unread messages are discarded (it is dropped).
+  std::string end_of(int k) {
+    for (;;) {
+      net::Received r = nodes_[k].conn->receive(Millis(0));
+      if (r.ok()) continue;
+      if (r.status == net::Received::Status::closed) return "closed the connection: " + r.reason;
+      return "failed: " + (r.status == net::Received::Status::error ? r.reason : std::string("connection ended"));
+    }
   }
 
   // A failed node: with --on-node-failure exit the run ends here (exit 1). Otherwise the node is

@@ -22,6 +22,7 @@ struct ClusterOptions {
   std::vector<std::string> all;                    // more flags for all three
   std::vector<std::string> node0, node1, client;   // more flags for one of them
   bool relay_node1 = false;                        // the client reaches node 1 through link_relay
+  bool relay_node_link = false;                    // or: node 1 reaches node 0 through link_relay
   std::chrono::milliseconds client_wait = std::chrono::seconds(300);  // finish(): the client's end
   std::chrono::milliseconds node_wait = std::chrono::seconds(30);     // then each node's
 };
@@ -44,7 +45,9 @@ class Cluster {
     return p0_ = wait_port(out_ / "n0.port", *n0_);
   }
   int start_node1() {
-    n1_.emplace(args({bin("switch_node"), "--id", "1", "--peer", local(p0_), "--port-file", file("n1.port")}, o_.node1),
+    n1_.emplace(args({bin("switch_node"), "--id", "1", "--peer", local(o_.relay_node_link ? pr_ : p0_), "--port-file",
+                      file("n1.port")},
+                     o_.node1),
                 out_ / "node1.log");
     return p1_ = wait_port(out_ / "n1.port", *n1_);
   }
@@ -61,9 +64,11 @@ class Cluster {
   }
   Proc& restarted(int k) { return k == 0 ? *n0_again_ : *n1_again_; }
 
-  // link_relay in front of node 1; control_port() takes "stall", "cut", ... (see relay_test).
+  // link_relay in front of node 1 (relay_node1), or of node 0 for node 1 (relay_node_link);
+  // control_port() takes "stall", "cut", ... (see relay_test).
   int start_relay() {
-    relay_.emplace(std::vector<std::string>{bin("link_relay"), "--target", local(p1_), "--port-file", file("relay.port"),
+    const int target = o_.relay_node_link ? p0_ : p1_;
+    relay_.emplace(std::vector<std::string>{bin("link_relay"), "--target", local(target), "--port-file", file("relay.port"),
                                             "--control-port-file", file("control.port")},
                    out_ / "relay.log");
     pr_ = wait_port(out_ / "relay.port", *relay_);
@@ -80,6 +85,7 @@ class Cluster {
   // the client was started.
   bool start() {
     start_node0();
+    if (o_.relay_node_link && (!p0_ || !start_relay())) return false;
     start_node1();
     if (!p0_ || !p1_ || (o_.relay_node1 && !start_relay())) return false;
     start_client();

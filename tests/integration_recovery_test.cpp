@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 
 #include <fstream>
+#include <thread>
 
 #include "cluster_run.hpp"
 
@@ -114,6 +115,56 @@ void killed_node_leaves_the_other_serving(int k) {
 
 TEST(Recovery, KilledNode1LeavesNode0ServingAloneAndFramesEqualTheReference) { killed_node_leaves_the_other_serving(1); }
 TEST(Recovery, KilledNode0LeavesNode1ServingAloneAndFramesEqualTheReference) { killed_node_leaves_the_other_serving(0); }
+
+// The race behind a flaky KilledNode1...: node K killed after the render client had its whole
+// last frame, but before node S (the other) had K's stream of it. S, waiting for that stream for
+// its next frame, sees its link end, drops K and waits for the client's resync; the client,
+// waiting for S's next frame, must notice at once that K's connection ended (reset or EOF) and
+// drop K, not wait out --timeout-ms on S (it then dropped S too: frustum culling to the end).
+// Made certain here: node 1 reaches node 0 through link_relay, stalled, so the switch stops with
+// the client waiting for S while K's last frame is held in the relay; then K is killed and the
+// link cut.
+TEST(Recovery, NodeKilledWhileTheOtherWaitsForItsStreamIsDroppedAtOnce) {
+  const std::string path = "walk:160";
+  const fs::path dir = fresh_dir("recovery_kill_stalled_link") / "cluster";
+  ClusterOptions o(kCity, path, kView);
+  o.relay_node_link = true;  // --timeout-ms stays 20 s: waiting it out fails the test below
+  Cluster c(dir, o);
+  ASSERT_TRUE(c.start()) << c.logs();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  ASSERT_EQ(control(c.control_port(), "stall").rfind("ok", 0), 0u);
+  // The switch stops within a frame or two: each node waits for the other's stream.
+  size_t shown = read_csv(c.stats())["frame"].size();
+  for (int quiet = 0; quiet < 50;) {
+    std::this_thread::sleep_for(20ms);
+    const size_t now = read_csv(c.stats())["frame"].size();
+    quiet = now == shown ? quiet + 1 : 0;
+    shown = now;
+  }
+  ASSERT_LT(shown, 60u) << c.logs();
+  const int k = int(read_csv(c.stats())["hc_node"].back());  // HC of the last frame shown: the client waits for the other
+  ASSERT_TRUE(k == 0 || k == 1) << c.logs();
+  (k == 0 ? c.node0() : c.node1()).kill_now();
+  EXPECT_EQ(control(c.control_port(), "cut").rfind("ok", 0), 0u);
+  const ClusterRun r = c.finish();
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(k == 0 ? r.node1_code : r.node0_code, 0) << r.logs();
+  const std::string survivor = "switch node " + std::to_string(1 - k);
+  EXPECT_EQ(r.rvg_log.find("sent nothing for"), std::string::npos) << r.logs();  // nobody waited out the timeout
+  EXPECT_NE(r.rvg_log.find("frame " + std::to_string(shown) + ": switch node " + std::to_string(k)), std::string::npos)
+      << r.logs();
+  EXPECT_NE(r.rvg_log.find("degraded: " + survivor), std::string::npos) << r.logs();
+  const std::vector<std::string> m = modes(c.stats());
+  ASSERT_EQ(m.size(), 160u);
+  EXPECT_EQ(count(m, "switch"), shown);
+  EXPECT_EQ(m[shown], "frustum");
+  EXPECT_EQ(m[shown + 1], "resync");
+  EXPECT_EQ(count(m, "frustum"), 1u);
+  EXPECT_EQ(count(m, "resync"), 1u);
+  EXPECT_EQ(count(m, "single"), 160u - shown - 2);
+  EXPECT_EQ(read_csv(c.stats())["hc_node"].back(), double(1 - k));
+  expect_equals_reference(dir, path, 160);
+}
 
 // Both nodes killed: the render client frustum-culls alone to the end, exit 0, frames exact.
 TEST(Recovery, BothNodesKilledLeaveFrustumCullingInTheClient) {
