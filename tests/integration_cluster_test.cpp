@@ -114,6 +114,31 @@ TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
   }
 }
 
+// The default HC test is batch (one draw per batch counting samples in a buffer); occlusion queries
+// stay available. Node 0 with --hc-test queries, node 1 with the default: the reference's frames,
+// node 0 drew no batch and node 1 counted boxes in batch draws.
+TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultBatchOnNode1EqualsReference) {
+  fs::path dir = fresh_dir("plant_queries_batch");
+  ClusterOptions o = cluster("plant:0.3", "walk:40");
+  o.node0 = {"--hc-test", "queries"};
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  if (!r) return;
+  // "HC test T: N boxes tested (...): Q occlusion queries issued, B boxes in D batch draws"
+  auto batch_draws = [](const std::string& log, const std::string& test) -> std::pair<unsigned long, unsigned long> {
+    const size_t at = log.find("HC test " + test + ": ");
+    if (at == std::string::npos) return {~0ul, ~0ul};
+    const size_t in = log.find(" boxes in ", at), draws = log.find(" batch draws", at);
+    if (in == std::string::npos || draws == std::string::npos) return {~0ul, ~0ul};
+    const size_t boxes = log.rfind(", ", in);
+    return {std::stoul(log.substr(boxes + 2, in - boxes - 2)), std::stoul(log.substr(in + 10, draws - in - 10))};
+  };
+  const auto q = batch_draws(r->node0_log, "queries"), b = batch_draws(r->node1_log, "batch");
+  EXPECT_EQ(q, std::make_pair(0ul, 0ul)) << r->node0_log;
+  ASSERT_NE(b.first, ~0ul) << "node 1 (default) did not report HC test batch:\n" << r->node1_log;
+  EXPECT_GT(b.first, 0u) << r->node1_log;
+  EXPECT_GT(b.second, 0u) << r->node1_log;
+}
+
 TEST(Cluster, DuplexWalkEqualsReference) {
   if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
   expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);

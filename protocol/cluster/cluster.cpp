@@ -116,7 +116,7 @@ void add_hc_options(Cli& cli, HcChoices& c) {
                      "GPU from HC's depth buffer first proves boxes occluded (one compute dispatch per batch), "
                      "queries only for the rest; auto = the pyramid for batches of 32 boxes or more in frames where "
                      "it proves enough; batch = each batch's boxes in one draw that counts their samples in a "
-                     "buffer (no query objects; boxes over 16384 pixels stay queries). Same results");
+                     "buffer (no query objects; boxes over 16384 pixels stay queries; the default). Same results");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }

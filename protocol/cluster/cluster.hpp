@@ -68,9 +68,9 @@ struct HcChoices {
   // (LeafTest in common/culling.hpp; the switch node's GeometryQuerier).
   LeafTest leaf_test = LeafTest::box;
   double geometry_below = 0.1;  // only leaves whose box showed less than this of its area (HcOptions)
-  // How each box is tested (common/gl/hzb_query.hpp). batch measured 0.64x the HC CPU of queries
-  // (plant:13, 1024^2); the default stays queries until batch has been through the whole suite.
-  HcTest test = HcTest::queries;
+  // How each box is tested (common/gl/hzb_query.hpp). batch (the default) measured 0.64x the HC
+  // CPU of queries (plant:13, 1024^2, docs/scale.md).
+  HcTest test = HcTest::batch;
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
 // --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below, --hc-test.
