@@ -38,23 +38,13 @@ inline long rss_mb() { return status_mb("VmRSS:"); }
 // when a process starts, so the process executes itself again, once, with the tunable added to
 // GLIBC_TUNABLES (same pid, arguments and descriptors). OCC_HUGE_PAGES=0 turns this off; if the
 // exec fails the process simply goes on with small pages. Call first thing in main().
-//
-// With huge pages the heap must not shrink and grow every frame: llvmpipe's vertex pipeline
-// mallocs and frees a few MB per draw, glibc trimmed the heap's top after each frame (trim
-// threshold 128 KiB..64 MiB) and the next frame faulted it back in, a zeroed 2 MiB page at a
-// time (saw orbit, 512^2: 14 huge-page faults a frame, clear_page 5 % of the process's samples).
-// glibc.malloc.trim_threshold=256 MiB keeps that memory (it is counted in the peak already):
-// 0 faults a frame.
 inline void use_huge_pages(char** argv) {
   const char* off = std::getenv("OCC_HUGE_PAGES");
   if (off && std::strcmp(off, "0") == 0) return;
   const char* had = std::getenv("GLIBC_TUNABLES");
   std::string tunables = had ? had : "";
   if (tunables.find("glibc.malloc.hugetlb") != std::string::npos) return;  // set by the user, or done
-  if (!tunables.empty()) tunables += ':';
-  tunables += "glibc.malloc.hugetlb=1";
-  if (tunables.find("glibc.malloc.trim_threshold") == std::string::npos)
-    tunables += ":glibc.malloc.trim_threshold=268435456";
+  tunables += tunables.empty() ? "glibc.malloc.hugetlb=1" : ":glibc.malloc.hugetlb=1";
   if (::setenv("GLIBC_TUNABLES", tunables.c_str(), 1) != 0) return;
   ::execv("/proc/self/exe", argv);
   // Still here: exec failed (no /proc?). Leave the environment as it was.

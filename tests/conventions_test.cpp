@@ -145,8 +145,7 @@ TEST(Conventions, OneDefaultViewport) {
 }
 
 // The processes run with huge pages for their large heap blocks (common/memory.hpp): they
-// re-execute themselves with glibc.malloc.hugetlb=1 in GLIBC_TUNABLES, unless OCC_HUGE_PAGES=0,
-// and with a trim threshold that keeps the heap from shrinking and faulting back every frame.
+// re-execute themselves with glibc.malloc.hugetlb=1 in GLIBC_TUNABLES, unless OCC_HUGE_PAGES=0.
 TEST(Conventions, ProcessesAskForHugePagesUnlessTurnedOff) {
   const fs::path dir = fresh_dir("hugepages");
   for (bool on : {true, false}) {
@@ -159,7 +158,6 @@ TEST(Conventions, ProcessesAskForHugePagesUnlessTurnedOff) {
     ASSERT_NE(wait_port(port, p), 0) << p.log();  // up and listening: past main's first line
     const std::string env = read_file("/proc/" + std::to_string(p.pid()) + "/environ");
     EXPECT_EQ(env.find("glibc.malloc.hugetlb=1") != std::string::npos, on) << (on ? "on" : "off");
-    EXPECT_EQ(env.find("glibc.malloc.trim_threshold=") != std::string::npos, on) << (on ? "on" : "off");
     p.kill_now();
   }
 }
