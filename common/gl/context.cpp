@@ -29,12 +29,15 @@ namespace {
 // from a heap top that is trimmed back, per draw: every frame then pays fresh page faults and
 // munmaps (perf: 36-44 % of a render process's samples in the kernel, 3.5x the frame time on the
 // ReciprocatingSaw). Keeping freed memory in the process makes the next draw reuse it. Process-
-// wide, once, before the first context; a user's own GLIBC_TUNABLES malloc settings win.
+// wide, once, before the first context; a user's own GLIBC_TUNABLES thresholds win (the
+// glibc.malloc.hugetlb=1 the processes add for themselves, common/memory.hpp, is not one: when
+// any malloc tunable turned this off, the heap top was trimmed and faulted back, 2 MiB zeroed
+// huge pages at a time, every frame: 14 faults a frame on the saw, clear_page 5 % of samples).
 void keep_freed_memory() {
   static std::once_flag once;
   std::call_once(once, [] {
     const char* t = std::getenv("GLIBC_TUNABLES");
-    if (t && std::strstr(t, "glibc.malloc.")) return;
+    if (t && (std::strstr(t, "glibc.malloc.mmap_threshold") || std::strstr(t, "glibc.malloc.trim_threshold"))) return;
     mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's maximum
     mallopt(M_TRIM_THRESHOLD, 256 << 20);
   });
