@@ -8,8 +8,6 @@
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <sstream>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <sys/stat.h>

@@ -99,15 +99,20 @@ double near_reach(const Camera& cam) {
   return cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-3);
 }
 
-// The pad in world units per unit of distance from the eye: kPadSubpixels steps of the
-// rasteriser's sub-pixel grid (GL_SUBPIXEL_BITS, at least 4 by the GL spec; 8 on llvmpipe: 1/64
-// px), for the current viewport's height.
-double pad_per_unit_distance(const GlApi& gl, const Camera& cam) {
-  GLint viewport[4] = {0, 0, 0, 0}, subpixel_bits = 4;
+// One step of the rasteriser's sub-pixel grid in pixels (GL_SUBPIXEL_BITS, at least 4 by the GL
+// spec; 8 on llvmpipe). A constant of the implementation: read once per querier.
+double subpixel_step(const GlApi& gl) {
+  GLint bits = 4;
+  gl.GetIntegerv(GL_SUBPIXEL_BITS, &bits);
+  return 1.0 / double(1u << std::clamp(bits, 1, 16));
+}
+
+// The pad in world units per unit of distance from the eye: kPadSubpixels sub-pixel steps (1/64
+// px on llvmpipe) for the current viewport's height.
+double pad_per_unit_distance(const GlApi& gl, const Camera& cam, double step) {
+  GLint viewport[4] = {0, 0, 0, 0};
   gl.GetIntegerv(GL_VIEWPORT, viewport);
-  gl.GetIntegerv(GL_SUBPIXEL_BITS, &subpixel_bits);
-  const double pixels = BoxQuerier::kPadSubpixels / double(1u << std::clamp(subpixel_bits, 1, 16));
-  return pixels * 2.0 * std::tan(cam.fovy_rad * 0.5) / std::max(1, viewport[3]);
+  return BoxQuerier::kPadSubpixels * step * 2.0 * std::tan(cam.fovy_rad * 0.5) / std::max(1, viewport[3]);
 }
 
 // Colour and depth writes off, reverse-Z depth test, back faces culled.
@@ -125,7 +130,7 @@ void query_state(const GlApi& gl, GLuint program, GLuint vao) {
 
 }  // namespace
 
-BoxQuerier::BoxQuerier(GlContext& ctx) : gl_(ctx.gl()) {
+BoxQuerier::BoxQuerier(GlContext& ctx) : gl_(ctx.gl()), subpixel_step_(subpixel_step(gl_)) {
   program_ = link_program(gl_, kBoxVertexShader, kBoxFragment);
   view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
   min_loc_ = gl_.GetUniformLocation(program_, "u_min");
@@ -142,7 +147,7 @@ BoxQuerier::~BoxQuerier() {
 void BoxQuerier::begin(const Camera& cam) {
   eye_ = cam.eye;
   reach_ = near_reach(cam);
-  pixel_pad_ = pad_per_unit_distance(gl_, cam);
+  pixel_pad_ = pad_per_unit_distance(gl_, cam, subpixel_step_);
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
   query_state(gl_, program_, vao_);
@@ -195,7 +200,8 @@ void BoxQuerier::end() {
   gl_.Disable(GL_CULL_FACE);
 }
 
-BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact) : gl_(ctx.gl()), exact_(exact) {
+BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact)
+    : gl_(ctx.gl()), exact_(exact), subpixel_step_(subpixel_step(gl_)) {
   program_ = link_program(gl_, kBatchVertex,
                           std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment);
   view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
@@ -215,7 +221,7 @@ BoxBatchCounter::~BoxBatchCounter() {
 void BoxBatchCounter::begin(const Camera& cam) {
   eye_ = cam.eye;
   reach_ = near_reach(cam);
-  pixel_pad_ = pad_per_unit_distance(gl_, cam);
+  pixel_pad_ = pad_per_unit_distance(gl_, cam, subpixel_step_);
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
   query_state(gl_, program_, vao_);

@@ -70,6 +70,7 @@ class BoxQuerier final : public OcclusionQueries {
 
  private:
   const GlApi& gl_;
+  double subpixel_step_;  // the rasteriser's sub-pixel step in pixels
   GLuint program_ = 0, vao_ = 0;
   GLint view_projection_loc_ = -1, min_loc_ = -1, max_loc_ = -1;
   std::vector<GLuint> pool_;  // GL_SAMPLES_PASSED query objects
@@ -115,6 +116,7 @@ class BoxBatchCounter final : public OcclusionQueries {
  private:
   const GlApi& gl_;
   bool exact_;
+  double subpixel_step_;  // the rasteriser's sub-pixel step in pixels
   GLuint program_ = 0, vao_ = 0, boxes_buf_ = 0, counts_buf_ = 0;
   GLint view_projection_loc_ = -1, first_loc_ = -1;
   size_t capacity_ = 0;
