@@ -12,6 +12,7 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <fstream>
 #include <thread>
 
@@ -104,7 +105,9 @@ void killed_node_leaves_the_other_serving(int k) {
   EXPECT_EQ(count(m, "resync"), 1u);
   EXPECT_LE(count(m, "frustum"), 2u);
   EXPECT_EQ(m.back(), "single");
-  EXPECT_GE(count(m, "single"), 100u);
+  // Every frame after the switch ended is one of those (how many frames the switch served before the
+  // kill was noticed depends on timing, so no fixed count).
+  EXPECT_EQ(count(m, "single"), m.size() - first_degraded - count(m, "frustum") - 1);
   auto hc = read_csv(c.stats())["hc_node"];
   EXPECT_EQ(hc.back(), double(1 - k));
   EXPECT_NE(r.rvg_log.find("modes: switch=" + std::to_string(count(m, "switch"))), std::string::npos) << r.rvg_log;
@@ -178,8 +181,12 @@ TEST(Recovery, BothNodesKilledLeaveFrustumCullingInTheClient) {
   EXPECT_NE(r.rvg_log.find("frustum culling in the render client"), std::string::npos) << r.rvg_log;
   const std::vector<std::string> m = modes(c.stats());
   ASSERT_EQ(m.size(), 120u);
-  EXPECT_EQ(m.back(), "frustum");
-  EXPECT_GE(count(m, "frustum"), 90u);
+  // Once the client frustum-culls it does so to the end; how many frames the nodes served before
+  // their deaths were noticed depends on timing, so only the order is asserted.
+  const size_t first = size_t(std::find(m.begin(), m.end(), "frustum") - m.begin());
+  ASSERT_LT(first, m.size()) << r.logs();
+  EXPECT_GE(first, 20u);
+  EXPECT_EQ(count(m, "frustum"), m.size() - first);
   auto q = read_csv(c.stats());
   EXPECT_EQ(q["hc_node"].back(), -1.0);
   EXPECT_EQ(q["queries"].back(), 0.0);
