@@ -435,3 +435,39 @@ TEST(SceneRenderer, StreamedUploadWithReleaseDrawsTheSameFramesAndFreesTheArrays
     }
   }
 }
+
+// Flushing in the middle of a frame (set_flush_triangles: indirect draws cut into parts, glFlush
+// between them) changes nothing drawn: every part size gives the frame of no flushes, draw for draw.
+TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
+  Scene scene = load_scene("plant:0.05");
+  const Hierarchy h = Hierarchy::build(scene, {});
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  SceneRenderer r(*ctx, scene, h, nullptr, SceneRenderer::Upload{.segment_bytes = 1 << 16});
+  const Aabb box = scene.bounds();
+  const glm::dvec3 eye(box.min.x + 3.0, 1.7, 0.0);
+  const Camera cam = Camera::look_at(eye, eye + glm::dvec3(1, -0.1, 0.3), {0, 1, 0}, 60.0, 1.0, 0.1, 500.0);
+  const std::vector<uint32_t> items = all_items(h);
+  for (SceneRenderer::Mode mode : {SceneRenderer::Mode::Shaded, SceneRenderer::Mode::ItemIds}) {
+    Image first;
+    DrawStats first_stats;
+    for (uint32_t flush : {0u, 1u, 97u, 5000u, SceneRenderer::kFlushTriangles}) {
+      r.set_flush_triangles(flush);
+      if (mode == SceneRenderer::Mode::ItemIds)
+        r.begin_id_frame(cam);
+      else
+        r.begin_frame(cam, true);
+      const DrawStats st = r.draw_items(items, mode);
+      const Image img = ctx->read_rgba();
+      if (flush == 0) {
+        first = img;
+        first_stats = st;
+        EXPECT_GT(st.triangles, 10000u);  // several parts at the default size
+        EXPECT_GT(ids_in_image(img).size(), 10u);
+        continue;
+      }
+      EXPECT_EQ(st.items, first_stats.items);
+      EXPECT_EQ(st.triangles, first_stats.triangles);
+      ASSERT_EQ(img.rgba, first.rgba) << "mode " << int(mode) << ", flush every " << flush << " triangles";
+    }
+  }
+}

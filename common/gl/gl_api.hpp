@@ -34,6 +34,7 @@ namespace occ {
   X(CLEARDEPTH, ClearDepth)                                   \
   X(CLEAR, Clear)                                             \
   X(FINISH, Finish)                                           \
+  X(FLUSH, Flush)                                             \
   X(PIXELSTOREI, PixelStorei)                                 \
   X(READPIXELS, ReadPixels)                                   \
   X(CREATEFRAMEBUFFERS, CreateFramebuffers)                   \

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <mutex>
 #include <stdexcept>
@@ -184,6 +185,19 @@ uint32_t pack_rgba8(glm::vec4 c) {
   return rgba;
 }
 
+// OCC_FLUSH_TRIANGLES overrides SceneRenderer::kFlushTriangles (see set_flush_triangles).
+uint32_t flush_triangles_from_environment() {
+  const char* v = std::getenv("OCC_FLUSH_TRIANGLES");
+  if (!v || !*v) return SceneRenderer::kFlushTriangles;
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long n = std::strtoull(v, &end, 10);
+  if (*v < '0' || *v > '9' || *end || errno || n > 0xffffffffull)
+    throw std::runtime_error(std::string("OCC_FLUSH_TRIANGLES=") + v +
+                             ": not a triangle count (a whole number, 0 turns the flushes off)");
+  return uint32_t(n);
+}
+
 }  // namespace
 
 // Without Upload::release nothing is written through these pointers.
@@ -193,6 +207,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
 SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* release_lod,
                              const Upload& upload)
     : gl_(ctx.gl()), hierarchy_(hierarchy) {
+  flush_triangles_ = flush_triangles_from_environment();
   const LodData* lod = release_lod;
   if (scene.geometry_released())
     throw std::logic_error("SceneRenderer: the geometry of " + scene.source + " was released after an upload");
@@ -848,8 +863,22 @@ void SceneRenderer::draw_runs(std::span<const Pending> draws, size_t first, size
       }
       bound.cull = cull;
     }
-    gl_.MultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT,
-                                  reinterpret_cast<const void*>(b * sizeof(IndirectCommand)), GLsizei(e - b), 0);
+    // One indirect call per part of about flush_triangles_ (see set_flush_triangles).
+    for (size_t c = b; c < e;) {
+      size_t d = c;
+      uint64_t triangles = 0;
+      do {
+        triangles += draws[d++].draw.index_count / 3;
+      } while (d < e && (flush_triangles_ == 0 || unflushed_triangles_ + triangles < flush_triangles_));
+      gl_.MultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT,
+                                    reinterpret_cast<const void*>(c * sizeof(IndirectCommand)), GLsizei(d - c), 0);
+      unflushed_triangles_ += triangles;
+      if (flush_triangles_ != 0 && unflushed_triangles_ >= flush_triangles_) {
+        gl_.Flush();
+        unflushed_triangles_ = 0;
+      }
+      c = d;
+    }
     b = e;
   }
 }
