@@ -53,6 +53,21 @@ int run_reference(const ClientOptions& o) {
   for (uint32_t id = 0; id < h.size(); ++id)
     if (h.node(id).leaf() && h.node(id).item_count > 0) all_leaves.push_back(id);
 
+  // BLEND items (glass) are not in the item buffer: each one whose leaf the item buffer did not
+  // show is counted by an occlusion query against the item buffer's depth (query_blended_items).
+  std::vector<uint32_t> blended_items, blended_leaf, blended_queries;
+  if (o.exact && renderer.has_blended()) {
+    for (uint32_t leaf : all_leaves)
+      for (uint32_t i = h.node(leaf).first_item; i < h.node(leaf).first_item + h.node(leaf).item_count; ++i)
+        if (renderer.item_blended(i)) {
+          blended_items.push_back(i);
+          blended_leaf.push_back(leaf);
+        }
+    blended_queries.resize(blended_items.size());
+    if (!blended_queries.empty())
+      ctx->gl().CreateQueries(GL_SAMPLES_PASSED, GLsizei(blended_queries.size()), blended_queries.data());
+  }
+
   double total_ms = 0;
   uint64_t total_tris = 0;
   std::vector<double> frame_ms;
@@ -88,6 +103,16 @@ int run_reference(const ClientOptions& o) {
       renderer.begin_id_frame(cam);
       renderer.draw_nodes_ids(all_leaves);
       std::vector<uint32_t> seen = ids_in_image(ctx->read_rgba());
+      if (!blended_items.empty()) {
+        renderer.query_blended_items(blended_items, blended_queries);
+        for (size_t k = 0; k < blended_items.size(); ++k) {
+          GLuint64 samples = 0;
+          ctx->gl().GetQueryObjectui64v(blended_queries[k], GL_QUERY_RESULT, &samples);
+          if (samples > 0) seen.push_back(blended_leaf[k]);
+        }
+        std::sort(seen.begin(), seen.end());
+        seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+      }
       uint64_t tris = 0;
       for (uint32_t id : seen) tris += h.node(id).triangles;  // ids_in_image gives node ids
       std::sort(st.drawn.begin(), st.drawn.end());

@@ -20,9 +20,18 @@ much less than the wall-clock interval on what else runs on this shared 2-core m
 import argparse, csv, math, os, statistics
 
 
+def number(v):
+    try:
+        return float(v)
+    except ValueError:
+        return None
+
+
 def rows(d):
+    """stats.csv as numbers; text columns (the render client's `mode`) are left out."""
     with open(f"{d}/stats.csv") as f:
-        return [{k: float(v) for k, v in r.items() if v not in ("", None)} for r in csv.DictReader(f)]
+        return [{k: x for k, v in r.items() if v not in ("", None) and (x := number(v)) is not None}
+                for r in csv.DictReader(f)]
 
 
 def pct(sorted_v, q):

@@ -471,3 +471,51 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
     }
   }
 }
+
+// The exact count's glass (reference --exact): a BLEND item counts as shown when it passes the
+// depth test against the opaque depth, as the Shaded pass draws it. Glass in front of a wall and
+// glass beside it show; glass behind the wall does not; an opaque item is refused.
+TEST(SceneRenderer, BlendedItemsShowOnlyWhereTheyAreInFrontOfOpaqueDepth) {
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  Scene scene;
+  scene.meshes.push_back(quad_mesh());  // opaque: no material
+  scene.meshes.push_back(quad_mesh());
+  scene.materials.push_back({.name = "glass", .base_color = {0.2f, 0.4f, 1.0f, 0.5f}, .alpha_mode = AlphaMode::Blend,
+                             .double_sided = true});
+  scene.meshes[1].material = 0;
+  scene.objects.push_back({0, place({0, 0, -4}, 2.0), "wall"});
+  scene.objects.push_back({1, place({0, 0, -3}, 0.5), "glass in front"});
+  scene.objects.push_back({1, place({0, 0, -6}, 0.5), "glass behind"});
+  scene.objects.push_back({1, place({2.5, 0, -6}, 0.5), "glass beside"});
+  const Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer r(*ctx, scene, h);
+  ASSERT_TRUE(r.has_blended());
+  std::vector<uint32_t> glass;
+  std::vector<std::string> names;
+  for (uint32_t i = 0; i < h.items().size(); ++i) {
+    const uint32_t object = h.items()[i].object;
+    EXPECT_EQ(r.item_blended(i), scene.objects[object].mesh == 1) << scene.objects[object].name;
+    if (r.item_blended(i)) {
+      glass.push_back(i);
+      names.push_back(scene.objects[object].name);
+    }
+  }
+  ASSERT_EQ(glass.size(), 3u);
+  r.begin_id_frame(camera_at({0, 0, 0}));
+  r.draw_items(all_items(h), SceneRenderer::Mode::ItemIds);
+  EXPECT_EQ(ids_in_image(ctx->read_rgba()).size(), 1u);  // the wall only: glass is not in the item buffer
+  std::vector<GLuint> queries(glass.size());
+  ctx->gl().CreateQueries(GL_SAMPLES_PASSED, GLsizei(queries.size()), queries.data());
+  r.query_blended_items(glass, queries);
+  for (size_t k = 0; k < glass.size(); ++k) {
+    GLuint64 samples = 0;
+    ctx->gl().GetQueryObjectui64v(queries[k], GL_QUERY_RESULT, &samples);
+    EXPECT_EQ(samples > 0, names[k] != "glass behind") << names[k] << ": " << samples << " samples";
+  }
+  ctx->gl().DeleteQueries(GLsizei(queries.size()), queries.data());
+  uint32_t wall_item = 0;
+  while (r.item_blended(wall_item)) ++wall_item;
+  const uint32_t bad[] = {wall_item};
+  const GLuint q[] = {0};
+  EXPECT_THROW(r.query_blended_items(bad, q), std::invalid_argument);
+}

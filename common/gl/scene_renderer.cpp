@@ -724,6 +724,48 @@ void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint
   gl_.DepthMask(GL_TRUE);
 }
 
+bool SceneRenderer::item_blended(uint32_t item) const {
+  if (item >= item_draws_.size())
+    throw std::out_of_range("SceneRenderer: item " + std::to_string(item) + " out of range (" +
+                            std::to_string(item_draws_.size()) + ")");
+  return (looks_[item_draws_[item].object].bits & kBlend) != 0;
+}
+
+void SceneRenderer::query_blended_items(std::span<const uint32_t> items, std::span<const GLuint> queries) {
+  if (queries.size() != items.size())
+    throw std::invalid_argument("SceneRenderer::query_blended_items: " + std::to_string(items.size()) +
+                                " items but " + std::to_string(queries.size()) + " queries");
+  if (items.empty()) return;
+  pending_.clear();
+  for (uint32_t item : items) {
+    if (!item_blended(item))
+      throw std::invalid_argument("SceneRenderer::query_blended_items: item " + std::to_string(item) +
+                                  " is not BLEND");
+    const ItemDraw& d = item_draws_[item];
+    pending_.push_back({uint64_t(looks_[d.object].cull), d, item + 1});  // the plain depth program
+  }
+  upload_draws(pending_);
+  gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  gl_.DepthMask(GL_FALSE);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthFunc(GL_GREATER);
+  gl_.BindVertexArray(vao_);
+  gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
+  RunState bound;
+  bound.segment = segments_.size() > 1 ? ~0u : 0;
+  for (size_t k = 0; k < items.size(); ++k) {
+    gl_.BeginQuery(GL_SAMPLES_PASSED, queries[k]);
+    draw_runs(pending_, k, k + 1, Mode::DepthOnly, bound);
+    gl_.EndQuery(GL_SAMPLES_PASSED);
+  }
+  pending_.clear();
+  if (bound.cull != kCullNone) {
+    gl_.Disable(GL_CULL_FACE);
+    gl_.FrontFace(GL_CCW);
+  }
+  gl_.DepthMask(GL_TRUE);
+}
+
 DrawStats SceneRenderer::draw_items(std::span<const uint32_t> item_indices, Mode mode) {
   check_items(item_indices);
   DrawStats stats;

@@ -159,6 +159,14 @@ class SceneRenderer {
   // DepthOnly (holds_blended() tells which renderables have them). All records and commands are
   // uploaded once. Leaves depth writes on and the depth test GL_GREATER.
   void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries);
+  // The BLEND items' share of an exact visibility count: for each BLEND item items[k] (others
+  // are an error), a GL_SAMPLES_PASSED query queries[k] around a depth-tested draw of it against
+  // the depth buffer as it is (GL_GREATER, no colour or depth writes: what the Shaded pass does to
+  // glass after the opaque draws). A non-zero count means the item shows in the frame; the item
+  // buffer (ItemIds) leaves BLEND items out. Leaves depth writes on.
+  void query_blended_items(std::span<const uint32_t> items, std::span<const GLuint> queries);
+  // True when item `item` has a BLEND material.
+  bool item_blended(uint32_t item) const;
   // True when renderable `id` draws BLEND items (HLODs never do).
   bool holds_blended(const Renderables& r, uint32_t id) const;
   // ItemIds rendering of whole nodes, each in colour node id + 1.
