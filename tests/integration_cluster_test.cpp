@@ -184,9 +184,9 @@ TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage)
   Cluster c(fresh_dir("kill") / "cluster", o);
   ASSERT_TRUE(c.start()) << c.logs();
   // Kill node 1 once frames are flowing.
-  ASSERT_GE(wait_frames(c.stats(), 20, 10s), 20u) << c.client().log();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();  // 3 process starts: slow under load
   c.node1().kill_now();
-  expect_client_stops_naming_node1(c.client(), 20.0);  // ended by the disconnect, not the 20 s timeout
+  expect_client_stops_naming_node1(c.client(), false);  // ended by the disconnect, not the 20 s timeout
   // Node 0 ends too, not hanging: with an error if it noticed node 1's death first, cleanly if
   // the render client's goodbye (which says it failed) came first.
   const int n0_code = c.node0().wait(30s);
