@@ -68,6 +68,10 @@ void expect_geometry_tests_equal_reference_with_fewer_leaves(const std::string& 
   }
 }
 
+// How long node 0 waits for a valid peer in the handshake tests (then exits 1, which they expect):
+// node 1 must start (scene, GL) and connect within it, seconds on a loaded machine under ASan.
+constexpr int kRefusalTimeoutMs = 10000;
+
 // Two switch nodes and no client, both refusing each other at the handshake (exit 1): their logs
 // (nothing when node 0 did not start).
 struct Refused {
@@ -184,9 +188,9 @@ TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage)
   Cluster c(fresh_dir("kill") / "cluster", o);
   ASSERT_TRUE(c.start()) << c.logs();
   // Kill node 1 once frames are flowing.
-  ASSERT_GE(wait_frames(c.stats(), 20, 10s), 20u) << c.client().log();
+  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();  // 3 process starts: slow under load
   c.node1().kill_now();
-  expect_client_stops_naming_node1(c.client(), 20.0);  // ended by the disconnect, not the 20 s timeout
+  expect_client_stops_naming_node1(c.client(), false);  // ended by the disconnect, not the 20 s timeout
   // Node 0 ends too, not hanging: with an error if it noticed node 1's death first, cleanly if
   // the render client's goodbye (which says it failed) came first.
   const int n0_code = c.node0().wait(30s);
@@ -199,7 +203,7 @@ TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage)
 
 TEST(ClusterFaults, SceneFingerprintMismatchIsRefusedAtHandshakeNamingBoth) {
   ClusterOptions o("", "", kSmallView);  // the scene differs: each node names its own
-  o.timeout_ms = 3000;
+  o.timeout_ms = kRefusalTimeoutMs;
   o.node0 = {"--scene", "city:4x4:2:5:1"};
   o.node1 = {"--scene", "city:5x4:2:5:1"};
   const auto r = expect_handshake_refused(fresh_dir("fingerprint"), o);
@@ -312,7 +316,7 @@ TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
 TEST(ClusterLod, MismatchedPixelErrorIsRefusedAtHandshake) {
   fs::path out = fresh_dir("lodmismatch");
   ClusterOptions o("city:4x4:2:5:1", "", kSmallView);
-  o.timeout_ms = 3000;
+  o.timeout_ms = kRefusalTimeoutMs;
   o.all = {"--lod-cache", (out / "cache").string()};
   o.node0 = {"--pixel-error", "1"};
   o.node1 = {"--pixel-error", "2"};

@@ -44,10 +44,6 @@ std::vector<std::string> client_argv(const ClusterOptions& o, int p0, int p1, co
   return a;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 void expect_equals_reference(const fs::path& reference, const fs::path& out, size_t frames) {
   EXPECT_EQ(frame_count(out), frames) << out;
   const Outcome diff = frame_diff(reference, out);
@@ -81,6 +77,9 @@ struct HeldCluster {
   HeldCluster(const fs::path& out, const ClusterOptions& o) : c(out, relayed(o)) {}
   static ClusterOptions relayed(ClusterOptions o) {
     o.relay_node1 = true;
+    // A hold lasts another process's whole run (its start alone takes seconds under TSan on a
+    // loaded machine); the held client and the nodes waiting for each other must outwait it.
+    o.timeout_ms = 60000;
     return o;
   }
   bool start() {
@@ -125,10 +124,9 @@ TEST(Membership, ProcessesWithoutTheKeyAreRefusedWhileTheRealClientIsServed) {
   h.p1 = p1;
 
   // Before the real client: one without a key, one with another key. Each is refused at once,
-  // saying why, and takes no slot.
-  auto t0 = std::chrono::steady_clock::now();
+  // saying why (the node's reason in its error, which a timeout could not give), and takes no
+  // slot.
   const Outcome nokey = run_to_end(client_argv(o, p0, p1, dir / "nokey", {}), dir / "nokey.log", 60s);
-  EXPECT_LT(seconds_since(t0), 10.0);
   expect_one_error(nokey, {"cluster key: the peer requires one (--cluster-key-file), this process has none"});
   const Outcome other = run_to_end(client_argv(o, p0, p1, dir / "wrongkey", {"--cluster-key-file", wrong}),
                                    dir / "wrongkey.log", 60s);
@@ -211,14 +209,13 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   const int p0 = h.p0, p1 = h.p1;
 
   // Client 1 is served; a second client meanwhile (client 1 held mid-run) is told the cluster is
-  // busy, at once.
+  // busy, at once: node 0's reason is its error, which a timeout could not give (how long the
+  // refusal took depends on the machine and is not asserted).
   ASSERT_GE(wait_frames(c.stats(), 5, 60s, &c.client()), 5u) << c.logs();
   ASSERT_TRUE(h.hold());
-  auto t0 = std::chrono::steady_clock::now();
   const Outcome busy = run_to_end(client_argv(o, p0, p1, dir / "busy", {"--cluster-key-file", key}),
                                   dir / "busy.log", 60s);
   ASSERT_TRUE(h.release());
-  EXPECT_LT(seconds_since(t0), 10.0) << "refused by a timeout, not by the node";
   expect_one_error(busy, {"the cluster is busy", "switch_node 0 is serving another render client"});
   ASSERT_EQ(c.client().wait(120s), 0) << c.logs();
   // (A client started before the nodes have closed the last session would be told "busy" too.)
