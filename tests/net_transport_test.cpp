@@ -66,6 +66,11 @@ bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;
 }
 
+// "Returns when its timeout runs out, not long after": the bound catches a timeout taken in the
+// wrong unit or never armed (a hang is ctest's --timeout), not speed. It is far above the timeouts
+// of 100-600 ms so that a loaded 2-core machine under TSan never trips it.
+constexpr double kPromptMs = 20000;
+
 double elapsed_ms(Clock::time_point since) {
   return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
 }
@@ -272,7 +277,7 @@ TEST_F(Loopback, ListenerGivesUpAfterTheOverallTimeoutNamingTheLastRejection) {
   RawPeer garbage(listener->port());
   garbage.send({0xff, 0xff, 0, 0, 0, 0});
   server.join();
-  EXPECT_LT(elapsed_ms(t0), 3000);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   ASSERT_FALSE(accepted);
   EXPECT_TRUE(contains(accepted.error(), "no valid peer on 127.0.0.1:")) << accepted.error();
   EXPECT_TRUE(contains(accepted.error(), "within 600 ms (1 rejected; last: peer 127.0.0.1:"))
@@ -297,7 +302,7 @@ TEST_F(Loopback, PeerThatDisconnectsMidMessageEndsWithAnError) {
   const auto t0 = Clock::now();
   net::Received r = conn->receive(5s);
   peer.join();
-  EXPECT_LT(elapsed_ms(t0), 2000);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   EXPECT_EQ(r.status, Status::error);
   EXPECT_EQ(r.reason, "peer disconnected mid-message (25 of 32 node_diff payload bytes)");
   EXPECT_EQ(conn->stats().errors, 1u);
@@ -337,7 +342,7 @@ TEST_F(Handshake, WrongSceneFingerprintFailsOnBothSidesNamingBothValues) {
   auto client_result = net::handshake(
       *conn, make_hello(wire::Role::render_client, 0, 0xaaaabbbbccccddddULL), {}, 5s);
   server.join();
-  EXPECT_LT(elapsed_ms(t0), 2000);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   ASSERT_FALSE(client_result);
   ASSERT_FALSE(server_result);
   EXPECT_TRUE(contains(client_result.error(),
@@ -406,7 +411,7 @@ TEST_F(Handshake, SilentPeerTimesOut) {
   auto result = net::handshake(*conn, make_hello(wire::Role::switch_node), {}, 300ms);
   const double ms = elapsed_ms(t0);
   EXPECT_GE(ms, 290);
-  EXPECT_LT(ms, 1500);
+  EXPECT_LT(ms, kPromptMs);
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(), "no hello within 300 ms")) << result.error();
 }
@@ -417,7 +422,7 @@ TEST_F(Handshake, ListenerThatNeverAnswersTimesOutOnTheConnectingSide) {
   ASSERT_TRUE(conn) << conn.error();
   const auto t0 = Clock::now();
   auto result = net::handshake(*conn, make_hello(wire::Role::render_client), {}, 300ms);
-  EXPECT_LT(elapsed_ms(t0), 1500);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(), "no hello within 300 ms")) << result.error();
 }
@@ -448,7 +453,7 @@ TEST(Connect, GivesUpAfterTheRetryTimeout) {
   const double ms = elapsed_ms(t0);
   ASSERT_FALSE(conn);
   EXPECT_GE(ms, 290);
-  EXPECT_LT(ms, 1500);
+  EXPECT_LT(ms, kPromptMs);
   EXPECT_TRUE(contains(conn.error(), "cannot connect to 127.0.0.1:" + std::to_string(port) +
                                          " within 300 ms: Connection refused"))
       << conn.error();
@@ -478,7 +483,7 @@ TEST_F(Connection, SendFailsWithinTheTimeoutWhenThePeerStopsReading) {
   std::optional<std::string> error;
   for (int i = 0; i < 2000 && !error; ++i) error = conn->send(big);  // at most ~480 MB
   ASSERT_TRUE(error);
-  EXPECT_LT(elapsed_ms(t0), 20000);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   EXPECT_TRUE(contains(*error, "send queue full for 300 ms")) << *error;
   EXPECT_TRUE(contains(*error, "peer is not reading")) << *error;
   EXPECT_EQ(conn->receive(10ms).status, Status::error);
@@ -568,7 +573,7 @@ TEST_F(Listener, BindsLoopbackByDefaultAndPublishesItsPortInAFile) {
 
   const auto t0 = Clock::now();
   auto missing = net::read_port_file((dir / "missing").string(), 100ms);
-  EXPECT_LT(elapsed_ms(t0), 1000);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   ASSERT_FALSE(missing);
   EXPECT_TRUE(contains(missing.error(), "did not appear within 100 ms"));
   std::ofstream(dir / "junk") << "80x\n";
@@ -585,7 +590,7 @@ TEST_F(Listener, AcceptTimesOutWhenNobodyConnects) {
   const auto t0 = Clock::now();
   auto conn = listener->accept(200ms);
   EXPECT_GE(elapsed_ms(t0), 190);
-  EXPECT_LT(elapsed_ms(t0), 1000);
+  EXPECT_LT(elapsed_ms(t0), kPromptMs);
   ASSERT_FALSE(conn);
   EXPECT_TRUE(contains(conn.error(), "within 200 ms")) << conn.error();
 }
