@@ -147,8 +147,9 @@ class SceneRenderer {
   DrawStats draw_nodes(std::span<const uint32_t> node_ids, Mode mode);
   // Renderable ids (lod.hpp): leaves at level 0 draw their items, leaves at level l their items'
   // level-l LODs with the objects' transforms and colours, interior nodes their HLOD (per-vertex
-  // colours of the source objects). Draw order: by the node's first item, then level — for
-  // level-0 leaves exactly ascending item order, as everywhere else (z-ties resolve identically).
+  // colours of the source objects). Collected by the node's first item, then level — for
+  // level-0 leaves exactly ascending item order, as everywhere else; drawn by batch key, segment,
+  // near to far, then that order (submit), so z-ties resolve identically in every renderer.
   // Without LOD data uploaded, LOD ids fall back to full detail.
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
   // Occlusion queries with real geometry (geometry_query.hpp): for each renderable ids[k], a
@@ -283,7 +284,13 @@ class SceneRenderer {
   std::vector<Pending> pending_;               // this draw call's draws
   std::vector<Pending> blended_;               // BLEND draws not drawn yet
   std::vector<Pending> sorted_;
-  std::vector<std::pair<uint64_t, uint32_t>> batch_order_;
+  struct BatchOrder {  // submit(): the order draws are drawn in
+    uint64_t key;
+    uint32_t segment;
+    double distance2;
+    uint32_t index;  // into pending_
+  };
+  std::vector<BatchOrder> batch_order_;
   std::vector<std::pair<double, uint32_t>> blend_order_;
   std::vector<IndirectCommand> commands_;
   std::vector<DrawRecord> records_;
