@@ -697,19 +697,23 @@ void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint
                      [](const Pending& a, const Pending& b) { return a.key < b.key; });
     query_ends_.push_back(pending_.size());
   }
-  upload_draws(pending_);
   // The occluders' state without their offset, depth writes off and ties passing: where this
   // geometry lies on the depth it (or anything at the same depth) wrote, it still shows.
+  query_pending(queries, GL_GEQUAL);
+}
+
+void SceneRenderer::query_pending(std::span<const GLuint> queries, GLenum depth_func) {
+  upload_draws(pending_);
   gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
   gl_.DepthMask(GL_FALSE);
   gl_.Enable(GL_DEPTH_TEST);
-  gl_.DepthFunc(GL_GEQUAL);
+  gl_.DepthFunc(depth_func);
   gl_.BindVertexArray(vao_);
   gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
   RunState bound;
   bound.segment = segments_.size() > 1 ? ~0u : 0;
   size_t b = 0;
-  for (size_t k = 0; k < ids.size(); ++k) {
+  for (size_t k = 0; k < queries.size(); ++k) {
     gl_.BeginQuery(GL_SAMPLES_PASSED, queries[k]);
     draw_runs(pending_, b, query_ends_[k], Mode::DepthOnly, bound);
     gl_.EndQuery(GL_SAMPLES_PASSED);
@@ -737,33 +741,16 @@ void SceneRenderer::query_blended_items(std::span<const uint32_t> items, std::sp
                                 " items but " + std::to_string(queries.size()) + " queries");
   if (items.empty()) return;
   pending_.clear();
+  query_ends_.clear();
   for (uint32_t item : items) {
     if (!item_blended(item))
       throw std::invalid_argument("SceneRenderer::query_blended_items: item " + std::to_string(item) +
                                   " is not BLEND");
     const ItemDraw& d = item_draws_[item];
     pending_.push_back({uint64_t(looks_[d.object].cull), d, item + 1});  // the plain depth program
+    query_ends_.push_back(pending_.size());
   }
-  upload_draws(pending_);
-  gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-  gl_.DepthMask(GL_FALSE);
-  gl_.Enable(GL_DEPTH_TEST);
-  gl_.DepthFunc(GL_GREATER);
-  gl_.BindVertexArray(vao_);
-  gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
-  RunState bound;
-  bound.segment = segments_.size() > 1 ? ~0u : 0;
-  for (size_t k = 0; k < items.size(); ++k) {
-    gl_.BeginQuery(GL_SAMPLES_PASSED, queries[k]);
-    draw_runs(pending_, k, k + 1, Mode::DepthOnly, bound);
-    gl_.EndQuery(GL_SAMPLES_PASSED);
-  }
-  pending_.clear();
-  if (bound.cull != kCullNone) {
-    gl_.Disable(GL_CULL_FACE);
-    gl_.FrontFace(GL_CCW);
-  }
-  gl_.DepthMask(GL_TRUE);
+  query_pending(queries, GL_GREATER);  // as the Shaded pass draws glass: ties fail
 }
 
 DrawStats SceneRenderer::draw_items(std::span<const uint32_t> item_indices, Mode mode) {

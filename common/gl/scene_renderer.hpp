@@ -284,6 +284,9 @@ class SceneRenderer {
   std::vector<Pending> pending_;               // this draw call's draws
   std::vector<Pending> blended_;               // BLEND draws not drawn yet
   std::vector<Pending> sorted_;
+  // pending_'s depth-only draws, query k around [query_ends_[k-1], query_ends_[k]), colour and
+  // depth writes off, depth test depth_func; leaves depth writes on and the test GL_GREATER.
+  void query_pending(std::span<const GLuint> queries, GLenum depth_func);
   struct BatchOrder {  // submit(): the order draws are drawn in
     uint64_t key;
     uint32_t segment;
