@@ -216,6 +216,14 @@ class Generator {
     }
     close_hall(columns);
     scene_.source = "plant";
+    // Closed solids with outward faces, as a CAD export has them: one single-sided material
+    // (back faces culled, glTF doubleSided false) with the per-object colour of generated scenes.
+    Material solid;
+    solid.name = "plant solid";
+    solid.object_color = true;
+    solid.double_sided = false;
+    scene_.materials.push_back(solid);
+    for (Mesh& m : scene_.meshes) m.material = 0;
     return std::move(scene_);
   }
 

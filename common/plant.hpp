@@ -9,6 +9,8 @@
 // aisle. Bays hold columns and beams (I-beams), floor slabs (some missing), tanks, boilers with
 // tube banks, heat exchangers, horizontal vessels, pumps, cable trays, railings and runs of pipes
 // with elbows; pipes above kAisleClear may cross the aisle. Outer walls and a roof close the hall.
+// Solids are closed (pipe runs end in capped flanges, tanks in heads) with outward faces and one
+// single-sided material: back faces are culled, as for a CAD export's glTF (doubleSided false).
 #pragma once
 #include <cstdint>
 
@@ -25,7 +27,7 @@ constexpr double kMinMillions = 0.01;  // limits of M (millions of triangles)
 constexpr double kMaxMillions = 200.0;
 // Goes into the scene cache key (scene_cache.hpp): bump it whenever generate_plant's output
 // changes, or a cache written by the old generator would be used.
-constexpr uint32_t kGeneratorVersion = 1;
+constexpr uint32_t kGeneratorVersion = 2;  // 2: single-sided material
 
 struct PlantParams {
   double millions = 1.0;  // target triangle count / 1e6 (the result is within a few %)

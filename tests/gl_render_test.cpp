@@ -472,6 +472,39 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   }
 }
 
+// The plant's solids are closed with outward faces (plant.hpp), so culling their back faces (its
+// single-sided material) hides nothing the double-sided drawing shows: from cameras along the walk
+// and looking across the bays, all but a few pixels (slits between abutting faces, sub-pixel
+// ends of thin open tubes) are equal. A mesh wound inside out would lose all its front pixels.
+TEST(SceneRenderer, PlantSolidsLookTheSameWithBackFacesCulled) {
+  Scene single = load_scene("plant:0.3");
+  ASSERT_EQ(single.materials.size(), 1u);
+  EXPECT_FALSE(single.materials[0].double_sided);
+  for (const Mesh& m : single.meshes) ASSERT_EQ(m.material, 0u) << m.name;
+  Scene both = single;
+  both.materials[0].double_sided = true;
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  const Aabb box = single.bounds();
+  size_t differing = 0, shown = 0, frames = 0;
+  for (double t : {0.1, 0.4, 0.7}) {
+    const glm::dvec3 eye(box.min.x + t * (box.max.x - box.min.x), 1.7 + 8.0 * t, 0.0);
+    for (const glm::dvec3 dir : {glm::dvec3(1, -0.05, 0), glm::dvec3(0.3, 0.1, 1), glm::dvec3(-0.2, 0.3, -1)}) {
+      const Camera cam = Camera::look_at(eye, eye + dir, {0, 1, 0}, 60.0, 1.0, 0.1, 500.0);
+      const Image a = render_shaded(*ctx, single, cam), b = render_shaded(*ctx, both, cam);
+      ASSERT_EQ(a.rgba.size(), b.rgba.size());
+      for (size_t i = 0; i < a.rgba.size(); i += 4) {
+        differing += !std::equal(&a.rgba[i], &a.rgba[i] + 3, &b.rgba[i]);
+        shown += b.rgba[i] || b.rgba[i + 1] || b.rgba[i + 2];
+      }
+      ++frames;
+    }
+  }
+  const size_t pixels = frames * size_t(kSize) * kSize;
+  std::cout << "plant single- vs double-sided: " << differing << " of " << pixels << " pixels differ\n";
+  EXPECT_GT(shown, pixels / 2);             // the views show the plant
+  EXPECT_LT(differing, pixels / 1000 + 1);  // under 0.1 %
+}
+
 // The exact count's glass (reference --exact): a BLEND item counts as shown when it passes the
 // depth test against the opaque depth, as the Shaded pass draws it. Glass in front of a wall and
 // glass beside it show; glass behind the wall does not; an opaque item is refused.
