@@ -3,7 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+#include <vector>
 
+#include "common/memory.hpp"
 #include "integration_util.hpp"
 
 using namespace occtest;
@@ -160,4 +165,21 @@ TEST(Conventions, ProcessesAskForHugePagesUnlessTurnedOff) {
     EXPECT_EQ(env.find("glibc.malloc.hugetlb=1") != std::string::npos, on) << (on ? "on" : "off");
     p.kill_now();
   }
+}
+
+// Scenes load on a thread of their own (common/memory.hpp in_own_arena), so the holes their freed
+// CPU geometry leaves are not in the main thread's malloc arena: the value and any exception come
+// back to the caller, and the work ran on another thread.
+TEST(Conventions, InOwnArenaRunsOnAnotherThreadAndPassesResultsAndErrors) {
+  const std::thread::id caller = std::this_thread::get_id();
+  std::thread::id ran_on;
+  auto v = occ::in_own_arena([&] {
+    ran_on = std::this_thread::get_id();
+    return std::make_unique<std::vector<int>>(1000, 7);
+  });
+  ASSERT_TRUE(v);
+  EXPECT_EQ(v->size(), 1000u);
+  EXPECT_EQ((*v)[999], 7);
+  EXPECT_NE(ran_on, caller);
+  EXPECT_THROW(occ::in_own_arena([]() -> int { throw std::runtime_error("scene file: bad header"); }), std::runtime_error);
 }

@@ -30,7 +30,7 @@ std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, i
 SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
                        int width, int height, const std::function<void(const LoadedScene&)>& before_gl) {
   SceneGl s;
-  s.loaded = std::make_unique<LoadedScene>(load_and_build(scene, who, with_lod));
+  s.loaded = in_own_arena([&] { return std::make_unique<LoadedScene>(load_and_build(scene, who, with_lod)); });
   if (before_gl) before_gl(*s.loaded);
   LodData* lod = s.loaded->lod.get();
   s.renderables = std::make_unique<Renderables>(s.loaded->hierarchy, lod);
