@@ -48,7 +48,7 @@ struct Material {
                                       // primitives without a material: the factor is ignored)
 };
 
-// Mesh::material for geometry without any material (generated scenes): a per-object hashed
+// Mesh::material for geometry without any material (the generated city, hard:*): a per-object hashed
 // colour, opaque, double-sided.
 constexpr uint32_t kNoMaterial = 0xffffffffu;
 
