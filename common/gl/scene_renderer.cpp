@@ -8,6 +8,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include <errno.h>
 #include <malloc.h>
@@ -797,10 +798,7 @@ DrawStats SceneRenderer::submit(Mode mode, DrawStats stats) {
       batch_order_.push_back({p.key, p.draw.segment, glm::dot(d, d), i});
     }
     std::sort(batch_order_.begin(), batch_order_.end(), [](const BatchOrder& a, const BatchOrder& b) {
-      if (a.key != b.key) return a.key < b.key;
-      if (a.segment != b.segment) return a.segment < b.segment;
-      if (a.distance2 != b.distance2) return a.distance2 < b.distance2;
-      return a.index < b.index;
+      return std::tie(a.key, a.segment, a.distance2, a.index) < std::tie(b.key, b.segment, b.distance2, b.index);
     });
     sorted_.clear();
     for (const BatchOrder& o : batch_order_) sorted_.push_back(pending_[o.index]);
