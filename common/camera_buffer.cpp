@@ -5,7 +5,7 @@ namespace occ {
 void CameraBuffer::put(const NumberedCamera& c) {
   {
     std::lock_guard lock(mu_);
-    cameras_[c.number] = c.camera;
+    cameras_[c.number] = c;
     while (cameras_.size() > 64) cameras_.erase(cameras_.begin());  // bounded: oldest go first
   }
   cv_.notify_all();
@@ -49,7 +49,7 @@ std::optional<NumberedCamera> CameraBuffer::take(uint32_t expected, std::chrono:
                                                  std::string* why) {
   std::unique_lock lock(mu_);
   if (!wait(lock, timeout, [&] { return cameras_.count(expected) > 0; }, why)) return std::nullopt;
-  NumberedCamera out{expected, cameras_.at(expected)};
+  NumberedCamera out = cameras_.at(expected);
   cameras_.erase(cameras_.begin(), cameras_.upper_bound(expected));
   return out;
 }
@@ -59,7 +59,7 @@ std::optional<NumberedCamera> CameraBuffer::take_latest(uint32_t min_number, std
   std::unique_lock lock(mu_);
   auto has = [&] { return !cameras_.empty() && cameras_.rbegin()->first >= min_number; };
   if (!wait(lock, timeout, has, why)) return std::nullopt;
-  NumberedCamera out{cameras_.rbegin()->first, cameras_.rbegin()->second};
+  NumberedCamera out = cameras_.rbegin()->second;
   cameras_.clear();
   return out;
 }

@@ -22,6 +22,7 @@ namespace occ {
 struct NumberedCamera {
   uint32_t number = 0;
   Camera camera;
+  bool occlusion = true;  // wire.hpp Camera.occlusion: cull this frame with occlusion (OR, queries)
 };
 
 class CameraBuffer {
@@ -42,7 +43,7 @@ class CameraBuffer {
   bool wait(std::unique_lock<std::mutex>& lock, std::chrono::milliseconds timeout, Pred ready, std::string* why);
   std::mutex mu_;
   std::condition_variable cv_;
-  std::map<uint32_t, Camera> cameras_;
+  std::map<uint32_t, NumberedCamera> cameras_;
   std::optional<std::string> closed_;
   bool interrupted_ = false;
 };

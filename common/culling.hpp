@@ -37,6 +37,14 @@ class OcclusionQueries {
   virtual uint32_t issue_geometry(uint32_t /*renderable*/) { return kNoGeometryQuery; }
 };
 
+// Every box passes: with it HC's traversal returns the frustum set at the chosen LODs (a frame the
+// render client's OcclusionGate sends without occlusion). No GL.
+class FrustumOnlyQueries final : public OcclusionQueries {
+ public:
+  uint32_t issue(const Aabb&) override { return 0; }
+  uint64_t result(uint32_t) override { return ~uint64_t(0); }
+};
+
 // True when a ray from the eye could enter `box` before reaching the near plane (the eye is in
 // or on the box, or the box crosses the near plane close to the eye). A query would then
 // rasterise only far faces or nothing and could report 0 samples although the content shows, so

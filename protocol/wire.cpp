@@ -125,7 +125,7 @@ class Reader {
 // ---- sizes ----
 
 constexpr uint32_t kHelloFixedBytes = 79;
-constexpr uint32_t kCameraBytes = 100;
+constexpr uint32_t kCameraBytes = 101;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
 constexpr uint32_t kEndOfFrameBytes = 68;
 constexpr uint32_t kByeFixedBytes = 2;
@@ -143,7 +143,7 @@ constexpr void hello_fields(auto& io, auto& m) {
 }
 constexpr void camera_fields(auto& io, auto& m) {
   io(m.frame, m.eye, m.orientation, m.fovy_rad, m.aspect, m.near_dist, m.far_dist,
-     m.viewport_width_px, m.viewport_height_px);
+     m.viewport_width_px, m.viewport_height_px, m.occlusion);
 }
 constexpr void end_of_frame_fields(auto& io, auto& m) {
   io(m.frame, m.total_added, m.total_removed, m.visible_count, m.set_hash, m.front_hash,
@@ -277,6 +277,7 @@ std::optional<std::string> check(const Camera& m) {
     return "fovy " + num(m.fovy_rad) + " rad outside (0, pi)";
   if (!(m.aspect > 0)) return "aspect " + num(m.aspect) + " <= 0";
   if (!(m.near_dist > 0)) return "near " + num(m.near_dist) + " <= 0";
+  if (m.occlusion > 1) return "occlusion " + num(m.occlusion) + " is neither 0 nor 1";
   if (!(m.far_dist > m.near_dist))
     return "far " + num(m.far_dist) + " <= near " + num(m.near_dist);
   return viewport_error(m.viewport_width_px, m.viewport_height_px, 1);

@@ -30,7 +30,7 @@
 //    77  u16  name_bytes           <= kMaxNameBytes
 //    79  u8[] name                 for logs
 //
-// Camera (100) — camera -> world rotation, camera looks down -Z, +Y up
+// Camera (101) — camera -> world rotation, camera looks down -Z, +Y up
 //     0  u32  frame
 //     4  f64  eye x, y, z
 //    28  f64  orientation w, x, y, z   unit quaternion (|q| within 1e-6 of 1)
@@ -40,6 +40,10 @@
 //    84  f64  far                      > near
 //    92  u32  viewport_width_px        1..16384
 //    96  u32  viewport_height_px       1..16384
+//   100  u8   occlusion                1: the switch culls this camera's frame with occlusion (OR,
+//                                      HC's queries); 0: its HC node sends the frustum set (no OR,
+//                                      no queries), the render client's OcclusionGate having found
+//                                      that occlusion does not pay (common/occlusion_gate.hpp)
 //
 // NodeDiff (12 + 4 * (added_count + removed_count)) — one chunk of δ(f,f-1) and δ(f-1,f)
 //     0  u32  frame
@@ -116,7 +120,8 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 4;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync
+constexpr uint16_t kProtocolVersion = 5;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
+                                          // 5: Camera.occlusion
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
@@ -166,6 +171,7 @@ struct Camera {
   double far_dist = 1000.0;
   uint32_t viewport_width_px = 1;
   uint32_t viewport_height_px = 1;
+  uint8_t occlusion = 1;  // 0 or 1
   bool operator==(const Camera&) const = default;
 };
 

@@ -81,7 +81,7 @@ struct NodeLink {
 
 class Client {
  public:
-  explicit Client(const ClientOptions& o) : o_(o) {}
+  explicit Client(const ClientOptions& o) : o_(o), gate_({.policy = o.occlusion_gate}) {}
 
   int run() {
     if (o_.window) viewer_ = std::make_unique<Viewer>(o_);  // no display: fail before loading the scene
@@ -99,6 +99,7 @@ class Client {
     for (const HNode& n : g_.hierarchy().nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
     total_triangles_ = g_.scene().triangle_count();
     connect();
+    if (!switch_) gate_ = OcclusionGate({.policy = OcclusionGate::Policy::on});  // an occlusion_server always culls
     int code = 0;
     try {
       loop();
@@ -158,11 +159,13 @@ class Client {
   // the run ends).
   void send_camera(uint32_t number) {
     sent_at_[number] = Clock::now();
+    if (cam_occlusion_.size() <= number) cam_occlusion_.resize(number + 1, 1);
+    cam_occlusion_[number] = gate_.occlusion(number);  // the same for both nodes and for resends
     for (int k = 0; k < 2; ++k)
       if (nodes_[k].conn) send_camera_to(k, number);
   }
   void send_camera_to(int k, uint32_t number) {
-    const wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height});
+    const wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height}, cam_occlusion_.at(number) != 0);
     if (auto err = nodes_[k].conn->send(w))
       drop(k, "frame " + std::to_string(frame_) + ": sending camera " + std::to_string(number) + " to " + node_name(k) +
                   ": " + *err);
@@ -382,7 +385,7 @@ class Client {
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
                      "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms",
-                     "camera_gap", "mode"});
+                     "camera_gap", "occlusion", "mode"});
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes, or one of them alone after a failure): a
     // single occlusion_server sends plain diffs.
@@ -450,16 +453,22 @@ class Client {
         viewer_->show(cam, std::move(image), hud);
       }
       const wire::EndOfFrame eof = served ? served->eof : wire::EndOfFrame{};
+      const double interval_ms = ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown);
       const uint64_t bytes = served ? served->bytes : 0;
       out.write_row({double(frame), double(cam_number), double(served ? k : -1), double(ids.size()),
                      double(eof.total_added), double(eof.total_removed), double(eof.queries), double(st.triangles),
                      double(bytes), eof.hc_us / 1000.0, eof.or_us / 1000.0, ms_between(r0, shown), latency_ms,
-                     ms_between(frame_done_.empty() ? start_ : frame_done_.back(), shown), eof.hc_cpu_us / 1000.0,
+                     interval_ms, eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
                      (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
-                     eof.or_tail_us / 1000.0, double(camera_gap)},
+                     eof.or_tail_us / 1000.0, double(camera_gap), double(served && served->wcam.occlusion)},
                     {mode_name(mode)});
       ++mode_frames_[int(mode)];
+      if (mode == Mode::switch_) {
+        std::optional<uint64_t> frustum;
+        if (gate_.wants_frustum_triangles()) frustum = frustum_triangles(cam);
+        gate_.frame(served->wcam.occlusion != 0, interval_ms, st.triangles, frustum);
+      }
       cpu_prev_shown_ = cpu_shown;
       frame_done_.push_back(shown);
       visible_sum_ += ids.size();
@@ -478,6 +487,15 @@ class Client {
       }
     }
     progress_done();
+  }
+
+  // The triangles of the frustum set at the chosen LODs: what frames without occlusion draw.
+  uint64_t frustum_triangles(const Camera& cam) const {
+    FrustumOnlyQueries all;
+    const LodSelector sel = o_.config.lod_policy(o_.height).selector(*g_.renderables, cam);
+    uint64_t t = 0;
+    for (uint32_t id : hardware_cull_lod(g_.hierarchy(), cam, all, sel)) t += g_.renderables->triangles(id);
+    return t;
   }
 
   // The O overlay: tints the boxes of the leaves in the frustum that occlusion culling removed
@@ -511,13 +529,15 @@ class Client {
         "summary: frames=%zu mean_fps=%.2f median_fps=%.2f mean_bytes_per_frame=%.0f mean_visible=%.1f "
         "leaves=%zu culled_pct=%.1f mean_triangles=%.0f triangles_culled_pct=%.1f latency_ms_mean=%.1f "
         "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f peak_rss_mb=%ld latency_frames=%.2f "
-        "camera_gap_max=%u\n",
+        "camera_gap_max=%u frames_without_occlusion=%u\n",
         frames, 1000.0 * frames / wall_ms, 1000.0 / sorted_iv[frames / 2], double(bytes_sum_) / frames, mean_v,
         leaf_count_, 100.0 * (1.0 - mean_v / std::max<size_t>(leaf_count_, 1)), double(tri_sum_) / frames,
         100.0 * (1.0 - double(tri_sum_) / frames / std::max<uint64_t>(total_triangles_, 1)),
         std::accumulate(lat.begin(), lat.end(), 0.0) / frames, lat[std::min(frames - 1, frames * 95 / 100)],
         hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb(),
-        std::accumulate(lat.begin(), lat.end(), 0.0) / wall_ms, camera_gap_max_);
+        std::accumulate(lat.begin(), lat.end(), 0.0) / wall_ms, camera_gap_max_, gate_.frames_off());
+    if (switch_ && o_.occlusion_gate == OcclusionGate::Policy::automatic)
+      std::cerr << "render_client: occlusion gate: " << gate_.describe() << "\n";
     if (frames != mode_frames_[int(Mode::switch_)])
       std::printf("modes: switch=%zu resync=%zu single=%zu frustum=%zu resyncs=%u\n", mode_frames_[0],
                   mode_frames_[1], mode_frames_[2], mode_frames_[3], resyncs_);
@@ -554,6 +574,8 @@ class Client {
   uint64_t total_triangles_ = 0, visible_sum_ = 0, bytes_sum_ = 0, tri_sum_ = 0;
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
   uint32_t camera_gap_max_ = 0;
+  OcclusionGate gate_;                // occlusion only where it pays (--occlusion-gate)
+  std::vector<uint8_t> cam_occlusion_;  // per camera sent: with occlusion (1) or the frustum set (0)
 };
 
 }  // namespace

@@ -37,6 +37,15 @@ int main(int argc, char** argv) {
                "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
                "in flight)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
+    cli.choice<occ::OcclusionGate::Policy>(
+        "occlusion-gate", &o.occlusion_gate,
+        {{"auto", occ::OcclusionGate::Policy::automatic},
+         {"on", occ::OcclusionGate::Policy::on},
+         {"off", occ::OcclusionGate::Policy::off},
+         {"alternate", occ::OcclusionGate::Policy::alternate}},
+        "occlusion only where it pays: auto = frames without occlusion (the switch sends frustum sets: no OR, no "
+        "queries) while they are measured faster at the display, tried where culling removes little; on = always "
+        "occlusion; off = never; alternate = 4 cameras each way (tests)");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "

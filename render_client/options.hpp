@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/gl/context.hpp"
+#include "common/occlusion_gate.hpp"
 #include "common/scene_setup.hpp"
 #include "protocol/cluster/cluster.hpp"
 
@@ -30,6 +31,7 @@ struct ClientOptions {
   int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
   bool degrade = true;  // --on-node-failure degrade|exit (client.cpp)
+  OcclusionGate::Policy occlusion_gate = OcclusionGate::Policy::automatic;  // --occlusion-gate
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   // --window (viewer.hpp)
   bool window = false;

@@ -11,7 +11,8 @@
 # file or an unknown kind is refused before anything starts). --lookahead N (render client,
 # default 2): cameras sent ahead, docs/latency.md.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
-# --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P) and node-only ones
+# --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P
+# --occlusion-gate G) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --query-budget,
 # --occluder-pixels-per-triangle, --visibility-hold, --leaf-test, --leaf-test-below, --hc-test), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
@@ -45,7 +46,7 @@ while [ $# -gt 0 ]; do
     --no-images) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --lookahead|--on-node-failure) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
+    --lookahead|--on-node-failure|--occlusion-gate) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;

@@ -455,9 +455,12 @@ class SwitchNode {
 
   // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera,
   // the occluders that cover enough pixels (occluder selection).
+  // A frame without occlusion (the render client's OcclusionGate) draws nothing.
   void draw_occluders(const Camera& cam) {
-    g_.renderer->begin_frame(cam, false);
+    or_triangles_ = 0;
     drawn_.assign(g_.renderables->count(), 0);
+    if (!occlusion_) return;
+    g_.renderer->begin_frame(cam, false);
     std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
     std::sort(ids.begin(), ids.end());
     for (uint32_t id : ids) drawn_[id] = 1;
@@ -495,6 +498,7 @@ class SwitchNode {
       }
       std::optional<NumberedCamera> cam = take_camera(frame, min_camera);
       if (!cam) return;
+      occlusion_ = cam->occlusion;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
@@ -505,7 +509,7 @@ class SwitchNode {
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
       try {
-        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}));
+        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, occlusion_));
       } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
@@ -522,13 +526,14 @@ class SwitchNode {
       poll_for_peer();
       std::optional<NumberedCamera> cam = take_camera(frame, last_camera_ ? *last_camera_ + 1 : 0);
       if (!cam) return;
+      occlusion_ = cam->occlusion;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
       tail_t0_ = or_start;
       draw_occluders(cam->camera);
       finish_or(or_start, or_cpu0, Clock::duration{0});
-      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}));
+      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, occlusion_));
       hc_frame(frame, cam->camera);
       ++single_frames_;
     }
@@ -644,7 +649,7 @@ class SwitchNode {
               hold_->seen(g_.renderables->node_of(id), frame);
         std::vector<uint32_t> fresh;
         for (uint32_t id : d->added)
-          if (!drawn_[id]) {
+          if (occlusion_ && !drawn_[id]) {
             drawn_[id] = 1;
             fresh.push_back(id);
           }
@@ -670,11 +675,19 @@ class SwitchNode {
     const Clock::time_point hc_start = Clock::now();
     hc_cpu0_ = process_cpu_us();
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
+    hc_camera_ = cam;
+    if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
+      FrustumOnlyQueries all;
+      HcFrame hc = step_->hc(frame, visible_, cam, all, HcLocal{.order = o_.hc.order}, out);
+      hc.stats.queries = hc.eof.queries = 0;
+      end_hc(hc, hc_start, out);
+      ++frustum_frames_;
+      return;
+    }
     HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
                   hold_ ? &*hold_ : nullptr};
     local.leaf_test = o_.hc.leaf_test;
     local.geometry_below = o_.hc.geometry_below;
-    hc_camera_ = cam;
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
@@ -692,6 +705,12 @@ class SwitchNode {
     OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;
     HcFrame hc = step_->hc(frame, visible_, cam, queries, local, out);
     querier_->end();
+    end_hc(hc, hc_start, out);
+    if (budget_) update_costs(hc.eof);
+  }
+
+  // HC's EndOfFrame, with this frame's times, to the render client and the other node.
+  void end_hc(HcFrame& hc, Clock::time_point hc_start, DiffSender& out) {
     hc.eof.or_us = or_us_;
     hc.eof.hc_us = micros_since(hc_start);
     hc.eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0_);
@@ -699,7 +718,6 @@ class SwitchNode {
     hc.eof.or_tail_cpu_us = or_tail_cpu_us_;
     hc.eof.or_tail_us = or_tail_us_;
     out.send(hc.eof);
-    if (budget_) update_costs(hc.eof);
     ++frames_;
     queries_ += hc.stats.queries;
     geometry_queries_ += hc.stats.geometry_queries;
@@ -741,7 +759,7 @@ class SwitchNode {
               << (o_.hc.leaf_test == LeafTest::geometry
                       ? std::to_string(geometry_queries_) + " geometry queries, " + std::to_string(geometry_occluded_) + " leaves rejected"
                       : std::string())
-              << "), sent " << r.sent.bytes
+              << "); " << frustum_frames_ << " frames without occlusion (the render client's gate), sent " << r.sent.bytes
               << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     if (resyncs_)
       std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
@@ -787,6 +805,8 @@ class SwitchNode {
   uint32_t peer_epoch_wait_ = 0;   // the other node's messages are stale until its marker of this resync
   uint32_t peer_resync_seen_ = 0;  // the other node's marker of a resync this node has not followed yet
   bool single_ = false;      // serving alone (no peer)
+  bool occlusion_ = true;    // this frame's camera asks for occlusion (else: the frustum set)
+  uint64_t frustum_frames_ = 0;  // HC frames sent as frustum sets (OcclusionGate)
   Clock::time_point next_poll_;
   VisibleSet visible_;
   DiffReceiver stream_;  // diffs of the other node's HC frames

@@ -21,6 +21,9 @@ struct ClusterOptions {
   int timeout_ms = 20000;                          // --timeout-ms of all three
   std::vector<std::string> all;                    // more flags for all three
   std::vector<std::string> node0, node1, client;   // more flags for one of them
+  // The render client's --occlusion-gate: "on" (every frame with occlusion) keeps the runs of the
+  // switch's own tests deterministic; the gate's tests set it.
+  std::string occlusion_gate = "on";
   bool relay_node1 = false;                        // the client reaches node 1 through link_relay
   bool relay_node_link = false;                    // or: node 1 reaches node 0 through link_relay
   std::chrono::milliseconds client_wait = std::chrono::seconds(300);  // finish(): the client's end
@@ -77,7 +80,7 @@ class Cluster {
   }
   void start_client() {
     client_.emplace(args({bin("render_client"), "--path", o_.path, "--out", out_.string(), "--connect", local(p0_),
-                          "--connect", local(o_.relay_node1 ? pr_ : p1_)},
+                          "--connect", local(o_.relay_node1 ? pr_ : p1_), "--occlusion-gate", o_.occlusion_gate},
                          o_.client),
                     out_ / "render_client.log");
   }

@@ -118,6 +118,38 @@ TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
   }
 }
 
+// Issue 14, occlusion only where it pays: the render client's gate switches frames between the
+// switch with occlusion and frustum sets (no OR, no queries on the HC node). --occlusion-gate
+// alternate switches every 4 cameras, so both changes of mode happen many times: the frames stay
+// the reference's; frames without occlusion issued no queries and drew at least the frustum set's
+// leaves; both nodes served some of them.
+TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
+  fs::path dir = fresh_dir("plant_gate");
+  ClusterOptions o = cluster("plant:0.3", "walk:40");
+  o.occlusion_gate = "alternate";
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  if (!r) return;
+  auto stats = read_csv(dir / "cluster" / "stats.csv");
+  ASSERT_EQ(stats["occlusion"].size(), 40u);
+  size_t with = 0, without = 0, visible_with = 0, visible_without = 0;
+  for (size_t f = 0; f < 40; ++f) {
+    EXPECT_EQ(stats["occlusion"][f], (uint32_t(stats["camera"][f]) / 4) % 2 == 0 ? 1.0 : 0.0) << "frame " << f;
+    if (stats["occlusion"][f] != 0) {
+      ++with;
+      visible_with += size_t(stats["visible"][f]);
+      continue;
+    }
+    ++without;
+    visible_without += size_t(stats["visible"][f]);
+    EXPECT_EQ(stats["queries"][f], 0.0) << "frame " << f;
+  }
+  EXPECT_EQ(with, 20u);
+  EXPECT_EQ(without, 20u);
+  EXPECT_GT(visible_without, visible_with);  // the aisle's walls hide most of the plant
+  for (const std::string* log : {&r->node0_log, &r->node1_log})
+    EXPECT_NE(log->find("; 10 frames without occlusion"), std::string::npos) << *log;
+}
+
 // The default HC test is batch (one draw per batch counting samples in a buffer); occlusion queries
 // stay available. Node 0 with --hc-test queries, node 1 with the default: the reference's frames,
 // node 0 drew no batch and node 1 counted boxes in batch draws.

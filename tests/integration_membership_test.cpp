@@ -38,7 +38,8 @@ std::vector<std::string> client_argv(const ClusterOptions& o, int p0, int p1, co
   std::vector<std::string> a = {bin("render_client"), "--scene", o.scene, "--path", path.empty() ? o.path : path,
                                 "--out", out.string(),
                                 "--connect", "127.0.0.1:" + std::to_string(p0), "--connect",
-                                "127.0.0.1:" + std::to_string(p1), "--timeout-ms", std::to_string(o.timeout_ms)};
+                                "127.0.0.1:" + std::to_string(p1), "--timeout-ms", std::to_string(o.timeout_ms),
+                                "--occlusion-gate", o.occlusion_gate};
   a.insert(a.end(), o.view.begin(), o.view.end());
   a.insert(a.end(), more.begin(), more.end());
   return a;

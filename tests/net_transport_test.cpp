@@ -375,10 +375,10 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   peer.join();
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(),
-                       "hello: unsupported protocol version 1 (this build speaks 4)"))
+                       "hello: unsupported protocol version 1 (this build speaks 5)"))
       << result.error();
   EXPECT_EQ(bye_reason(peer_saw),
-            "protocol error: hello: unsupported protocol version 1 (this build speaks 4)");
+            "protocol error: hello: unsupported protocol version 1 (this build speaks 5)");
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 

@@ -48,7 +48,11 @@ TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
   named.name = "abc";
   EXPECT_EQ(encode(named).size(), 6u + 79u + 3u);
   EXPECT_EQ(encode(Proof{}).size(), 6u + 32u);
-  EXPECT_EQ(encode(Camera{}).size(), 6u + 100u);
+  EXPECT_EQ(encode(Camera{}).size(), 6u + 101u);
+  Camera frustum_only;
+  frustum_only.occlusion = 0;
+  EXPECT_EQ(encode(frustum_only)[6 + 100], 0);  // occlusion, the last byte
+  EXPECT_EQ(encode(Camera{})[6 + 100], 1);
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
   EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
   EXPECT_EQ(encode(Bye{"bye"}).size(), 6u + 2u + 3u);
@@ -94,7 +98,7 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   cam.frame = 0x01020304;
   cam.eye[0] = 1.0;  // 0x3ff0000000000000
   const auto c = encode(cam);
-  EXPECT_EQ(c[2], 100);  // payload length
+  EXPECT_EQ(c[2], 101);  // payload length
   EXPECT_EQ(c[6], 0x04);
   EXPECT_EQ(c[9], 0x01);
   EXPECT_EQ(c[6 + 4 + 7], 0x3f);
@@ -169,7 +173,7 @@ TEST(Wire, CorruptedHeaderFieldsAreRejected) {
   }
   auto wrong_size = bytes;
   put_u32(wrong_size, 2, 99);
-  EXPECT_EQ(decode_error(wrong_size), "camera: payload of 99 bytes, expected 100");
+  EXPECT_EQ(decode_error(wrong_size), "camera: payload of 99 bytes, expected 101");
   auto huge = encode(NodeDiff{});
   put_u32(huge, 2, 0xffffffffu);
   EXPECT_EQ(decode_error(huge), "node_diff payload too large: 4294967295 bytes (maximum 1048576)");
@@ -193,10 +197,13 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 4)");
+            "hello: unsupported protocol version 1 (this build speaks 5)");
   put_u16(bad_version, 10, 3);  // the cluster key without Resync
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 3 (this build speaks 4)");
+            "hello: unsupported protocol version 3 (this build speaks 5)");
+  put_u16(bad_version, 10, 4);  // cameras without the occlusion byte
+  EXPECT_EQ(decode_error(bad_version),
+            "hello: unsupported protocol version 4 (this build speaks 5)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
@@ -313,6 +320,7 @@ TEST(Wire, CameraRejectsEveryInvalidValue) {
        "camera: viewport 0x1 outside [1, 16384]"},
       {[](Camera& c, double, double) { c.viewport_height_px = 16385; },
        "camera: viewport 1x16385 outside [1, 16384]"},
+      {[](Camera& c, double, double) { c.occlusion = 2; }, "camera: occlusion 2 is neither 0 nor 1"},
   };
   for (const Case& tc : cases) {
     Camera c;

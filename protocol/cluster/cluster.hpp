@@ -23,7 +23,8 @@ namespace occ {
 
 class Cli;
 
-wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp);
+// `occlusion`: whether the switch culls this camera's frame with occlusion (wire.hpp Camera).
+wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, bool occlusion = true);
 Camera from_wire(const wire::Camera& w);
 // Why a camera packet does not fit a process rendering `vp` (nullopt when it does).
 std::optional<std::string> viewport_mismatch(const wire::Camera& w, const Viewport& vp);

@@ -1,0 +1,109 @@
+#include "common/occlusion_gate.hpp"
+
+#include <algorithm>
+#include <sstream>
+#include <vector>
+
+namespace occ {
+
+bool OcclusionGate::occlusion(uint32_t camera) const {
+  switch (o_.policy) {
+    case Policy::on: return true;
+    case Policy::off: return false;
+    case Policy::alternate: return (camera / std::max(o_.period, 1u)) % 2 == 0;
+    case Policy::automatic: break;
+  }
+  return state_ == State::on || state_ == State::trial_on;
+}
+
+bool OcclusionGate::wants_frustum_triangles() const {
+  return o_.policy == Policy::automatic && state_ == State::on && n_ >= next_trial_ && on_.size() >= o_.window;
+}
+
+double OcclusionGate::median(std::deque<double> v) {
+  std::vector<double> s(v.begin(), v.end());
+  std::sort(s.begin(), s.end());
+  return s.empty() ? 0 : s.size() % 2 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
+}
+
+void OcclusionGate::push(std::deque<double>& ring, double v) const {
+  ring.push_back(v);
+  while (ring.size() > o_.window) ring.pop_front();
+}
+
+void OcclusionGate::enter(State s) {
+  state_ = s;
+  fresh_ = 0;
+  if (s == State::trial_off) {
+    ++trials_;
+    off_.clear();
+  }
+  if (s == State::trial_on) on_.clear();
+}
+
+void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
+                          std::optional<uint64_t> frustum_triangles) {
+  ++n_;
+  same_ = occlusion == last_mode_ ? same_ + 1 : 1;
+  last_mode_ = occlusion;
+  if (!occlusion) ++frames_off_;
+  if (o_.policy != Policy::automatic) return;
+  // Only settled frames are measured: the first frames of a mode still carry the other's work
+  // (the OR of the first frame with occlusion draws a whole frustum set).
+  const bool settled = same_ > o_.settle;
+  if (settled) {
+    push(occlusion ? on_ : off_, interval_ms);
+    const bool measured = (occlusion && (state_ == State::on || state_ == State::trial_on)) ||
+                          (!occlusion && (state_ == State::off || state_ == State::trial_off));
+    if (measured) ++fresh_;
+  }
+  const auto first = [&](uint32_t v) { return v ? v : o_.first_hold; };
+  if (state_ == State::on && frustum_triangles && n_ >= next_trial_ && on_.size() >= o_.window) {
+    if (double(*frustum_triangles) < o_.try_below * double(std::max<uint64_t>(drawn_triangles, 1)))
+      enter(State::trial_off);
+    else
+      next_trial_ = n_ + o_.window;  // culling pays on this view: look again later
+  }
+  if (!settled) return;
+  const double med_on = median(on_), med_off = median(off_);
+  if (state_ == State::trial_off && !occlusion) {
+    if (interval_ms > o_.give_up * med_on) {  // much slower than with occlusion: stop the trial now
+      on_wait_ = std::min(2 * first(on_wait_), o_.max_hold);
+      next_trial_ = n_ + on_wait_;
+      enter(State::on);
+    } else if (fresh_ >= o_.window) {
+      if (med_off < o_.margin * med_on) {
+        off_hold_ = first(off_hold_);
+        off_until_ = n_ + off_hold_;
+        enter(State::off);
+      } else {
+        on_wait_ = std::min(2 * first(on_wait_), o_.max_hold);
+        next_trial_ = n_ + on_wait_;
+        enter(State::on);
+      }
+    }
+  } else if (state_ == State::off && !occlusion) {
+    if (interval_ms > o_.give_up * med_off || n_ >= off_until_) enter(State::trial_on);
+  } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
+    if (med_on < o_.margin * med_off) {  // occlusion pays again
+      off_hold_ = 0;
+      on_wait_ = 0;
+      next_trial_ = n_ + o_.first_hold;
+      enter(State::on);
+    } else {
+      off_hold_ = std::min(2 * first(off_hold_), o_.max_hold);
+      off_until_ = n_ + off_hold_;
+      enter(State::off);
+    }
+  }
+}
+
+std::string OcclusionGate::describe() const {
+  std::ostringstream s;
+  static constexpr const char* kState[] = {"on", "trial without occlusion", "off", "trial with occlusion"};
+  s << kState[int(state_)] << ", " << trials_ << " trials without occlusion, " << frames_off_
+    << " frames without; median interval with " << median(on_) << " ms, without " << median(off_) << " ms";
+  return s.str();
+}
+
+}  // namespace occ

@@ -1,0 +1,76 @@
+// Occlusion only where it pays, for the cluster as a whole (issue 14): the render client decides
+// for every camera it sends whether the switch culls that frame with occlusion (the OR draws the
+// previous visible set, HC queries: the switch as designed) or without (the HC node sends the
+// frustum set at the chosen LODs: no OR, no queries; wire.hpp Camera.occlusion). It decides from
+// the figure the user sees, the frame interval at the display, so the choice fits any placement
+// of the three processes (one machine with two cores, three machines) without a model of it:
+//   - frames start with occlusion;
+//   - while occlusion culls little (the frustum set's triangles are fewer than try_below x the
+//     visible set's), a trial runs frames without it; after `settle` frames (the pipeline's change
+//     of mode) `window` frames are measured and the mode with the lower median interval, by
+//     `margin`, is kept; a failed trial doubles the wait before the next (first_hold .. max_hold);
+//   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
+//     occlusion is tried again the same way; a frame without it that takes give_up x the median
+//     (the view changed: culling may pay now) ends them at once.
+// Either way is conservative: the frustum set holds the visible set, so frames never change.
+// GL-free and clock-free: the caller feeds it what each displayed frame measured.
+#pragma once
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+
+namespace occ {
+
+class OcclusionGate {
+ public:
+  // automatic (above); on: always occlusion (the switch as designed); off: frustum sets only;
+  // alternate: `period` cameras each way in turn (tests of the switch between the two).
+  enum class Policy { automatic, on, off, alternate };
+  struct Options {
+    Policy policy = Policy::automatic;
+    uint32_t period = 4;            // Policy::alternate
+    uint32_t window = 8, settle = 3;
+    double try_below = 1.6;
+    double margin = 0.95;
+    uint32_t first_hold = 32, max_hold = 1024;
+    double give_up = 1.5;
+  };
+  explicit OcclusionGate(const Options& o) : o_(o) {}
+
+  // Whether the next camera sent (number `camera`) is culled with occlusion.
+  bool occlusion(uint32_t camera) const;
+  // Whether the next frame() should carry the frustum set's triangles (computed only when asked:
+  // automatic policy, occlusion on, and a trial may start).
+  bool wants_frustum_triangles() const;
+  // A frame was displayed: whether its camera had occlusion, the interval since the previous
+  // frame, the triangles drawn, and (when asked) the frustum set's triangles.
+  void frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
+             std::optional<uint64_t> frustum_triangles = std::nullopt);
+
+  // For logs and tests.
+  enum class State { on, trial_off, off, trial_on };
+  State state() const { return state_; }
+  uint32_t trials() const { return trials_; }           // trials of frames without occlusion
+  uint32_t frames_off() const { return frames_off_; }   // displayed frames without occlusion
+  std::string describe() const;
+
+ private:
+  static double median(std::deque<double> v);
+  void push(std::deque<double>& ring, double v) const;
+  void enter(State s);
+
+  Options o_;
+  State state_ = State::on;
+  uint32_t n_ = 0;             // frames displayed
+  uint32_t same_ = 0;          // consecutive displayed frames with this frame's mode
+  bool last_mode_ = true;
+  std::deque<double> on_, off_;  // settled intervals of each mode, the newest `window`
+  uint32_t fresh_ = 0;           // samples of the measured mode since the state began
+  uint32_t next_trial_ = 0;      // frame count before which no trial starts
+  uint32_t off_until_ = 0;       // state off: its end
+  uint32_t on_wait_ = 0, off_hold_ = 0;  // current back-off of failed trials / hold of won ones
+  uint32_t trials_ = 0, frames_off_ = 0;
+};
+
+}  // namespace occ

@@ -1,0 +1,104 @@
+// OcclusionGate (common/occlusion_gate.hpp): the render client's choice, per camera, between the
+// switch with occlusion and frustum sets, driven by simulated frame intervals. The simulated
+// pipeline shows each decision `lag` frames later, as the cluster does (cameras go out ahead).
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <functional>
+
+#include "common/occlusion_gate.hpp"
+
+namespace occ {
+namespace {
+
+struct Sim {
+  // interval(frame, occlusion): what a displayed frame measures; triangles drawn with and
+  // without occlusion (the frustum set).
+  std::function<double(uint32_t, bool)> interval;
+  uint64_t visible_triangles = 1000, frustum_triangles = 1100;
+  uint32_t lag = 2;
+  uint32_t off_frames = 0;
+  std::vector<bool> shown = {};  // per displayed frame: with occlusion
+
+  void run(OcclusionGate& g, uint32_t frames) {
+    std::deque<bool> in_flight;
+    uint32_t camera = 0;
+    for (; camera < lag; ++camera) in_flight.push_back(g.occlusion(camera));
+    for (uint32_t f = 0; f < frames; ++f) {
+      const bool occ = in_flight.front();
+      in_flight.pop_front();
+      in_flight.push_back(g.occlusion(camera++));
+      std::optional<uint64_t> ft;
+      if (g.wants_frustum_triangles()) ft = frustum_triangles;
+      g.frame(occ, interval(f, occ), occ ? visible_triangles : frustum_triangles, ft);
+      off_frames += !occ;
+      shown.push_back(occ);
+    }
+  }
+};
+
+TEST(OcclusionGate, GoesWithoutOcclusionWhereItIsFasterAndStaysThere) {
+  OcclusionGate g{{}};
+  Sim s{[](uint32_t, bool occ) { return occ ? 18.0 : 13.0; }};
+  s.run(g, 600);
+  EXPECT_GE(g.trials(), 1u);
+  EXPECT_GT(s.off_frames, 480u);  // the rest: the first frames and short trials with occlusion
+  // It keeps checking that occlusion still does not pay: some later frames use it again.
+  uint32_t late_on = 0;
+  for (size_t f = 300; f < s.shown.size(); ++f) late_on += s.shown[f];
+  EXPECT_GT(late_on, 0u);
+  EXPECT_LT(late_on, 60u);
+}
+
+TEST(OcclusionGate, KeepsOcclusionWhereFramesWithoutItAreSlower) {
+  OcclusionGate g{{}};
+  Sim s{[](uint32_t, bool occ) { return occ ? 13.0 : 18.0; }};
+  s.run(g, 1000);
+  EXPECT_GE(g.trials(), 2u);  // it did try, and backed off
+  EXPECT_LT(s.off_frames, 100u);
+  EXPECT_EQ(g.state(), OcclusionGate::State::on);
+}
+
+TEST(OcclusionGate, NeverTriesWhereOcclusionCullsMostTriangles) {
+  OcclusionGate g{{}};
+  // Without occlusion frames would be faster (say, a machine with spare cores), but the frustum
+  // set is 3x the visible set: a trial would risk a run of heavy frames (issue 15).
+  Sim s{[](uint32_t, bool occ) { return occ ? 18.0 : 13.0; }, 1000, 3000};
+  s.run(g, 500);
+  EXPECT_EQ(g.trials(), 0u);
+  EXPECT_EQ(s.off_frames, 0u);
+}
+
+TEST(OcclusionGate, AViewWhereCullingPaysEndsFramesWithoutOcclusionAtOnce) {
+  OcclusionGate g{{}};
+  // Frames without occlusion are faster until frame 200, when the view turns to where culling
+  // pays: without occlusion a frame takes 10x.
+  Sim s{[](uint32_t f, bool occ) { return occ ? 18.0 : (f < 200 ? 13.0 : 130.0); }};
+  s.run(g, 400);
+  ASSERT_GT(s.off_frames, 100u);
+  uint32_t slow_frames = 0;
+  for (size_t f = 200; f < s.shown.size(); ++f) slow_frames += !s.shown[f];
+  // Each later trial stops at its first settled frame; the back-off spaces them out.
+  EXPECT_LT(slow_frames, 40u);
+  uint32_t run = 0, longest = 0;
+  for (size_t f = 200; f < s.shown.size(); ++f) {
+    run = s.shown[f] ? 0 : run + 1;
+    longest = std::max(longest, run);
+  }
+  EXPECT_LE(longest, 3u + 1u + 2u);  // settle, the frame that gives up, the pipeline's lag
+}
+
+TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
+  for (auto [policy, expect_off] : {std::pair{OcclusionGate::Policy::on, 0u}, {OcclusionGate::Policy::off, 100u}}) {
+    OcclusionGate g{{.policy = policy}};
+    Sim s{[](uint32_t, bool occ) { return occ ? 18.0 : 13.0; }};
+    s.run(g, 100);
+    EXPECT_EQ(s.off_frames, expect_off);
+    EXPECT_EQ(g.trials(), 0u);
+  }
+  OcclusionGate every{{.policy = OcclusionGate::Policy::alternate, .period = 4}};
+  for (uint32_t c = 0; c < 16; ++c) EXPECT_EQ(every.occlusion(c), (c / 4) % 2 == 0) << c;
+}
+
+}  // namespace
+}  // namespace occ
