@@ -101,8 +101,11 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
 std::string OcclusionGate::describe() const {
   std::ostringstream s;
   static constexpr const char* kState[] = {"on", "trial without occlusion", "off", "trial with occlusion"};
+  const auto ms = [](const std::deque<double>& ring) {
+    return ring.empty() ? std::string("not measured") : std::to_string(median(ring)) + " ms";
+  };
   s << kState[int(state_)] << ", " << trials_ << " trials without occlusion, " << frames_off_
-    << " frames without; median interval with " << median(on_) << " ms, without " << median(off_) << " ms";
+    << " frames without; median interval with occlusion " << ms(on_) << ", without " << ms(off_);
   return s.str();
 }
 

@@ -6,7 +6,12 @@
 # walks with 90° turns (scripts/street_walk.py) and the duplex layout walk. SKIP_EXACT=1 skips the
 # item-buffer runs (they do not depend on the cluster's flags). ONLY=label limits to one path.
 set -uo pipefail
-cd "$(dirname "$0")/.."
+source "$(dirname "$0")/lib.sh"
+cd "$here"
+case "${1:-}" in
+  -h|--help) occ_usage; exit 0 ;;
+  ""|-*) occ_die "give the output folder first (see $OCC_SCRIPT --help)" ;;
+esac
 out=$1; shift
 export LP_NUM_THREADS=1
 BIN=${OCC_BIN:-build/bin}

@@ -40,7 +40,8 @@ TEST(Conventions, EveryBinaryAndScriptHasTheSameVersion) {
 
 TEST(Conventions, ScriptHelpIsHelpAndDoesNothingElse) {
   const fs::path dir = fresh_dir("help");
-  for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "video.sh"}) {
+  for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "video.sh", "bench.sh", "netlab.sh",
+                        "accuracy_sweep.sh", "recovery.sh", "scale_matrix.sh", "spikes_matrix.sh"}) {
     Proc p({"/bin/bash", script(s), "--help"}, dir / (std::string(s) + ".log"));
     EXPECT_EQ(p.wait(30s), 0) << s << ": " << p.log();
     const std::string out = p.log();
