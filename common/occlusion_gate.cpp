@@ -59,10 +59,11 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   }
   const auto first = [&](uint32_t v) { return v ? v : o_.first_hold; };
   if (state_ == State::on && frustum_triangles && n_ >= next_trial_ && on_.size() >= o_.window) {
-    if (double(*frustum_triangles) < o_.try_below * double(std::max<uint64_t>(drawn_triangles, 1)))
+    const double ratio = double(*frustum_triangles) / double(std::max<uint64_t>(drawn_triangles, 1));
+    if (ratio < o_.try_below)
       enter(State::trial_off);
-    else
-      next_trial_ = n_ + o_.window;  // culling pays on this view: look again later
+    else  // culling pays on this view: look again later (much later where it pays much)
+      next_trial_ = n_ + o_.window * (ratio > 2 * o_.try_below ? 4 : 1);
   }
   if (!settled) return;
   const double med_on = median(on_), med_off = median(off_);

@@ -445,7 +445,8 @@ class Client {
         HudStats hud{latency_ms, ids.size(), leaf_count_, st.triangles, o_.config.pixel_error, -1,
                      mode == Mode::single    ? "degraded: one switch node"
                      : mode == Mode::frustum ? "degraded: frustum culling"
-                                             : mode_name(mode)};
+                     : served && !served->wcam.occlusion ? "switch, no occlusion (does not pay here)"
+                                                         : mode_name(mode)};
         if (viewer_->overlay()) {
           hud.occluded = long(draw_overlay(cam, ids));
           image = g_.ctx->read_rgba();
