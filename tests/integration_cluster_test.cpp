@@ -38,7 +38,9 @@ void expect_cluster_equals_reference(const std::string& name, const std::string&
   if (coherent) {
     EXPECT_LT(sum(stats["added"]) + sum(stats["removed"]), sum(stats["visible"]));
   }
-  for (double q : stats["queries"]) EXPECT_GT(q, 0);
+  // HC queried: in every early frame (adaptive queries then trust nodes that keep passing: a
+  // late frame of a walk may need none).
+  for (size_t f = 0; f < std::min<size_t>(frames, 10); ++f) EXPECT_GT(stats["queries"][f], 0) << "frame " << f;
 }
 
 // --leaf-test geometry: leaves whose box passed are tested with their own geometry. The frames
