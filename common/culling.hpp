@@ -80,7 +80,7 @@ struct CullStats {
 class QuerySkipper {
  public:
   // 2 and 32 (were 3 and 16): duplex orbit at 1024^2, HC CPU -15 to -20 %; c45walk at 512^2 tau 0,
-  // p99 frame interval 11.1-12.7 against 12.9-15.5 ms; visible sets +1 to +3 % (docs/spikes.md).
+  // p99 frame interval 11.1-12.7 against 12.9-18.6 ms; PVS/exact +0.01-0.04 (docs/spikes.md).
   static constexpr uint8_t kTrust = 2;
   static constexpr uint8_t kMaxWait = 32;
   explicit QuerySkipper(size_t nodes) : state_(nodes) {}
