@@ -20,7 +20,7 @@ bool OcclusionGate::wants_frustum_triangles() const {
   return o_.policy == Policy::automatic && state_ == State::on && n_ >= next_trial_ && on_.size() >= o_.window;
 }
 
-double OcclusionGate::median(std::deque<double> v) {
+double OcclusionGate::median(const std::deque<double>& v) {
   std::vector<double> s(v.begin(), v.end());
   std::sort(s.begin(), s.end());
   return s.empty() ? 0 : s.size() % 2 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
@@ -41,6 +41,20 @@ void OcclusionGate::enter(State s) {
   if (s == State::trial_on) on_.clear();
 }
 
+uint32_t OcclusionGate::doubled(uint32_t v) const { return std::min(2 * (v ? v : o_.first_hold), o_.max_hold); }
+
+void OcclusionGate::back_off() {
+  on_wait_ = doubled(on_wait_);
+  next_trial_ = n_ + on_wait_;
+  enter(State::on);
+}
+
+void OcclusionGate::go_off(uint32_t hold) {
+  off_hold_ = hold;
+  off_until_ = n_ + hold;
+  enter(State::off);
+}
+
 void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
                           std::optional<uint64_t> frustum_triangles) {
   ++n_;
@@ -57,8 +71,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
                           (!occlusion && (state_ == State::off || state_ == State::trial_off));
     if (measured) ++fresh_;
   }
-  const auto first = [&](uint32_t v) { return v ? v : o_.first_hold; };
-  if (state_ == State::on && frustum_triangles && n_ >= next_trial_ && on_.size() >= o_.window) {
+  if (frustum_triangles && wants_frustum_triangles()) {
     const double ratio = double(*frustum_triangles) / double(std::max<uint64_t>(drawn_triangles, 1));
     if (ratio < o_.try_below)
       enter(State::trial_off);
@@ -68,21 +81,11 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   if (!settled) return;
   const double med_on = median(on_), med_off = median(off_);
   if (state_ == State::trial_off && !occlusion) {
-    if (interval_ms > o_.give_up * med_on) {  // much slower than with occlusion: stop the trial now
-      on_wait_ = std::min(2 * first(on_wait_), o_.max_hold);
-      next_trial_ = n_ + on_wait_;
-      enter(State::on);
-    } else if (fresh_ >= o_.window) {
-      if (med_off < o_.margin * med_on) {
-        off_hold_ = first(off_hold_);
-        off_until_ = n_ + off_hold_;
-        enter(State::off);
-      } else {
-        on_wait_ = std::min(2 * first(on_wait_), o_.max_hold);
-        next_trial_ = n_ + on_wait_;
-        enter(State::on);
-      }
-    }
+    // Much slower than with occlusion stops the trial at once; otherwise a full window decides.
+    if (interval_ms > o_.give_up * med_on || (fresh_ >= o_.window && !(med_off < o_.margin * med_on)))
+      back_off();
+    else if (fresh_ >= o_.window)
+      go_off(off_hold_ ? off_hold_ : o_.first_hold);
   } else if (state_ == State::off && !occlusion) {
     if (interval_ms > o_.give_up * med_off || n_ >= off_until_) enter(State::trial_on);
   } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
@@ -92,9 +95,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       next_trial_ = n_ + o_.first_hold;
       enter(State::on);
     } else {
-      off_hold_ = std::min(2 * first(off_hold_), o_.max_hold);
-      off_until_ = n_ + off_hold_;
-      enter(State::off);
+      go_off(doubled(off_hold_));
     }
   }
 }

@@ -56,9 +56,12 @@ class OcclusionGate {
   std::string describe() const;
 
  private:
-  static double median(std::deque<double> v);
+  static double median(const std::deque<double>& v);
   void push(std::deque<double>& ring, double v) const;
   void enter(State s);
+  uint32_t doubled(uint32_t v) const;  // twice v (first_hold when 0), at most max_hold
+  void back_off();                     // a trial without occlusion lost: occlusion, next trial later
+  void go_off(uint32_t hold);          // frames without occlusion for `hold` frames
 
   Options o_;
   State state_ = State::on;
