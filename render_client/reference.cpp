@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <iterator>
 
 #include "common/camera_path.hpp"
 #include "common/cpu_time.hpp"
@@ -45,8 +46,11 @@ int run_reference(const ClientOptions& o) {
   // cpu_ms: CPU time of the whole process (llvmpipe's threads included) for the frame's rendering.
   std::vector<std::string> columns{"frame", "nodes_drawn", "triangles_drawn", "render_ms", "queries", "cpu_ms"};
   // exact_visible/exact_triangles: the nodes seen in an item buffer of every leaf (brute force);
-  // missed_visible: how many of them this method did not draw (0 for a conservative method).
-  if (o.exact) columns.insert(columns.end(), {"exact_visible", "exact_triangles", "missed_visible"});
+  // missed_visible: how many of them this method did not draw (0 for a conservative method);
+  // exact_added/exact_removed: how the exact set changed from the frame before (its own id churn:
+  // what an incremental visible set could save at best on this path, scripts/spikes_report.py).
+  if (o.exact)
+    columns.insert(columns.end(), {"exact_visible", "exact_triangles", "missed_visible", "exact_added", "exact_removed"});
   FrameOutput out(o.out, !o.no_images, columns);
 
   std::vector<uint32_t> all_leaves;
@@ -68,6 +72,7 @@ int run_reference(const ClientOptions& o) {
       ctx->gl().CreateQueries(GL_SAMPLES_PASSED, GLsizei(blended_queries.size()), blended_queries.data());
   }
 
+  std::vector<uint32_t> prev_seen;  // --exact: the exact set of the frame before
   double total_ms = 0;
   uint64_t total_tris = 0;
   std::vector<double> frame_ms;
@@ -101,7 +106,9 @@ int run_reference(const ClientOptions& o) {
     std::vector<double> row{double(f), double(st.nodes_drawn), double(st.triangles), ms, double(st.queries), cpu_ms};
     if (o.exact) {
       renderer.begin_id_frame(cam);
-      renderer.draw_nodes_ids(all_leaves);
+      // Leaves outside the frustum are clipped whole (no depth clamp): the frustum's leaves give
+      // the same image as all leaves, at a fraction of the cost on large scenes.
+      renderer.draw_nodes_ids(frustum_cull(h, cam));
       std::vector<uint32_t> seen = ids_in_image(ctx->read_rgba());
       if (!blended_items.empty()) {
         renderer.query_blended_items(blended_items, blended_queries);
@@ -118,7 +125,13 @@ int run_reference(const ClientOptions& o) {
       std::sort(st.drawn.begin(), st.drawn.end());
       size_t missed = 0;
       for (uint32_t id : seen) missed += !std::binary_search(st.drawn.begin(), st.drawn.end(), id);
-      row.insert(row.end(), {double(seen.size()), double(tris), double(missed)});
+      std::vector<uint32_t> changed;
+      std::set_difference(seen.begin(), seen.end(), prev_seen.begin(), prev_seen.end(), std::back_inserter(changed));
+      const size_t added = changed.size();
+      changed.clear();
+      std::set_difference(prev_seen.begin(), prev_seen.end(), seen.begin(), seen.end(), std::back_inserter(changed));
+      row.insert(row.end(), {double(seen.size()), double(tris), double(missed), double(added), double(changed.size())});
+      prev_seen = std::move(seen);
     }
     out.write_row(row);
     total_ms += ms;

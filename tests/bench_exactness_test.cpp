@@ -71,6 +71,20 @@ TEST(Exactness, ChcAndStopAndWaitFramesEqualBruteForceOnAGeneratedCity) {
     EXPECT_EQ(none["missed_visible"][f], 0);
     EXPECT_LE(none["exact_visible"][f], none["nodes_drawn"][f]);
   }
+  // The exact set's own churn: each frame's set is the one before plus what was added, less what
+  // was removed (frame 0 adds its whole set), and the path's view changes, so ids do change.
+  double churn = 0;
+  for (size_t f = 0; f < 30; ++f) {
+    const double before = f == 0 ? 0 : none["exact_visible"][f - 1];
+    EXPECT_EQ(none["exact_visible"][f], before + none["exact_added"][f] - none["exact_removed"][f]) << "frame " << f;
+    EXPECT_LE(none["exact_removed"][f], before) << "frame " << f;
+    if (f > 0) churn += none["exact_added"][f] + none["exact_removed"][f];
+  }
+  EXPECT_GT(churn, 0);
+  // The item buffer does not depend on the method: every method sees the same exact sets.
+  auto chc = read_csv(dir / "chc" / "stats.csv");
+  EXPECT_EQ(chc["exact_visible"], none["exact_visible"]);
+  EXPECT_EQ(chc["exact_added"], none["exact_added"]);
 }
 
 // bench.sh hands generated scenes to the OpenSceneGraph peer as the glTF file --save-scene
