@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The issue-15 measurement matrix (docs/spikes.md): every path at 512² and 1024², tau 0 and 1,
-# a --full-sets run at tau 0, and an item-buffer run (every 10th camera) for PVS/exact.
+# a --full-sets run at tau 0, and an item-buffer run (every camera) for PVS/exact and the exact
+# set's own ids saved (what an incremental set could save at best on the path).
 #   scripts/spikes_matrix.sh OUT [extra cluster args...]      e.g. OUT=out/sp/base
 # Paths: the generated city walks (45x45 passes through buildings, 20x20 follows a street), street
 # walks with 90° turns (scripts/street_walk.py) and the duplex layout walk. SKIP_EXACT=1 skips the
@@ -26,18 +27,11 @@ for p in "${paths[@]}"; do
   read -r label scene path <<<"$p"
   [ -n "${ONLY:-}" ] && [ "$ONLY" != "$label" ] && continue
   for size in 512 1024; do
-    ex=out/sp/exact/${label}_$size
+    ex=out/sp/exact1/${label}_$size
     if [ -z "${SKIP_EXACT:-}" ] && [ ! -s "$ex/stats.csv" ]; then
       mkdir -p "$ex"
-      # The camera path as CSV: the reference writes it before it renders; stop it once written.
       "$BIN"/render_client --reference --scene "$scene" --path "$path" --width $size --height $size \
-        --no-images --out "$ex/full" --save-path "$ex/path.csv" --cull frustum >/dev/null 2>&1 &
-      rp=$!
-      while kill -0 $rp 2>/dev/null && ! grep -q '^299,' "$ex/path.csv" 2>/dev/null; do sleep 0.2; done
-      sleep 0.5; kill $rp 2>/dev/null; wait $rp 2>/dev/null
-      awk -F, 'NR == 1 { print; next } (NR - 2) % 10 == 0 { $1 = (NR - 2) / 10; print }' OFS=, "$ex/path.csv" >"$ex/sub.csv" &&
-        "$BIN"/render_client --reference --scene "$scene" --path "$ex/sub.csv" --width $size --height $size \
-          --no-images --exact --cull frustum --out "$ex" >"$ex/log" 2>&1 || echo "exact $label $size failed" >&2
+        --no-images --exact --cull frustum --out "$ex" >"$ex/log" 2>&1 || echo "exact $label $size failed" >&2
     fi
     for tau in 0 1; do
       for fs in "" full; do
@@ -48,7 +42,7 @@ for p in "${paths[@]}"; do
       done
       d=$out/${label}_${size}_t$tau
       args=(); [ $tau = 0 ] && args+=(--full-sets "${d}_full")
-      [ -s "$ex/stats.csv" ] && args+=(--exact "$ex" --exact-every 10)
+      [ -s "$ex/stats.csv" ] && args+=(--exact "$ex" --exact-every 1)
       python3 scripts/spikes_report.py "$d" "${args[@]}" --label "${label} ${size}² tau $tau" | tee -a "$out/report.txt"
     done
   done

@@ -107,11 +107,11 @@ def table(before, after):
         for size in (512, 1024):
             for tau in (0, 1):
                 name = f"{label}_{size}_t{tau}"
-                ex = f"out/sp/exact/{label}_{size}"
+                ex = f"out/sp/exact1/{label}_{size}"
                 if not (os.path.exists(f"{before}/{name}/stats.csv") and os.path.exists(f"{after}/{name}/stats.csv")):
                     continue
-                b = figures(f"{before}/{name}", f"{before}/{name}_full", ex, 10)
-                a = figures(f"{after}/{name}", f"{after}/{name}_full", ex, 10)
+                b = figures(f"{before}/{name}", f"{before}/{name}_full", ex, 1)
+                a = figures(f"{after}/{name}", f"{after}/{name}_full", ex, 1)
                 bytes_cell = arrow(b["B"], a["B"], "{:.0f}")
                 if "Bfull" in b and "Bfull" in a:
                     bytes_cell += f" ({b['Bfull']:.0f} → {a['Bfull']:.0f})"
