@@ -48,9 +48,14 @@ int run_reference(const ClientOptions& o) {
   // exact_visible/exact_triangles: the nodes seen in an item buffer of every leaf (brute force);
   // missed_visible: how many of them this method did not draw (0 for a conservative method);
   // exact_added/exact_removed: how the exact set changed from the frame before (its own id churn:
-  // what an incremental visible set could save at best on this path, scripts/spikes_report.py).
+  // what an incremental visible set could save at best on this path, scripts/spikes_report.py);
+  // oracle_ms/oracle_cpu_ms: a shaded render of exactly the visible nodes, what a renderer that
+  // knew visibility for free would pay (the scene's own frame-to-frame variation, issue 15);
+  // oracle_diff_pixels: where that render differs from the frame (0 unless the item buffer missed
+  // a visible node; -1 with --no-images: not compared).
   if (o.exact)
-    columns.insert(columns.end(), {"exact_visible", "exact_triangles", "missed_visible", "exact_added", "exact_removed"});
+    columns.insert(columns.end(), {"exact_visible", "exact_triangles", "missed_visible", "exact_added", "exact_removed",
+                                   "oracle_ms", "oracle_cpu_ms", "oracle_diff_pixels"});
   FrameOutput out(o.out, !o.no_images, columns);
 
   std::vector<uint32_t> all_leaves;
@@ -130,7 +135,23 @@ int run_reference(const ClientOptions& o) {
       const size_t added = changed.size();
       changed.clear();
       std::set_difference(prev_seen.begin(), prev_seen.end(), seen.begin(), seen.end(), std::back_inserter(changed));
-      row.insert(row.end(), {double(seen.size()), double(tris), double(missed), double(added), double(changed.size())});
+      const auto o0 = std::chrono::steady_clock::now();
+      const uint64_t ocpu0 = process_cpu_us();
+      renderer.begin_frame(cam, true);
+      renderer.draw_items(items_of_nodes(h, seen), SceneRenderer::Mode::Shaded);
+      renderer.end_frame();
+      ctx->gl().Finish();
+      const double oracle_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - o0).count();
+      const double oracle_cpu_ms = double(process_cpu_us() - ocpu0) / 1000.0;
+      double diff_pixels = -1;
+      if (!image.rgba.empty()) {
+        const Image oracle = ctx->read_rgba();
+        diff_pixels = 0;
+        for (size_t p = 0; p + 3 < image.rgba.size() && p + 3 < oracle.rgba.size(); p += 4)
+          diff_pixels += !std::equal(&image.rgba[p], &image.rgba[p] + 4, &oracle.rgba[p]);
+      }
+      row.insert(row.end(), {double(seen.size()), double(tris), double(missed), double(added), double(changed.size()),
+                             oracle_ms, oracle_cpu_ms, diff_pixels});
       prev_seen = std::move(seen);
     }
     out.write_row(row);

@@ -40,6 +40,9 @@ void expect_conservative(const fs::path& dir, const std::string& cull, size_t fr
     EXPECT_EQ(st["missed_visible"][f], 0) << cull << " frame " << f << ": an exactly visible node was culled";
     EXPECT_LE(st["exact_triangles"][f], st["triangles_drawn"][f]) << cull << " frame " << f;
     EXPECT_GT(st["cpu_ms"][f], 0) << cull << " frame " << f;
+    // Drawing exactly the nodes the item buffer saw gives the frame: it missed none.
+    EXPECT_EQ(st["oracle_diff_pixels"][f], 0) << cull << " frame " << f;
+    EXPECT_GT(st["oracle_ms"][f], 0) << cull << " frame " << f;
   }
 }
 
