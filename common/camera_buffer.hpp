@@ -23,6 +23,7 @@ struct NumberedCamera {
   uint32_t number = 0;
   Camera camera;
   bool occlusion = true;  // wire.hpp Camera.occlusion: cull this frame with occlusion (OR, queries)
+  bool selected_occluders = false;  // ... with selected occluders (Camera.occlusion 2)
 };
 
 class CameraBuffer {

@@ -11,6 +11,7 @@ bool OcclusionGate::occlusion(uint32_t camera) const {
     case Policy::on: return true;
     case Policy::off: return false;
     case Policy::alternate: return (camera / std::max(o_.period, 1u)) % 2 == 0;
+    case Policy::selected: return true;
     case Policy::automatic: break;
   }
   return state_ == State::on || state_ == State::trial_on;

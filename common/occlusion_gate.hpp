@@ -13,6 +13,9 @@
 //     occlusion is tried again the same way; a frame without it that takes give_up x the median
 //     (the view changed: culling may pay now) ends them at once.
 // Either way is conservative: the frustum set holds the visible set, so frames never change.
+// Policy::selected (the user's choice, not automatic) culls every frame with selected occluders
+// (wire.hpp Camera.occlusion 2): docs/results.md has what they did on the saw, and why auto does
+// not choose them (they cost the render client what they save the OR).
 // GL-free and clock-free: the caller feeds it what each displayed frame measured.
 #pragma once
 #include <cstdint>
@@ -25,8 +28,9 @@ namespace occ {
 class OcclusionGate {
  public:
   // automatic (above); on: always occlusion (the switch as designed); off: frustum sets only;
-  // alternate: `period` cameras each way in turn (tests of the switch between the two).
-  enum class Policy { automatic, on, off, alternate };
+  // alternate: `period` cameras each way in turn (tests of the switch between the two); selected:
+  // always occlusion, with selected occluders.
+  enum class Policy { automatic, on, off, alternate, selected };
   struct Options {
     Policy policy = Policy::automatic;
     uint32_t period = 4;            // Policy::alternate
@@ -40,6 +44,10 @@ class OcclusionGate {
 
   // Whether the next camera sent (number `camera`) is culled with occlusion.
   bool occlusion(uint32_t camera) const;
+  // With occlusion, whether its occluders are selected (Camera.occlusion 2).
+  bool selected_occluders() const { return o_.policy == Policy::selected; }
+  // Camera.occlusion for the next camera sent: 0, 1 or 2.
+  uint8_t wire_occlusion(uint32_t camera) const { return occlusion(camera) ? (selected_occluders() ? 2 : 1) : 0; }
   // Whether the next frame() should carry the frustum set's triangles (computed only when asked:
   // automatic policy, occlusion on, and a trial may start).
   bool wants_frustum_triangles() const;

@@ -160,12 +160,12 @@ class Client {
   void send_camera(uint32_t number) {
     sent_at_[number] = Clock::now();
     if (cam_occlusion_.size() <= number) cam_occlusion_.resize(number + 1, 1);
-    cam_occlusion_[number] = gate_.occlusion(number);  // the same for both nodes and for resends
+    cam_occlusion_[number] = gate_.wire_occlusion(number);  // the same for both nodes and for resends
     for (int k = 0; k < 2; ++k)
       if (nodes_[k].conn) send_camera_to(k, number);
   }
   void send_camera_to(int k, uint32_t number) {
-    const wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height}, cam_occlusion_.at(number) != 0);
+    const wire::Camera w = to_wire(number, path_[number], {o_.width, o_.height}, cam_occlusion_.at(number));
     if (auto err = nodes_[k].conn->send(w))
       drop(k, "frame " + std::to_string(frame_) + ": sending camera " + std::to_string(number) + " to " + node_name(k) +
                   ": " + *err);
@@ -462,7 +462,7 @@ class Client {
                      interval_ms, eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
                      (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
-                     eof.or_tail_us / 1000.0, double(camera_gap), double(served && served->wcam.occlusion)},
+                     eof.or_tail_us / 1000.0, double(camera_gap), double(served ? served->wcam.occlusion : 0)},
                     {mode_name(mode)});
       ++mode_frames_[int(mode)];
       if (mode == Mode::switch_) {
@@ -576,7 +576,7 @@ class Client {
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
   uint32_t camera_gap_max_ = 0;
   OcclusionGate gate_;                // occlusion only where it pays (--occlusion-gate)
-  std::vector<uint8_t> cam_occlusion_;  // per camera sent: with occlusion (1) or the frustum set (0)
+  std::vector<uint8_t> cam_occlusion_;  // per camera sent: Camera.occlusion (0 frustum set, 1, 2 selected occluders)
 };
 
 }  // namespace

@@ -42,10 +42,12 @@ int main(int argc, char** argv) {
         {{"auto", occ::OcclusionGate::Policy::automatic},
          {"on", occ::OcclusionGate::Policy::on},
          {"off", occ::OcclusionGate::Policy::off},
-         {"alternate", occ::OcclusionGate::Policy::alternate}},
+         {"alternate", occ::OcclusionGate::Policy::alternate},
+         {"selected", occ::OcclusionGate::Policy::selected}},
         "occlusion only where it pays: auto = frames without occlusion (the switch sends frustum sets: no OR, no "
         "queries) while they are measured faster at the display, tried where culling removes little; on = always "
-        "occlusion; off = never; alternate = 4 cameras each way (tests)");
+        "occlusion; off = never; alternate = 4 cameras each way (tests); selected = always occlusion, the OR and "
+        "occluder fusion drawing only objects that cover at least 4 px per triangle (cheaper OR, larger visible sets)");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "

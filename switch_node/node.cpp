@@ -454,8 +454,8 @@ class SwitchNode {
   }
 
   // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera,
-  // the occluders that cover enough pixels (occluder selection).
-  // A frame without occlusion (the render client's OcclusionGate) draws nothing.
+  // the occluders that cover enough pixels (occluder selection; stricter where the camera asks for
+  // selected occluders). A frame without occlusion (the render client's OcclusionGate) draws nothing.
   void draw_occluders(const Camera& cam) {
     or_triangles_ = 0;
     drawn_.assign(g_.renderables->count(), 0);
@@ -465,7 +465,7 @@ class SwitchNode {
     std::sort(ids.begin(), ids.end());
     for (uint32_t id : ids) drawn_[id] = 1;
     or_camera_ = cam;
-    select_.filter(ids, *g_.renderables, or_camera_, o_.height);
+    selection().filter(ids, *g_.renderables, or_camera_, o_.height);
     or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
   }
 
@@ -499,6 +499,8 @@ class SwitchNode {
       std::optional<NumberedCamera> cam = take_camera(frame, min_camera);
       if (!cam) return;
       occlusion_ = cam->occlusion;
+      selected_ = cam->selected_occluders;
+      selected_frames_ += occlusion_ && selected_;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
@@ -509,7 +511,7 @@ class SwitchNode {
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
       try {
-        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, occlusion_));
+        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, wire_occlusion()));
       } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
@@ -527,13 +529,15 @@ class SwitchNode {
       std::optional<NumberedCamera> cam = take_camera(frame, last_camera_ ? *last_camera_ + 1 : 0);
       if (!cam) return;
       occlusion_ = cam->occlusion;
+      selected_ = cam->selected_occluders;
+      selected_frames_ += occlusion_ && selected_;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
       tail_t0_ = or_start;
       draw_occluders(cam->camera);
       finish_or(or_start, or_cpu0, Clock::duration{0});
-      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, occlusion_));
+      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, wire_occlusion()));
       hc_frame(frame, cam->camera);
       ++single_frames_;
     }
@@ -653,7 +657,7 @@ class SwitchNode {
             drawn_[id] = 1;
             fresh.push_back(id);
           }
-        select_.filter(fresh, *g_.renderables, or_camera_, o_.height);
+        selection().filter(fresh, *g_.renderables, or_camera_, o_.height);
         or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
@@ -696,7 +700,7 @@ class SwitchNode {
             drawn_[id] = 1;
             fresh.push_back(id);
           }
-        select_.filter(fresh, *g_.renderables, cam, o_.height);
+        selection().filter(fresh, *g_.renderables, cam, o_.height);
         if (fresh.empty()) return;
         g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
         querier_->depth_added();  // restores the GL state the queries need; the pyramid is stale
@@ -759,7 +763,8 @@ class SwitchNode {
               << (o_.hc.leaf_test == LeafTest::geometry
                       ? std::to_string(geometry_queries_) + " geometry queries, " + std::to_string(geometry_occluded_) + " leaves rejected"
                       : std::string())
-              << "); " << frustum_frames_ << " frames without occlusion (the render client's gate), sent " << r.sent.bytes
+              << "); " << frustum_frames_ << " frames without occlusion and " << selected_frames_
+              << " with selected occluders (the render client's gate), sent " << r.sent.bytes
               << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     if (resyncs_)
       std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
@@ -818,6 +823,12 @@ class SwitchNode {
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
   OccluderSelection select_{o_.hc.occluder_pixels_per_triangle};
+  // Camera.occlusion 2: at least wire::kSelectedOccluderPixelsPerTriangle px per triangle.
+  OccluderSelection select_strict_{std::max(o_.hc.occluder_pixels_per_triangle, wire::kSelectedOccluderPixelsPerTriangle)};
+  const OccluderSelection& selection() const { return selected_ ? select_strict_ : select_; }
+  uint8_t wire_occlusion() const { return occlusion_ ? (selected_ ? 2 : 1) : 0; }
+  bool selected_ = false;        // this frame's camera asks for selected occluders
+  uint64_t selected_frames_ = 0;  // frames (OR) with selected occluders
   Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)
   std::optional<QueryBudget> budget_;
   uint64_t or_triangles_ = 0;  // drawn by the current OR

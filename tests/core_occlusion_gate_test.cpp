@@ -12,27 +12,32 @@ namespace occ {
 namespace {
 
 struct Sim {
-  // interval(frame, occlusion): what a displayed frame measures; triangles drawn with and
-  // without occlusion (the frustum set).
-  std::function<double(uint32_t, bool)> interval;
+  // interval(frame, mode): what a displayed frame measures (mode: Camera.occlusion, 0 without
+  // occlusion, 1 with, 2 with selected occluders); triangles drawn with occlusion and without (the
+  // frustum set).
+  std::function<double(uint32_t, uint8_t)> interval;
   uint64_t visible_triangles = 1000, frustum_triangles = 1100;
   uint32_t lag = 2;
-  uint32_t off_frames = 0;
+  uint32_t off_frames = 0, selected_frames = 0;
   std::vector<bool> shown = {};  // per displayed frame: with occlusion
+  std::vector<uint8_t> modes = {};
 
   void run(OcclusionGate& g, uint32_t frames) {
-    std::deque<bool> in_flight;
+    std::deque<uint8_t> in_flight;
     uint32_t camera = 0;
-    for (; camera < lag; ++camera) in_flight.push_back(g.occlusion(camera));
+    for (; camera < lag; ++camera) in_flight.push_back(g.wire_occlusion(camera));
     for (uint32_t f = 0; f < frames; ++f) {
-      const bool occ = in_flight.front();
+      const uint8_t mode = in_flight.front();
       in_flight.pop_front();
-      in_flight.push_back(g.occlusion(camera++));
+      in_flight.push_back(g.wire_occlusion(camera++));
+      const uint64_t drawn = mode == 0 ? frustum_triangles : visible_triangles;
       std::optional<uint64_t> ft;
       if (g.wants_frustum_triangles()) ft = frustum_triangles;
-      g.frame(occ, interval(f, occ), occ ? visible_triangles : frustum_triangles, ft);
-      off_frames += !occ;
-      shown.push_back(occ);
+      g.frame(mode, interval(f, mode), drawn, ft);
+      off_frames += mode == 0;
+      selected_frames += mode == 2;
+      shown.push_back(mode != 0);
+      modes.push_back(mode);
     }
   }
 };
@@ -98,6 +103,10 @@ TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
   }
   OcclusionGate every{{.policy = OcclusionGate::Policy::alternate, .period = 4}};
   for (uint32_t c = 0; c < 16; ++c) EXPECT_EQ(every.occlusion(c), (c / 4) % 2 == 0) << c;
+  OcclusionGate selected{{.policy = OcclusionGate::Policy::selected}};
+  Sim s{[](uint32_t, uint8_t) { return 13.0; }, 1000, 3000};
+  s.run(selected, 50);
+  EXPECT_EQ(s.selected_frames, 50u);
 }
 
 }  // namespace

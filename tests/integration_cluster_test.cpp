@@ -152,6 +152,31 @@ TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
     EXPECT_NE(log->find("; 10 frames without occlusion"), std::string::npos) << *log;
 }
 
+// Selected occluders (Camera.occlusion 2, what the gate uses where culling removes little): the
+// OR and occluder fusion draw only objects covering 4 px per triangle or more. Fewer occluders
+// are still real geometry: the frames stay the reference's, and the visible sets are no smaller
+// than with every occluder (same walk, lockstep: deterministic).
+TEST(Cluster, SelectedOccludersEqualReferenceWithNoFewerLeaves) {
+  fs::path dir = fresh_dir("plant_selected");
+  ClusterOptions o = cluster("plant:0.3", "walk:40");
+  o.occlusion_gate = "selected";
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  if (!r) return;
+  auto stats = read_csv(dir / "cluster" / "stats.csv");
+  ASSERT_EQ(stats["occlusion"].size(), 40u);
+  for (size_t f = 0; f < 40; ++f) EXPECT_EQ(stats["occlusion"][f], 2.0) << "frame " << f;
+  for (const std::string* log : {&r->node0_log, &r->node1_log})
+    EXPECT_NE(log->find(" frames without occlusion and 20 with selected occluders"), std::string::npos) << *log;
+  o.occlusion_gate = "on";
+  o.client = {"--no-images"};
+  const ClusterRun all = run_cluster(dir / "all", o);
+  ASSERT_EQ(all.rvg_code, 0) << all.logs();
+  auto all_stats = read_csv(dir / "all" / "stats.csv");
+  ASSERT_EQ(all_stats["visible"].size(), 40u);
+  EXPECT_GE(sum(stats["visible"]), sum(all_stats["visible"]));
+  for (size_t f = 0; f < 40; ++f) EXPECT_EQ(all_stats["occlusion"][f], 1.0) << "frame " << f;
+}
+
 // The default HC test is batch (one draw per batch counting samples in a buffer); occlusion queries
 // stay available. Node 0 with --hc-test queries, node 1 with the default: the reference's frames,
 // node 0 drew no batch and node 1 counted boxes in batch draws.

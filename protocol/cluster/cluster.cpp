@@ -9,7 +9,7 @@
 
 namespace occ {
 
-wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, bool occlusion) {
+wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, uint8_t occlusion) {
   wire::Camera w;
   w.frame = number;
   for (int i = 0; i < 3; ++i) w.eye[i] = c.eye[i];
@@ -23,7 +23,7 @@ wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, bool 
   w.far_dist = c.far_dist;
   w.viewport_width_px = uint32_t(vp.width);
   w.viewport_height_px = uint32_t(vp.height);
-  w.occlusion = occlusion ? 1 : 0;
+  w.occlusion = occlusion;
   return w;
 }
 

@@ -23,8 +23,9 @@ namespace occ {
 
 class Cli;
 
-// `occlusion`: whether the switch culls this camera's frame with occlusion (wire.hpp Camera).
-wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, bool occlusion = true);
+// `occlusion`: whether the switch culls this camera's frame with occlusion, and with which
+// occluders (wire.hpp Camera: 0 without, 1 with, 2 with selected occluders).
+wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, uint8_t occlusion = 1);
 Camera from_wire(const wire::Camera& w);
 // Why a camera packet does not fit a process rendering `vp` (nullopt when it does).
 std::optional<std::string> viewport_mismatch(const wire::Camera& w, const Viewport& vp);
