@@ -45,7 +45,7 @@ int run_reference(const ClientOptions& o) {
   ChcRenderer chc(h);
   // cpu_ms: CPU time of the whole process (llvmpipe's threads included) for the frame's rendering.
   std::vector<std::string> columns{"frame", "nodes_drawn", "triangles_drawn", "render_ms", "queries", "cpu_ms"};
-  // exact_visible/exact_triangles: the nodes seen in an item buffer of every leaf (brute force);
+  // exact_visible/exact_triangles: the nodes seen in an item buffer of every leaf in the frustum;
   // missed_visible: how many of them this method did not draw (0 for a conservative method);
   // exact_added/exact_removed: how the exact set changed from the frame before (its own id churn:
   // what an incremental visible set could save at best on this path, scripts/spikes_report.py);
