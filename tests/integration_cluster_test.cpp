@@ -152,8 +152,8 @@ TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
     EXPECT_NE(log->find("; 10 frames without occlusion"), std::string::npos) << *log;
 }
 
-// Selected occluders (Camera.occlusion 2, what the gate uses where culling removes little): the
-// OR and occluder fusion draw only objects covering 4 px per triangle or more. Fewer occluders
+// Selected occluders (Camera.occlusion 2, --occlusion-gate selected): the OR and occluder fusion
+// draw only objects covering 4 px per triangle or more. Fewer occluders
 // are still real geometry: the frames stay the reference's, and the visible sets are no smaller
 // than with every occluder (same walk, lockstep: deterministic).
 TEST(Cluster, SelectedOccludersEqualReferenceWithNoFewerLeaves) {
