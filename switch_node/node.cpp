@@ -498,9 +498,7 @@ class SwitchNode {
       }
       std::optional<NumberedCamera> cam = take_camera(frame, min_camera);
       if (!cam) return;
-      occlusion_ = cam->occlusion;
-      selected_ = cam->selected_occluders;
-      selected_frames_ += occlusion_ && selected_;
+      take_mode(*cam);
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
@@ -511,7 +509,7 @@ class SwitchNode {
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
       try {
-        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, wire_occlusion()));
+        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
       } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
@@ -528,16 +526,14 @@ class SwitchNode {
       poll_for_peer();
       std::optional<NumberedCamera> cam = take_camera(frame, last_camera_ ? *last_camera_ + 1 : 0);
       if (!cam) return;
-      occlusion_ = cam->occlusion;
-      selected_ = cam->selected_occluders;
-      selected_frames_ += occlusion_ && selected_;
+      take_mode(*cam);
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
       tail_t0_ = or_start;
       draw_occluders(cam->camera);
       finish_or(or_start, or_cpu0, Clock::duration{0});
-      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, wire_occlusion()));
+      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
       hc_frame(frame, cam->camera);
       ++single_frames_;
     }
@@ -826,7 +822,12 @@ class SwitchNode {
   // Camera.occlusion 2: at least wire::kSelectedOccluderPixelsPerTriangle px per triangle.
   OccluderSelection select_strict_{std::max(o_.hc.occluder_pixels_per_triangle, wire::kSelectedOccluderPixelsPerTriangle)};
   const OccluderSelection& selection() const { return selected_ ? select_strict_ : select_; }
-  uint8_t wire_occlusion() const { return occlusion_ ? (selected_ ? 2 : 1) : 0; }
+  // This frame's camera: with or without occlusion, with which occluders.
+  void take_mode(const NumberedCamera& cam) {
+    occlusion_ = cam.occlusion;
+    selected_ = cam.selected_occluders;
+    selected_frames_ += occlusion_ && selected_;
+  }
   bool selected_ = false;        // this frame's camera asks for selected occluders
   uint64_t selected_frames_ = 0;  // frames (OR) with selected occluders
   Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)

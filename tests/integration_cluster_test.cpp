@@ -70,6 +70,20 @@ void expect_geometry_tests_equal_reference_with_fewer_leaves(const std::string& 
   }
 }
 
+// The plant's 40-camera walk (`o`: cluster("plant:0.3", "walk:40")) with the render client's
+// --occlusion-gate `policy`, frames checked against the reference; the run's stats (40 rows) in
+// `stats`. Null when the cluster run failed.
+std::optional<ClusterRun> plant_walk_with_gate(const fs::path& dir, const std::string& policy, ClusterOptions& o,
+                                               std::map<std::string, std::vector<double>>& stats) {
+  o.occlusion_gate = policy;
+  std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  if (!r) return r;
+  stats = read_csv(dir / "cluster" / "stats.csv");
+  EXPECT_EQ(stats["occlusion"].size(), 40u);
+  if (stats["occlusion"].size() != 40u) return std::nullopt;
+  return r;
+}
+
 // How long node 0 waits for a valid peer in the handshake tests (then exits 1, which they expect):
 // node 1 must start (scene, GL) and connect within it, seconds on a loaded machine under ASan.
 constexpr int kRefusalTimeoutMs = 10000;
@@ -126,13 +140,10 @@ TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
 // the reference's; frames without occlusion issued no queries and drew at least the frustum set's
 // leaves; both nodes served some of them.
 TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
-  fs::path dir = fresh_dir("plant_gate");
   ClusterOptions o = cluster("plant:0.3", "walk:40");
-  o.occlusion_gate = "alternate";
-  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  std::map<std::string, std::vector<double>> stats;
+  const std::optional<ClusterRun> r = plant_walk_with_gate(fresh_dir("plant_gate"), "alternate", o, stats);
   if (!r) return;
-  auto stats = read_csv(dir / "cluster" / "stats.csv");
-  ASSERT_EQ(stats["occlusion"].size(), 40u);
   size_t with = 0, without = 0, visible_with = 0, visible_without = 0;
   for (size_t f = 0; f < 40; ++f) {
     EXPECT_EQ(stats["occlusion"][f], (uint32_t(stats["camera"][f]) / 4) % 2 == 0 ? 1.0 : 0.0) << "frame " << f;
@@ -157,13 +168,11 @@ TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
 // are still real geometry: the frames stay the reference's, and the visible sets are no smaller
 // than with every occluder (same walk, lockstep: deterministic).
 TEST(Cluster, SelectedOccludersEqualReferenceWithNoFewerLeaves) {
-  fs::path dir = fresh_dir("plant_selected");
+  const fs::path dir = fresh_dir("plant_selected");
   ClusterOptions o = cluster("plant:0.3", "walk:40");
-  o.occlusion_gate = "selected";
-  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  std::map<std::string, std::vector<double>> stats;
+  const std::optional<ClusterRun> r = plant_walk_with_gate(dir, "selected", o, stats);
   if (!r) return;
-  auto stats = read_csv(dir / "cluster" / "stats.csv");
-  ASSERT_EQ(stats["occlusion"].size(), 40u);
   for (size_t f = 0; f < 40; ++f) EXPECT_EQ(stats["occlusion"][f], 2.0) << "frame " << f;
   for (const std::string* log : {&r->node0_log, &r->node1_log})
     EXPECT_NE(log->find(" frames without occlusion and 20 with selected occluders"), std::string::npos) << *log;
