@@ -162,7 +162,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
       } else if (visible_without_query(n.box, cam)) {
         ++st.near_visible;
         visible.emplace_back(id, kNoQuery);
-      } else if (skipper && skipper->skip(id)) {
+      } else if (skipper && QuerySkipper::may_skip(n) && skipper->skip(id)) {
         ++st.skipped;
         visible.emplace_back(id, kNoQuery);
       } else {

@@ -83,6 +83,14 @@ class QuerySkipper {
   // p99 frame interval 11.1-12.7 against 12.9-18.6 ms; PVS/exact +0.01-0.04 (docs/spikes.md).
   static constexpr uint8_t kTrust = 2;
   static constexpr uint8_t kMaxWait = 32;
+  // A leaf with more triangles than this is queried every time: skipping its query saves one
+  // box test, but if it has become occluded it is drawn for nothing, twice (the other node's
+  // OR and the render client), for up to kMaxWait frames. Duplex orbit at 512^2 (the cluster,
+  // paired runs): triangles sent 13.5 k -> 7.2 k per frame for +1 % queries, frame interval
+  // -7 %; 50 and 100 query more for less; the city and the saw unchanged (docs/results.md).
+  static constexpr uint64_t kMaxSkippedLeafTriangles = 150;
+  // Whether `n`'s query may be skipped at all (interior nodes: their children are tested).
+  static bool may_skip(const HNode& n) { return !n.leaf() || n.triangles <= kMaxSkippedLeafTriangles; }
   explicit QuerySkipper(size_t nodes) : state_(nodes) {}
   // True when `node` is assumed visible this time (consumes one visit of its wait).
   bool skip(uint32_t node);

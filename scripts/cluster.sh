@@ -29,6 +29,12 @@
 # P screenshot, O culling overlay, Esc quits). Without --path you drive from the start; with --path the path plays
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
+# --node-raster-threads N (default 0): llvmpipe's rasteriser threads in each switch node
+# (LP_NUM_THREADS for the nodes only; the render client keeps $LP_NUM_THREADS, default 1). 0
+# rasterises on the node's own thread: its work is many small passes it waits for (OR flushes,
+# HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
+# paired runs: frame interval 0.91-0.98x against 1 (docs/results.md). Give 1 or more when the
+# nodes have cores of their own (--netns on a bigger machine, or other machines).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
 # it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
 # names one to use instead.
@@ -36,13 +42,14 @@ set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file=""
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --scene|--path|--frames|--out|--link) occ_set "$@"; shift 2 ;;
     --netns) netns=1; shift ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
+    --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
     --no-images) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
@@ -55,6 +62,8 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
+[[ "$node_threads" =~ ^[0-9]+$ ]] && [ "$node_threads" -le 64 ] ||
+  occ_die "--node-raster-threads '$node_threads': expected a whole number from 0 to 64"
 if [ $window = 1 ]; then
   [ -n "$path" ] || path=interactive
   [[ " ${common[*]} " == *" --camera-mode "* ]] || common+=(--camera-mode latest)
@@ -158,7 +167,7 @@ start_relay() {
   pids+=($!)
 }
 
-"${in_a[@]}" "$BIN/switch_node" --id 0 --scene "$scene" --listen "$listen" --port-file "$out/node0.port" \
+"${in_a[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id 0 --scene "$scene" --listen "$listen" --port-file "$out/node0.port" \
   "${common[@]}" "${node_only[@]}" >"$out/node0.log" 2>&1 &
 node0_pid=$!
 pids+=($node0_pid)
@@ -168,7 +177,7 @@ if [ -n "$link" ]; then
   start_relay relay_peer "$peer0" "${in_b[@]}"
   peer0=127.0.0.1:$(wait_port "$out/relay_peer.port" "${pids[-1]}" relay_peer) || { cleanup; exit 1; }
 fi
-"${in_b[@]}" "$BIN/switch_node" --id 1 --scene "$scene" --peer "$peer0" --listen "$listen" --port-file "$out/node1.port" \
+"${in_b[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id 1 --scene "$scene" --peer "$peer0" --listen "$listen" --port-file "$out/node1.port" \
   "${common[@]}" "${node_only[@]}" >"$out/node1.log" 2>&1 &
 node1_pid=$!
 pids+=($node1_pid)

@@ -467,6 +467,11 @@ class SwitchNode {
     or_camera_ = cam;
     selection().filter(ids, *g_.renderables, or_camera_, o_.height);
     or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
+    // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
+    // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for
+    // finish_or() and lengthened the OR's tail, which HC(frame) waits for. Duplex orbit 512^2:
+    // OR tail 2.0-2.4 -> 0.3-0.4 ms wall (docs/results.md).
+    g_.ctx->gl().Flush();
   }
 
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
@@ -655,6 +660,7 @@ class SwitchNode {
           }
         selection().filter(fresh, *g_.renderables, or_camera_, o_.height);
         or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
+        if (!fresh.empty()) g_.ctx->gl().Flush();  // as in draw_occluders
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
         start_frame();

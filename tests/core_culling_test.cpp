@@ -210,6 +210,49 @@ TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
   EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
 }
 
+TEST(QuerySkipper, HeavyLeavesAreQueriedEveryTime) {
+  // Mesh 1: the cube's triangles repeated, over kMaxSkippedLeafTriangles; every other cube uses it.
+  Scene s = cube_grid(4, 3);
+  Mesh heavy = s.meshes[0];
+  const std::vector<uint32_t> one = heavy.indices;
+  while (heavy.indices.size() / 3 <= QuerySkipper::kMaxSkippedLeafTriangles)
+    heavy.indices.insert(heavy.indices.end(), one.begin(), one.end());
+  s.meshes.push_back(heavy);
+  for (size_t k = 0; k < s.objects.size(); k += 2) s.objects[k].mesh = 1;
+  Hierarchy h = Hierarchy::build(s, {});
+  Renderables r(h, nullptr);
+  Camera cam = overview(h.node(0).box);
+  LodSelector sel(r, cam, 480, 0.0);
+  FakeQueries q;
+  for (const HNode& n : h.nodes())
+    if (n.leaf()) q.visible_points.push_back(n.box.center());  // every cube shows
+  QuerySkipper skipper(h.size());
+  constexpr int kFrames = 12;
+  std::vector<uint32_t> expected;
+  for (uint32_t id = 0; id < h.size(); ++id)
+    if (h.node(id).leaf() && h.node(id).item_count) expected.push_back(id);
+  for (int frame = 0; frame < kFrames; ++frame) {
+    auto v = hardware_cull_lod(h, cam, q, sel, {.skipper = &skipper});
+    EXPECT_EQ(v, expected) << "frame " << frame;
+  }
+  int heavy_leaves = 0, light_leaves = 0;
+  for (uint32_t id : expected) {
+    const HNode& n = h.node(id);
+    const auto times = std::count_if(q.boxes.begin(), q.boxes.end(), [&](const Aabb& b) {
+      return b.min == n.box.min && b.max == n.box.max;
+    });
+    if (n.triangles > QuerySkipper::kMaxSkippedLeafTriangles) {
+      ++heavy_leaves;
+      EXPECT_EQ(times, kFrames) << "heavy leaf " << id << " (" << n.triangles << " triangles)";
+    } else {
+      ++light_leaves;
+      EXPECT_LT(times, kFrames / 2) << "light leaf " << id << " (" << n.triangles << " triangles)";
+    }
+  }
+  EXPECT_EQ(heavy_leaves, 8);
+  EXPECT_EQ(light_leaves, 8);
+}
+
 namespace {
 
 // Geometry queries (LeafTest::geometry): a box passes as in FakeQueries; a leaf's geometry shows
