@@ -1,4 +1,5 @@
 // switch_node: one half of the occlusion switch. Run two (--id 0 and --id 1) and a render_client.
+#include <cstdlib>
 #include <string>
 
 #include "common/cli.hpp"
@@ -8,6 +9,10 @@
 #include "switch_node/node.hpp"
 
 int main(int argc, char** argv) {
+  // No llvmpipe rasteriser threads unless asked for (LP_NUM_THREADS): a node's work is many small
+  // passes it waits for, and Mesa 22.3's rasteriser threads can corrupt the heap (a fence freed
+  // while its mutex is still being unlocked; docs/hard_cases.md).
+  ::setenv("LP_NUM_THREADS", "0", 0);
   occ::use_huge_pages(argv);
   return occ::run_main([&] {
     occ::NodeOptions o;

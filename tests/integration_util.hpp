@@ -52,7 +52,7 @@ class Proc {
       std::vector<char*> args;
       for (auto& a : argv) args.push_back(a.data());
       args.push_back(nullptr);
-      ::setenv("LP_NUM_THREADS", "1", 0);
+      ::setenv("LP_NUM_THREADS", "0", 0);  // as scripts/test.sh: no rasteriser threads (docs/hard_cases.md)
       ::execv(args[0], args.data());
       ::_exit(127);
     }
