@@ -107,6 +107,13 @@ TEST(Conventions, ClusterPrintsTheFailingProcessesOwnError) {
     EXPECT_NE(log.find("no_such_path.csv': cannot open camera path file"), std::string::npos) << log;
     EXPECT_FALSE(fs::exists(dir / "c" / "node0.log")) << log;
   }
+  {  // a bad --node-raster-threads: said before any process starts
+    Proc p(cluster(dir / "e", {"--scene", "city:2x2:2:4:1", "--node-raster-threads", "two"}), dir / "e.log");
+    EXPECT_EQ(p.wait(60s), 2);
+    EXPECT_NE(p.log().find("--node-raster-threads 'two': expected a whole number from 0 to 64"), std::string::npos)
+        << p.log();
+    EXPECT_FALSE(fs::exists(dir / "e" / "node0.log")) << p.log();
+  }
   {  // a broken --path file: the render client's own line, and the nodes are stopped at once, not
      // left to wait for it until their --timeout-ms
     std::ofstream(dir / "broken.csv") << "frame,eye_x\n0,1\n";
