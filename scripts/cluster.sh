@@ -33,8 +33,8 @@
 # (LP_NUM_THREADS for the nodes only; the render client keeps $LP_NUM_THREADS, default 1). 0
 # rasterises on the node's own thread: its work is many small passes it waits for (OR flushes,
 # HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
-# paired runs: frame interval 0.91-0.98x against 1 (docs/results.md). Give 1 or more when the
-# nodes have cores of their own (--netns on a bigger machine, or other machines).
+# paired runs: frame interval 0.92-0.98x against 1 (docs/results.md). It also keeps the nodes
+# clear of a Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
 # it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
 # names one to use instead.
