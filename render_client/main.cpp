@@ -8,6 +8,7 @@
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
 #include "common/memory.hpp"
+#include "protocol/wire.hpp"
 #include "render_client/options.hpp"
 
 int main(int argc, char** argv) {
@@ -47,7 +48,9 @@ int main(int argc, char** argv) {
         "occlusion only where it pays: auto = frames without occlusion (the switch sends frustum sets: no OR, no "
         "queries) while they are measured faster at the display, tried where culling removes little; on = always "
         "occlusion; off = never; alternate = 4 cameras each way (tests); selected = always occlusion, the OR and "
-        "occluder fusion drawing only objects that cover at least 4 px per triangle (cheaper OR, larger visible sets)");
+        "occluder fusion drawing only objects that cover at least " +
+            std::to_string(int(occ::wire::kSelectedOccluderPixelsPerTriangle)) +
+            " px per triangle (cheaper OR, larger visible sets)");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "

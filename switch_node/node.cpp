@@ -474,6 +474,26 @@ class SwitchNode {
     g_.ctx->gl().Flush();
   }
 
+  // Draws, depth only, those of `ids` that are not in this frame's depth buffer yet and that the
+  // occluder selection keeps as seen from `cam` (the OR's streamed additions, occluder fusion);
+  // all of `ids` count as drawn from now on.
+  struct NewOccluders {
+    size_t renderables = 0;
+    uint64_t triangles = 0;
+  };
+  NewOccluders draw_new_occluders(std::span<const uint32_t> ids, const Camera& cam) {
+    std::vector<uint32_t> fresh;
+    for (uint32_t id : ids)
+      if (!drawn_[id]) {
+        drawn_[id] = 1;
+        fresh.push_back(id);
+      }
+    selection().filter(fresh, *g_.renderables, cam, o_.height);
+    if (fresh.empty()) return {};
+    return {fresh.size(),
+            g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles};
+  }
+
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
   void run_switch(uint32_t first) {
     single_ = false;
@@ -652,15 +672,11 @@ class SwitchNode {
           for (uint32_t id : d->added)
             if (!o_.config.full_sets || !std::binary_search(before.begin(), before.end(), id))
               hold_->seen(g_.renderables->node_of(id), frame);
-        std::vector<uint32_t> fresh;
-        for (uint32_t id : d->added)
-          if (occlusion_ && !drawn_[id]) {
-            drawn_[id] = 1;
-            fresh.push_back(id);
-          }
-        selection().filter(fresh, *g_.renderables, or_camera_, o_.height);
-        or_triangles_ += g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
-        if (!fresh.empty()) g_.ctx->gl().Flush();  // as in draw_occluders
+        if (occlusion_) {
+          const NewOccluders drawn = draw_new_occluders(d->added, or_camera_);
+          or_triangles_ += drawn.triangles;
+          if (drawn.renderables) g_.ctx->gl().Flush();  // as in draw_occluders
+        }
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
         start_frame();
@@ -696,16 +712,8 @@ class SwitchNode {
     local.geometry_below = o_.hc.geometry_below;
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
-        std::vector<uint32_t> fresh;
-        for (uint32_t id : found)
-          if (!drawn_[id]) {
-            drawn_[id] = 1;
-            fresh.push_back(id);
-          }
-        selection().filter(fresh, *g_.renderables, cam, o_.height);
-        if (fresh.empty()) return;
-        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
-        querier_->depth_added();  // restores the GL state the queries need; the pyramid is stale
+        // Restores the GL state the queries need; the pyramid is stale.
+        if (draw_new_occluders(found, cam).renderables) querier_->depth_added();
       };
     querier_->begin(cam);
     OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;
