@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "common/camera_path.hpp"
 #include "common/error.hpp"
@@ -13,9 +14,18 @@ namespace {
 const Aabb kBounds{{-50, 0, -20}, {50, 30, 20}};
 const Viewport kVp{320, 240};
 
+// The files write_tmp makes, removed when the test program ends (they used to stay in /tmp).
+struct TmpFiles {
+  std::vector<std::filesystem::path> paths;
+  ~TmpFiles() {
+    for (const auto& p : paths) std::filesystem::remove(p);
+  }
+} g_tmp_files;
+
 std::string write_tmp(const std::string& name, const std::string& text) {
   auto p = std::filesystem::temp_directory_path() / ("occ_path_" + std::to_string(::getpid()) + "_" + name);
   std::ofstream(p) << text;
+  g_tmp_files.paths.push_back(p);
   return p.string();
 }
 

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -26,10 +28,38 @@ inline std::string bin(const std::string& name) { return std::string(OCC_BIN_DIR
 inline bool have_shared() { return fs::exists(std::string(OCC_SHARED_DIR) + "/scenes"); }
 inline std::string shared(const std::string& rel) { return std::string(OCC_SHARED_DIR) + "/" + rel; }
 
+// The folders fresh_dir made. They are removed when the test program ends if every test in it
+// passed (and OCC_KEEP_TEST_DIRS is unset); a failure keeps them, with their logs, and says where.
+// (Constructed at the first fresh_dir, inside a test, so destroyed before GoogleTest's UnitTest.)
+class TestDirs {
+ public:
+  static TestDirs& get() {
+    static TestDirs dirs;
+    return dirs;
+  }
+  void add(const fs::path& d) { dirs_.push_back(d); }
+  ~TestDirs() {
+    const bool failed = ::testing::UnitTest::GetInstance()->Failed();
+    const char* keep = std::getenv("OCC_KEEP_TEST_DIRS");
+    for (const auto& d : dirs_) {
+      if (failed || (keep && *keep && std::string(keep) != "0")) {
+        std::fprintf(stderr, "kept %s\n", d.c_str());
+      } else {
+        std::error_code ec;
+        fs::remove_all(d, ec);
+      }
+    }
+  }
+
+ private:
+  std::vector<fs::path> dirs_;
+};
+
 inline fs::path fresh_dir(const std::string& name) {
   fs::path d = fs::temp_directory_path() / ("occ_it_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
+  TestDirs::get().add(d);
   return d;
 }
 
