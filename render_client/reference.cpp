@@ -41,6 +41,9 @@ int run_reference(const ClientOptions& o) {
   const Hierarchy& h = g.hierarchy();
   GlContext* ctx = g.ctx.get();
   SceneRenderer& renderer = *g.renderer;
+  // One process with the machine to itself: parts sized to the frame keep llvmpipe's rasteriser
+  // thread busy while the rest is binned (the cluster's processes keep fixed parts: set_flush_automatic).
+  renderer.set_flush_automatic();
   BoxQuerier querier(*ctx);
   ChcRenderer chc(h);
   // cpu_ms: CPU time of the whole process (llvmpipe's threads included) for the frame's rendering.

@@ -450,8 +450,12 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   for (SceneRenderer::Mode mode : {SceneRenderer::Mode::Shaded, SceneRenderer::Mode::ItemIds}) {
     Image first;
     DrawStats first_stats;
-    for (uint32_t flush : {0u, 1u, 97u, 5000u, SceneRenderer::kFlushTriangles}) {
-      r.set_flush_triangles(flush);
+    // ~0u: automatic part sizes (flush_part), the default.
+    for (uint32_t flush : {0u, 1u, 97u, 5000u, SceneRenderer::kFlushTriangles, ~0u}) {
+      if (flush == ~0u)
+        r.set_flush_automatic();
+      else
+        r.set_flush_triangles(flush);
       if (mode == SceneRenderer::Mode::ItemIds)
         r.begin_id_frame(cam);
       else
@@ -472,83 +476,20 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   }
 }
 
-// The plant's solids are closed with outward faces (plant.hpp), so culling their back faces (its
-// single-sided material) hides nothing the double-sided drawing shows: from cameras along the walk
-// and looking across the bays, all but a few pixels (slits between abutting faces, sub-pixel
-// ends of thin open tubes) are equal. A mesh wound inside out would lose all its front pixels.
-TEST(SceneRenderer, PlantSolidsLookTheSameWithBackFacesCulled) {
-  Scene single = load_scene("plant:0.3");
-  ASSERT_EQ(single.materials.size(), 1u);
-  EXPECT_FALSE(single.materials[0].double_sided);
-  for (const Mesh& m : single.meshes) ASSERT_EQ(m.material, 0u) << m.name;
-  Scene both = single;
-  both.materials[0].double_sided = true;
-  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
-  const Aabb box = single.bounds();
-  size_t differing = 0, shown = 0, frames = 0;
-  for (double t : {0.1, 0.4, 0.7}) {
-    const glm::dvec3 eye(box.min.x + t * (box.max.x - box.min.x), 1.7 + 8.0 * t, 0.0);
-    for (const glm::dvec3 dir : {glm::dvec3(1, -0.05, 0), glm::dvec3(0.3, 0.1, 1), glm::dvec3(-0.2, 0.3, -1)}) {
-      const Camera cam = Camera::look_at(eye, eye + dir, {0, 1, 0}, 60.0, 1.0, 0.1, 500.0);
-      const Image a = render_shaded(*ctx, single, cam), b = render_shaded(*ctx, both, cam);
-      ASSERT_EQ(a.rgba.size(), b.rgba.size());
-      for (size_t i = 0; i < a.rgba.size(); i += 4) {
-        differing += !std::equal(&a.rgba[i], &a.rgba[i] + 3, &b.rgba[i]);
-        shown += b.rgba[i] || b.rgba[i + 1] || b.rgba[i + 2];
-      }
-      ++frames;
+// Automatic part sizes: an eighth of the draw call, never below kMinFlushTriangles (a flush costs
+// llvmpipe a scene of its own) nor above kFlushTriangles.
+TEST(SceneRenderer, AutomaticFlushPartsAreAnEighthOfTheCallWithinBounds) {
+  EXPECT_EQ(SceneRenderer::flush_part(0), SceneRenderer::kMinFlushTriangles);
+  EXPECT_EQ(SceneRenderer::flush_part(7200), SceneRenderer::kMinFlushTriangles);  // the duplex's V
+  EXPECT_EQ(SceneRenderer::flush_part(32000), 4000u);                              // its frustum set
+  EXPECT_EQ(SceneRenderer::flush_part(198000), SceneRenderer::kFlushTriangles);    // the whole saw
+  EXPECT_EQ(SceneRenderer::flush_part(uint64_t(1) << 40), SceneRenderer::kFlushTriangles);
+  for (uint64_t t = 0; t < 400000; t += 1237) {
+    const uint32_t part = SceneRenderer::flush_part(t);
+    EXPECT_GE(part, SceneRenderer::kMinFlushTriangles);
+    EXPECT_LE(part, SceneRenderer::kFlushTriangles);
+    if (part > SceneRenderer::kMinFlushTriangles && part < SceneRenderer::kFlushTriangles) {
+      EXPECT_EQ(part, t / SceneRenderer::kFlushParts);
     }
   }
-  const size_t pixels = frames * size_t(kSize) * kSize;
-  std::cout << "plant single- vs double-sided: " << differing << " of " << pixels << " pixels differ\n";
-  EXPECT_GT(shown, pixels / 2);             // the views show the plant
-  EXPECT_LT(differing, pixels / 1000 + 1);  // under 0.1 %
-}
-
-// The exact count's glass (reference --exact): a BLEND item counts as shown when it passes the
-// depth test against the opaque depth, as the Shaded pass draws it. Glass in front of a wall and
-// glass beside it show; glass behind the wall does not; an opaque item is refused.
-TEST(SceneRenderer, BlendedItemsShowOnlyWhereTheyAreInFrontOfOpaqueDepth) {
-  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
-  Scene scene;
-  scene.meshes.push_back(quad_mesh());  // opaque: no material
-  scene.meshes.push_back(quad_mesh());
-  scene.materials.push_back({.name = "glass", .base_color = {0.2f, 0.4f, 1.0f, 0.5f}, .alpha_mode = AlphaMode::Blend,
-                             .double_sided = true});
-  scene.meshes[1].material = 0;
-  scene.objects.push_back({0, place({0, 0, -4}, 2.0), "wall"});
-  scene.objects.push_back({1, place({0, 0, -3}, 0.5), "glass in front"});
-  scene.objects.push_back({1, place({0, 0, -6}, 0.5), "glass behind"});
-  scene.objects.push_back({1, place({2.5, 0, -6}, 0.5), "glass beside"});
-  const Hierarchy h = Hierarchy::build(scene, {});
-  SceneRenderer r(*ctx, scene, h);
-  ASSERT_TRUE(r.has_blended());
-  std::vector<uint32_t> glass;
-  std::vector<std::string> names;
-  for (uint32_t i = 0; i < h.items().size(); ++i) {
-    const uint32_t object = h.items()[i].object;
-    EXPECT_EQ(r.item_blended(i), scene.objects[object].mesh == 1) << scene.objects[object].name;
-    if (r.item_blended(i)) {
-      glass.push_back(i);
-      names.push_back(scene.objects[object].name);
-    }
-  }
-  ASSERT_EQ(glass.size(), 3u);
-  r.begin_id_frame(camera_at({0, 0, 0}));
-  r.draw_items(all_items(h), SceneRenderer::Mode::ItemIds);
-  EXPECT_EQ(ids_in_image(ctx->read_rgba()).size(), 1u);  // the wall only: glass is not in the item buffer
-  std::vector<GLuint> queries(glass.size());
-  ctx->gl().CreateQueries(GL_SAMPLES_PASSED, GLsizei(queries.size()), queries.data());
-  r.query_blended_items(glass, queries);
-  for (size_t k = 0; k < glass.size(); ++k) {
-    GLuint64 samples = 0;
-    ctx->gl().GetQueryObjectui64v(queries[k], GL_QUERY_RESULT, &samples);
-    EXPECT_EQ(samples > 0, names[k] != "glass behind") << names[k] << ": " << samples << " samples";
-  }
-  ctx->gl().DeleteQueries(GLsizei(queries.size()), queries.data());
-  uint32_t wall_item = 0;
-  while (r.item_blended(wall_item)) ++wall_item;
-  const uint32_t bad[] = {wall_item};
-  const GLuint q[] = {0};
-  EXPECT_THROW(r.query_blended_items(bad, q), std::invalid_argument);
 }

@@ -186,10 +186,10 @@ uint32_t pack_rgba8(glm::vec4 c) {
   return rgba;
 }
 
-// OCC_FLUSH_TRIANGLES overrides SceneRenderer::kFlushTriangles (see set_flush_triangles).
-uint32_t flush_triangles_from_environment() {
+// OCC_FLUSH_TRIANGLES fixes SceneRenderer's part size (see set_flush_triangles); nullopt if unset.
+std::optional<uint32_t> flush_triangles_from_environment() {
   const char* v = std::getenv("OCC_FLUSH_TRIANGLES");
-  if (!v || !*v) return SceneRenderer::kFlushTriangles;
+  if (!v || !*v) return std::nullopt;
   char* end = nullptr;
   errno = 0;
   const unsigned long long n = std::strtoull(v, &end, 10);
@@ -208,7 +208,10 @@ SceneRenderer::SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy
 SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* release_lod,
                              const Upload& upload)
     : gl_(ctx.gl()), hierarchy_(hierarchy) {
-  flush_triangles_ = flush_triangles_from_environment();
+  if (const std::optional<uint32_t> n = flush_triangles_from_environment()) {
+    flush_triangles_ = *n;
+    flush_from_environment_ = true;
+  }
   const LodData* lod = release_lod;
   if (scene.geometry_released())
     throw std::logic_error("SceneRenderer: the geometry of " + scene.source + " was released after an upload");
@@ -705,6 +708,7 @@ void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint
 
 void SceneRenderer::query_pending(std::span<const GLuint> queries, GLenum depth_func) {
   upload_draws(pending_);
+  part_triangles_ = flush_triangles_.value_or(kFlushTriangles);  // queries: parts as before
   gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
   gl_.DepthMask(GL_FALSE);
   gl_.Enable(GL_DEPTH_TEST);
@@ -899,17 +903,17 @@ void SceneRenderer::draw_runs(std::span<const Pending> draws, size_t first, size
       }
       bound.cull = cull;
     }
-    // One indirect call per part of about flush_triangles_ (see set_flush_triangles).
+    // One indirect call per part of about part_triangles_ (see set_flush_triangles).
     for (size_t c = b; c < e;) {
       size_t d = c;
       uint64_t triangles = 0;
       do {
         triangles += draws[d++].draw.index_count / 3;
-      } while (d < e && (flush_triangles_ == 0 || unflushed_triangles_ + triangles < flush_triangles_));
+      } while (d < e && (part_triangles_ == 0 || unflushed_triangles_ + triangles < part_triangles_));
       gl_.MultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT,
                                     reinterpret_cast<const void*>(c * sizeof(IndirectCommand)), GLsizei(d - c), 0);
       unflushed_triangles_ += triangles;
-      if (flush_triangles_ != 0 && unflushed_triangles_ >= flush_triangles_) {
+      if (part_triangles_ != 0 && unflushed_triangles_ >= part_triangles_) {
         gl_.Flush();
         unflushed_triangles_ = 0;
       }
@@ -921,6 +925,13 @@ void SceneRenderer::draw_runs(std::span<const Pending> draws, size_t first, size
 
 void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool blended) {
   upload_draws(draws);
+  if (flush_triangles_) {
+    part_triangles_ = *flush_triangles_;
+  } else {
+    uint64_t triangles = 0;
+    for (const Pending& p : draws) triangles += p.draw.index_count / 3;
+    part_triangles_ = flush_part(triangles);
+  }
   const bool color = mode != Mode::DepthOnly;
   const bool offset = !color && occluder_offset_;  // see set_occluder_offset()
   if (offset) {

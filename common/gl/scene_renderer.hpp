@@ -57,7 +57,9 @@
 // and is only read in the constructor (meshes, materials and images go to the GPU, transforms
 // are copied) unless Upload::release frees its geometry there. Invalid item or node ids throw std::out_of_range.
 #pragma once
+#include <algorithm>
 #include <array>
+#include <optional>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -122,15 +124,32 @@ class SceneRenderer {
   // it (CHC, stop-and-wait) does not need it, and toggling the state per draw costs llvmpipe.
   void set_occluder_offset(bool on) { occluder_offset_ = on; }
 
-  // glFlush after about this many triangles submitted (0: never). llvmpipe bins a whole frame
-  // on the calling thread and rasterises it only at a flush, so without one the two run one
-  // after the other; flushing every ~20k triangles hands each part to the rasteriser thread
-  // while the next is binned. Measured (render_client --reference --cull frustum, paired runs,
-  // LP_NUM_THREADS=1): saw orbit 0.62-0.72x the frame time at 512^2 and 1024^2 (5k-60k all
-  // ~0.72 at 1024^2), duplex 0.75x at 512^2, 0.88x at 1024^2. Frames are unchanged. The
-  // environment variable OCC_FLUSH_TRIANGLES=N sets the default (0 turns it off, for A/B runs).
+  // glFlush after about this many triangles submitted. llvmpipe bins a whole frame on the
+  // calling thread and rasterises it only at a flush, so without one the two run one after the
+  // other; a flush hands each part to the rasteriser thread while the next is binned. Frames are
+  // unchanged (test SceneRenderer.FlushingEveryFewTrianglesDrawsTheSameFrames).
+  // Fixed parts of kFlushTriangles by default. Against no flushes (render_client --reference
+  // --cull frustum, paired runs, LP_NUM_THREADS=1): the saw orbit 0.62-0.72x the frame time at
+  // 512^2 and 1024^2, the duplex 0.75x / 0.88x.
+  // set_flush_automatic(): parts of an eighth of each draw call's triangles, at least
+  // kMinFlushTriangles and at most kFlushTriangles (flush_part), so that small frames are split
+  // too. For a process with the cores to itself (render_client --reference and the baselines),
+  // against fixed 20k: the duplex frustum frame 0.88-0.90x at 512^2, 0.94-0.95x at 1024^2 (30 k
+  // triangles: 2 parts became 8), the saw unchanged (a fixed 4k: 1.05x there at 1024^2). Not in
+  // the cluster, where three processes share two cores: every part is one more llvmpipe scene
+  // (CPU), and the render client's CPU per frame rose 5 % on the duplex at 1024^2, its frame
+  // interval 1.02-1.06x (docs/results.md "Flush parts"). OCC_FLUSH_TRIANGLES=N fixes the part
+  // size in every process (0: no flushes, for A/B runs), over both.
   static constexpr uint32_t kFlushTriangles = 20000;
+  static constexpr uint32_t kMinFlushTriangles = 2000;
+  static constexpr uint32_t kFlushParts = 8;
+  static uint32_t flush_part(uint64_t call_triangles) {
+    return uint32_t(std::clamp<uint64_t>(call_triangles / kFlushParts, kMinFlushTriangles, kFlushTriangles));
+  }
   void set_flush_triangles(uint32_t n) { flush_triangles_ = n; }
+  void set_flush_automatic() {
+    if (!flush_from_environment_) flush_triangles_.reset();
+  }
 
   // Starts a frame for `cam`: clears depth to 0 (far) and, if clear_color, colour to
   // kBackgroundRgba8; forgets the previous frame's per-object transforms. Each Shaded draw call
@@ -182,8 +201,10 @@ class SceneRenderer {
 
  private:
   bool occluder_offset_ = false;
-  uint32_t flush_triangles_ = kFlushTriangles;
-  uint64_t unflushed_triangles_ = 0;  // submitted since the last glFlush
+  std::optional<uint32_t> flush_triangles_ = kFlushTriangles;  // fixed part size; none: automatic
+  bool flush_from_environment_ = false;  // OCC_FLUSH_TRIANGLES set: fixed whatever is asked
+  uint32_t part_triangles_ = kFlushTriangles;  // this draw call's part size (0: no flushes)
+  uint64_t unflushed_triangles_ = 0;          // submitted since the last glFlush
   struct ItemDraw {
     uint32_t index_count, first_index;  // first_index, base_vertex: within its segment
     int32_t base_vertex;
