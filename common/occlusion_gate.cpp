@@ -35,6 +35,7 @@ void OcclusionGate::push(std::deque<double>& ring, double v) const {
 void OcclusionGate::enter(State s) {
   state_ = s;
   fresh_ = 0;
+  slow_ = 0;
   if (s == State::trial_off) {
     ++trials_;
     off_.clear();
@@ -81,14 +82,19 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   }
   if (!settled) return;
   const double med_on = median(on_), med_off = median(off_);
+  // Frames without occlusion much slower than the reference median, give_up_frames in a row.
+  auto gave_up = [&](double reference_ms) {
+    slow_ = interval_ms > o_.give_up * reference_ms ? slow_ + 1 : 0;
+    return slow_ >= std::max(o_.give_up_frames, 1u);
+  };
   if (state_ == State::trial_off && !occlusion) {
     // Much slower than with occlusion stops the trial at once; otherwise a full window decides.
-    if (interval_ms > o_.give_up * med_on || (fresh_ >= o_.window && !(med_off < o_.margin * med_on)))
+    if (gave_up(med_on) || (fresh_ >= o_.window && !(med_off < o_.margin * med_on)))
       back_off();
     else if (fresh_ >= o_.window)
       go_off(off_hold_ ? off_hold_ : o_.first_hold);
   } else if (state_ == State::off && !occlusion) {
-    if (interval_ms > o_.give_up * med_off || n_ >= off_until_) enter(State::trial_on);
+    if (gave_up(med_off) || n_ >= off_until_) enter(State::trial_on);
   } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
     if (med_on < o_.margin * med_off) {  // occlusion pays again
       off_hold_ = 0;

@@ -10,8 +10,10 @@
 //     of mode) `window` frames are measured and the mode with the lower median interval, by
 //     `margin`, is kept; a failed trial doubles the wait before the next (first_hold .. max_hold);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
-//     occlusion is tried again the same way; a frame without it that takes give_up x the median
-//     (the view changed: culling may pay now) ends them at once.
+//     occlusion is tried again the same way; give_up_frames frames in a row without it that take
+//     give_up x the median (the view changed: culling may pay now) end them at once. One slow frame
+//     does not: on two cores a scheduling hiccup doubles a frame now and then (compare.sh, saw
+//     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
 // Either way is conservative: the frustum set holds the visible set, so frames never change.
 // Policy::selected (the user's choice, not automatic) culls every frame with selected occluders
 // (wire.hpp Camera.occlusion 2): docs/results.md has what they did on the saw, and why auto does
@@ -39,6 +41,7 @@ class OcclusionGate {
     double margin = 0.95;
     uint32_t first_hold = 32, max_hold = 1024;
     double give_up = 1.5;
+    uint32_t give_up_frames = 2;
   };
   explicit OcclusionGate(const Options& o) : o_(o) {}
 
@@ -78,6 +81,7 @@ class OcclusionGate {
   bool last_mode_ = true;
   std::deque<double> on_, off_;  // settled intervals of each mode, the newest `window`
   uint32_t fresh_ = 0;           // samples of the measured mode since the state began
+  uint32_t slow_ = 0;            // consecutive settled frames without occlusion over give_up x median
   uint32_t next_trial_ = 0;      // frame count before which no trial starts
   uint32_t off_until_ = 0;       // state off: its end
   uint32_t on_wait_ = 0, off_hold_ = 0;  // current back-off of failed trials / hold of won ones

@@ -90,7 +90,28 @@ TEST(OcclusionGate, AViewWhereCullingPaysEndsFramesWithoutOcclusionAtOnce) {
     run = s.shown[f] ? 0 : run + 1;
     longest = std::max(longest, run);
   }
-  EXPECT_LE(longest, 3u + 1u + 2u);  // settle, the frame that gives up, the pipeline's lag
+  EXPECT_LE(longest, 3u + 2u + 2u);  // settle, the two frames that give up, the pipeline's lag
+}
+
+TEST(OcclusionGate, OneSlowFrameDoesNotEndFramesWithoutOcclusion) {
+  // Without occlusion frames are faster, but every 40th frame takes 3x (a scheduling hiccup on
+  // a busy machine): the gate goes without occlusion as it does with no hiccups at all.
+  auto run = [](bool hiccups) {
+    OcclusionGate g{{}};
+    Sim s{[hiccups](uint32_t f, bool occ) { return (hiccups && f % 40 == 39 ? 3.0 : 1.0) * (occ ? 18.0 : 13.0); }};
+    s.run(g, 600);
+    return s.off_frames;
+  };
+  const uint32_t calm = run(false), noisy = run(true);
+  EXPECT_GT(calm, 480u);
+  EXPECT_GT(noisy, 480u);
+  EXPECT_GE(noisy + 10, calm);
+  // Two slow frames in a row still end them (AViewWhereCullingPaysEndsFramesWithoutOcclusionAtOnce);
+  // with give_up_frames 1 a single one does, as before.
+  OcclusionGate eager{{.give_up_frames = 1}};
+  Sim s{[](uint32_t f, bool occ) { return (f % 40 == 39 ? 3.0 : 1.0) * (occ ? 18.0 : 13.0); }};
+  s.run(eager, 600);
+  EXPECT_LT(s.off_frames, calm - 100);
 }
 
 TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
