@@ -45,7 +45,6 @@ class Writer {
     u16(static_cast<uint16_t>(s.size()));
     out_.insert(out_.end(), s.begin(), s.end());
   }
-  void raw(const std::vector<uint8_t>& b) { out_.insert(out_.end(), b.begin(), b.end()); }
   // Writes a field list (see "field lists" below), each value at the width of its type.
   template <class... T>
   void operator()(const T&... v) {
@@ -86,10 +85,6 @@ class Reader {
     std::string s(reinterpret_cast<const char*>(b_.data() + pos_), n);
     pos_ += n;
     return s;
-  }
-  void raw(std::vector<uint8_t>& out, size_t n) {
-    out.assign(b_.begin() + std::ptrdiff_t(pos_), b_.begin() + std::ptrdiff_t(pos_ + n));
-    pos_ += n;
   }
   void ids(std::vector<uint32_t>& out, size_t n) {
     out.resize(n);
@@ -188,7 +183,6 @@ Bounds payload_bounds(Type t) {
     case Type::bye: return {kByeFixedBytes, kByeFixedBytes + uint32_t(kMaxReasonBytes)};
     case Type::proof: return {kProofPayloadBytes, kProofPayloadBytes};
     case Type::resync: return {kResyncBytes, kResyncBytes};
-    case Type::frame_part: return {kFramePartFixedBytes + 4, kMaxPayloadBytes};
   }
   return {0, 0};
 }
@@ -283,7 +277,7 @@ std::optional<std::string> check(const Camera& m) {
     return "fovy " + num(m.fovy_rad) + " rad outside (0, pi)";
   if (!(m.aspect > 0)) return "aspect " + num(m.aspect) + " <= 0";
   if (!(m.near_dist > 0)) return "near " + num(m.near_dist) + " <= 0";
-  if (m.occlusion > kOcclusionOffSortLast) return "occlusion " + num(m.occlusion) + " is not 0, 1, 2 or 3";
+  if (m.occlusion > 2) return "occlusion " + num(m.occlusion) + " is not 0, 1 or 2";
   if (!(m.far_dist > m.near_dist))
     return "far " + num(m.far_dist) + " <= near " + num(m.near_dist);
   return viewport_error(m.viewport_width_px, m.viewport_height_px, 1);
@@ -318,20 +312,6 @@ std::optional<std::string> check(const Resync& m) {
   return std::nullopt;
 }
 
-std::optional<std::string> check(const FramePart& m) {
-  const std::string f = "frame " + num(m.frame) + ": ";
-  if (m.kind > FramePart::depth) return f + "kind " + num(m.kind) + " is not 0 (colour) or 1 (depth)";
-  if (m.width_px < 1 || m.width_px > kMaxViewportPx)
-    return f + "width " + num(m.width_px) + " outside [1, " + num(kMaxViewportPx) + "]";
-  if (m.rows < 1 || uint64_t(m.first_row) + m.rows > kMaxViewportPx)
-    return f + "rows " + num(m.first_row) + ".." + num(uint64_t(m.first_row) + m.rows) + " outside [0, " +
-           num(kMaxViewportPx) + "]";
-  if (m.pixels.size() != 4 * uint64_t(m.width_px) * m.rows)
-    return f + num(m.pixels.size()) + " pixel bytes for " + num(m.rows) + " rows of " + num(m.width_px) +
-           " pixels (4 bytes each)";
-  return std::nullopt;
-}
-
 // ---- payload codecs ----
 
 void put(Writer& w, const Hello& m) {
@@ -357,10 +337,6 @@ void put(Writer& w, const Bye& m) { w.str(m.reason); }
 
 void put(Writer& w, const Proof& m) { w(m.mac); }
 void put(Writer& w, const Resync& m) { resync_fields(w, m); }
-void put(Writer& w, const FramePart& m) {
-  w(m.frame, m.kind, m.width_px, m.first_row, m.rows);
-  w.raw(m.pixels);
-}
 
 // Reads a u16-prefixed string; the caller has checked the fixed part.
 Result<std::string> get_str(Reader& r, std::string_view what) {
@@ -414,17 +390,6 @@ Result<Message> get_bye(Reader& r) {
   return Message{Bye{std::move(*reason)}};
 }
 
-Result<Message> get_frame_part(Reader& r) {
-  FramePart m;
-  r(m.frame, m.kind, m.width_px, m.first_row, m.rows);
-  const uint64_t need = 4 * uint64_t(m.width_px) * m.rows;  // no overflow in 64 bits
-  if (need != r.remaining())
-    return Error{"frame " + num(m.frame) + ": " + num(m.rows) + " rows of " + num(m.width_px) + " pixels need " +
-                 num(need) + " bytes, payload has " + num(r.remaining())};
-  r.raw(m.pixels, size_t(need));
-  return Message{std::move(m)};
-}
-
 Result<Message> get_proof(Reader& r) {
   Proof m;
   r(m.mac);
@@ -442,7 +407,6 @@ std::string_view type_name(Type t) {
     case Type::bye: return "bye";
     case Type::proof: return "proof";
     case Type::resync: return "resync";
-    case Type::frame_part: return "frame_part";
   }
   return "unknown";
 }
@@ -500,7 +464,6 @@ Result<Message> decode_payload(Type type, std::span<const uint8_t> payload) {
       case Type::bye: return get_bye(r);
       case Type::proof: return get_proof(r);
       case Type::resync: return get_fields<Resync>(r, resync_fields);
-      case Type::frame_part: return get_frame_part(r);
     }
     return Error{"unreachable"};
   }();
@@ -550,52 +513,6 @@ std::vector<NodeDiff> chunk_node_diff(uint32_t frame, std::span<const uint32_t> 
     r += take_r;
     out.push_back(std::move(d));
   }
-  return out;
-}
-
-}  // namespace occ::wire
-
-namespace occ::wire {
-
-std::vector<FramePart> chunk_frame_part(uint32_t frame, uint8_t kind, uint32_t width, uint32_t height,
-                                        std::span<const uint8_t> pixels) {
-  if (width < 1 || height < 1 || width > kMaxViewportPx || height > kMaxViewportPx)
-    throw std::invalid_argument("chunk_frame_part: image " + num(width) + "x" + num(height) + " outside [1, " +
-                                num(kMaxViewportPx) + "]");
-  const size_t row_bytes = 4 * size_t(width);
-  if (pixels.size() != row_bytes * height)
-    throw std::invalid_argument("chunk_frame_part: " + num(pixels.size()) + " bytes for a " + num(width) + "x" +
-                                num(height) + " image of 4-byte pixels");
-  const uint32_t rows_per = uint32_t((kMaxPayloadBytes - kFramePartFixedBytes) / row_bytes);
-  std::vector<FramePart> out;
-  for (uint32_t row = 0; row < height; row += rows_per) {
-    FramePart p;
-    p.frame = frame;
-    p.kind = kind;
-    p.width_px = width;
-    p.first_row = row;
-    p.rows = std::min(rows_per, height - row);
-    p.pixels.assign(pixels.begin() + std::ptrdiff_t(row * row_bytes),
-                    pixels.begin() + std::ptrdiff_t((row + p.rows) * row_bytes));
-    out.push_back(std::move(p));
-  }
-  return out;
-}
-
-std::vector<uint8_t> depth_to_bytes(std::span<const float> depth) {
-  std::vector<uint8_t> out(4 * depth.size());
-  for (size_t i = 0; i < depth.size(); ++i) {
-    const uint32_t v = std::bit_cast<uint32_t>(depth[i]);
-    for (int k = 0; k < 4; ++k) out[4 * i + k] = uint8_t(v >> (8 * k));
-  }
-  return out;
-}
-
-std::vector<float> depth_from_bytes(std::span<const uint8_t> bytes) {
-  std::vector<float> out(bytes.size() / 4);
-  for (size_t i = 0; i < out.size(); ++i)
-    out[i] = std::bit_cast<float>(uint32_t(bytes[4 * i]) | uint32_t(bytes[4 * i + 1]) << 8 |
-                                  uint32_t(bytes[4 * i + 2]) << 16 | uint32_t(bytes[4 * i + 3]) << 24);
   return out;
 }
 

@@ -10,7 +10,7 @@
 // Frame header (6 bytes)
 //   off size field
 //     0  u16  type            1 hello, 2 camera, 3 node_diff, 4 end_of_frame, 5 bye, 6 proof,
-//                             7 resync, 8 frame_part
+//                             7 resync
 //     2  u32  payload_bytes   <= kMaxPayloadBytes and within the type's size bounds below
 //
 // Hello (79 + name_bytes; 79..143) — first message on every connection, in both directions
@@ -44,12 +44,8 @@
 //                                      HC's queries); 2: the same with selected occluders (the OR
 //                                      and occluder fusion draw only objects covering at least
 //                                      kSelectedOccluderPixelsPerTriangle px per triangle); 0: its
-//                                      HC node sends the frustum set (no OR, no queries); 3: as 0,
-//                                      and the HC node also draws the second half of that set
-//                                      (sort-last, SceneRenderer::Part::second) and sends its colour
-//                                      and depth in FrameParts after the EndOfFrame. The render
-//                                      client's OcclusionGate chooses 0-2 (common/occlusion_gate.hpp),
-//                                      its sort-last setting 3 for 0
+//                                      HC node sends the frustum set (no OR, no queries). The render
+//                                      client's OcclusionGate chooses (common/occlusion_gate.hpp)
 //
 // NodeDiff (12 + 4 * (added_count + removed_count)) — one chunk of δ(f,f-1) and δ(f-1,f)
 //     0  u32  frame
@@ -99,17 +95,6 @@
 //     4  u32  epoch             >= 1
 //     8  u32  nodes             1 or 2
 //
-// FramePart (17 + 4 * width_px * rows) — switch node -> render client: rows of the node's half of
-// a sort-last frame (Camera.occlusion 3), after that frame's EndOfFrame; every row of the viewport
-// once for each kind (chunk_frame_part), colour first
-//     0  u32  frame
-//     4  u8   kind              0 colour: RGBA8, row 0 the top row; 1 depth: f32 bit patterns
-//                               (reverse-Z, 0 = far), row 0 the bottom row
-//     5  u32  width_px          1..16384
-//     9  u32  first_row         first_row + rows <= 16384
-//    13  u32  rows              >= 1
-//    17  u8[] pixels            4 bytes a pixel, rows x width_px, row after row
-//
 // Handshake (protocol/net/transport.hpp handshake()). C = the side that connected, A = the side
 // that accepted. C sends its Hello first; A answers with its Hello once it has C's (so a refusal,
 // e.g. "busy", can take the place of A's last message). With auth 0 on both sides that is all.
@@ -137,9 +122,8 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 7;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
-                                          // 5: Camera.occlusion; 6: Camera.occlusion 2 (selected occluders);
-                                          // 7: Camera.occlusion 3 and FramePart (sort-last)
+constexpr uint16_t kProtocolVersion = 6;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
+                                          // 5: Camera.occlusion; 6: Camera.occlusion 2 (selected occluders)
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
@@ -154,12 +138,9 @@ constexpr size_t kNonceBytes = 32;
 constexpr size_t kProofBytes = 32;  // HMAC-SHA256
 
 enum class Type : uint16_t {
-  hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5, proof = 6, resync = 7, frame_part = 8
+  hello = 1, camera = 2, node_diff = 3, end_of_frame = 4, bye = 5, proof = 6, resync = 7
 };
-constexpr size_t kTypeCount = 8;
-constexpr uint32_t kFramePartFixedBytes = 17;
-// Camera.occlusion: the values (see the table above).
-constexpr uint8_t kOcclusionOff = 0, kOcclusionOn = 1, kOcclusionSelected = 2, kOcclusionOffSortLast = 3;
+constexpr size_t kTypeCount = 7;
 constexpr size_t type_index(Type t) { return static_cast<size_t>(t) - 1; }  // 0..kTypeCount-1
 std::string_view type_name(Type t);  // "hello", ...; "unknown" for values outside the enum
 
@@ -247,18 +228,7 @@ struct Resync {
   bool operator==(const Resync&) const = default;
 };
 
-struct FramePart {
-  enum Kind : uint8_t { color = 0, depth = 1 };
-  uint32_t frame = 0;
-  uint8_t kind = color;
-  uint32_t width_px = 1;
-  uint32_t first_row = 0;
-  uint32_t rows = 1;
-  std::vector<uint8_t> pixels;  // 4 * width_px * rows bytes
-  bool operator==(const FramePart&) const = default;
-};
-
-using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye, Proof, Resync, FramePart>;
+using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye, Proof, Resync>;
 Type type_of(const Message& m);
 
 // The rules a decoded message must satisfy beyond its layout (finite camera values, unit
@@ -301,13 +271,5 @@ std::vector<uint8_t> proof_input(ProofDirection d, const Hello& prover, const He
 std::vector<NodeDiff> chunk_node_diff(uint32_t frame, std::span<const uint32_t> added,
                                       std::span<const uint32_t> removed,
                                       uint32_t max_ids = kDefaultDiffChunkIds);
-// Splits a width x height image of 4-byte pixels (row after row, pixels.size() = 4 * width *
-// height) into FrameParts of as many whole rows as fit in kMaxPayloadBytes. Throws
-// std::invalid_argument on a size outside the viewport bounds or a pixel count that does not match.
-std::vector<FramePart> chunk_frame_part(uint32_t frame, uint8_t kind, uint32_t width, uint32_t height,
-                                        std::span<const uint8_t> pixels);
-// Depth values as FramePart pixels (little-endian f32 bit patterns) and back.
-std::vector<uint8_t> depth_to_bytes(std::span<const float> depth);
-std::vector<float> depth_from_bytes(std::span<const uint8_t> bytes);
 
 }  // namespace occ::wire

@@ -5,8 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <bit>
-
 #include "protocol/wire.hpp"
 
 using namespace occ::wire;
@@ -171,7 +169,7 @@ TEST(Wire, TrailingBytesAreRejected) {
 
 TEST(Wire, CorruptedHeaderFieldsAreRejected) {
   auto bytes = encode(Camera{});
-  for (uint16_t type : {0, 9, 255, 0xffff}) {
+  for (uint16_t type : {0, 8, 255, 0xffff}) {
     auto b = bytes;
     put_u16(b, 0, type);
     EXPECT_EQ(decode_error(b), "unknown message type " + std::to_string(type));
@@ -202,19 +200,16 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 7)");
+            "hello: unsupported protocol version 1 (this build speaks 6)");
   put_u16(bad_version, 10, 3);  // the cluster key without Resync
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 3 (this build speaks 7)");
+            "hello: unsupported protocol version 3 (this build speaks 6)");
   put_u16(bad_version, 10, 4);  // cameras without the occlusion byte
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 4 (this build speaks 7)");
+            "hello: unsupported protocol version 4 (this build speaks 6)");
   put_u16(bad_version, 10, 5);  // cameras whose occlusion byte is 0 or 1 only
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 5 (this build speaks 7)");
-  put_u16(bad_version, 10, 6);  // no sort-last (Camera.occlusion 3, FramePart)
-  EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 6 (this build speaks 7)");
+            "hello: unsupported protocol version 5 (this build speaks 6)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
@@ -331,7 +326,7 @@ TEST(Wire, CameraRejectsEveryInvalidValue) {
        "camera: viewport 0x1 outside [1, 16384]"},
       {[](Camera& c, double, double) { c.viewport_height_px = 16385; },
        "camera: viewport 1x16385 outside [1, 16384]"},
-      {[](Camera& c, double, double) { c.occlusion = 4; }, "camera: occlusion 4 is not 0, 1, 2 or 3"},
+      {[](Camera& c, double, double) { c.occlusion = 3; }, "camera: occlusion 3 is not 0, 1 or 2"},
   };
   for (const Case& tc : cases) {
     Camera c;
@@ -421,58 +416,6 @@ TEST(Wire, TypeAndRoleNames) {
   EXPECT_EQ(type_index(Type::hello), 0u);
   EXPECT_EQ(type_index(Type::proof), 5u);
   EXPECT_EQ(type_name(Type::proof), "proof");
-  EXPECT_EQ(type_index(Type::frame_part), kTypeCount - 1);
+  EXPECT_EQ(type_index(Type::resync), kTypeCount - 1);
   EXPECT_EQ(type_name(Type::resync), "resync");
-  EXPECT_EQ(type_name(Type::frame_part), "frame_part");
-}
-
-// FramePart (sort-last): an image chunked into parts of whole rows that fit a payload, each round
-// trip exact; depth bit patterns survive; inconsistent parts are refused naming the problem.
-TEST(Wire, FramePartsCarryAWholeImageInRowsThatFitAPayload) {
-  const uint32_t w = 1000, h = 700;  // 4000-byte rows: 262 rows a part
-  std::vector<uint8_t> pixels(4 * size_t(w) * h);
-  for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = uint8_t(i * 7 + i / 4093);
-  const std::vector<FramePart> parts = chunk_frame_part(42, FramePart::color, w, h, pixels);
-  ASSERT_EQ(parts.size(), 3u);
-  std::vector<uint8_t> again;
-  uint32_t next_row = 0;
-  for (const FramePart& p : parts) {
-    EXPECT_EQ(p.first_row, next_row);
-    next_row += p.rows;
-    const std::vector<uint8_t> bytes = encode(Message{p});
-    EXPECT_LE(bytes.size() - kHeaderBytes, kMaxPayloadBytes);
-    auto back = decode(bytes);
-    ASSERT_TRUE(back) << back.error();
-    EXPECT_EQ(std::get<FramePart>(*back), p);
-    again.insert(again.end(), p.pixels.begin(), p.pixels.end());
-  }
-  EXPECT_EQ(next_row, h);
-  EXPECT_EQ(again, pixels);
-
-  const std::vector<float> depth = {0.0f, 1.0f, 0.25f, 1e-30f, 0.99999994f, -0.0f};
-  const std::vector<uint8_t> db = depth_to_bytes(depth);
-  ASSERT_EQ(db.size(), 24u);
-  EXPECT_EQ(db[4], 0x00);
-  EXPECT_EQ(db[7], 0x3f);  // 1.0f = 0x3f800000, little-endian
-  const std::vector<float> back = depth_from_bytes(db);
-  for (size_t i = 0; i < depth.size(); ++i)
-    EXPECT_EQ(std::bit_cast<uint32_t>(back[i]), std::bit_cast<uint32_t>(depth[i])) << i;
-
-  FramePart bad = parts[0];
-  bad.kind = 2;
-  EXPECT_EQ(invalid_reason(Message{bad}), "frame_part: frame 42: kind 2 is not 0 (colour) or 1 (depth)");
-  bad = parts[0];
-  bad.pixels.pop_back();
-  EXPECT_NE(invalid_reason(Message{bad})->find("pixel bytes for 262 rows of 1000 pixels"), std::string::npos);
-  bad = parts[0];
-  bad.first_row = kMaxViewportPx;
-  EXPECT_NE(invalid_reason(Message{bad})->find("outside [0, 16384]"), std::string::npos);
-  // A payload whose rows and width do not match its length is refused by the decoder.
-  std::vector<uint8_t> bytes = encode(Message{parts[2]});
-  bytes[6 + 13] ^= 1;  // rows
-  auto r = decode(bytes);
-  ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("frame_part: frame 42:"), std::string::npos) << r.error();
-  EXPECT_THROW(chunk_frame_part(1, 0, 2, 2, std::vector<uint8_t>(15)), std::invalid_argument);
-  EXPECT_THROW(chunk_frame_part(1, 0, 0, 2, {}), std::invalid_argument);
 }
