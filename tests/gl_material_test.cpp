@@ -6,10 +6,8 @@
 #include <cmath>
 #include <numeric>
 
-#include "common/camera_path.hpp"
 #include "common/culling.hpp"
 #include "common/gl/box_query.hpp"
-#include "common/gl/composite.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/hierarchy.hpp"
@@ -287,99 +285,4 @@ TEST_F(Materials, PrimitivesWithoutMaterialAndGeneratedScenesKeepTheHashedColour
   gen.objects.push_back(scene.objects[0]);
   EXPECT_EQ(pixel(render(gen, kFront), 64, 64), c) << "the same hashed colour";
   EXPECT_NE(pixel(render(gen, camera_at({0, 0, -2})), 64, 64), kBackground);
-}
-
-// Sort-last (SceneRenderer::Part, DepthCompositor): the first half drawn here, the second half's
-// colour and depth composited where strictly nearer, then the glass, equals the whole frame pixel
-// for pixel, also where surfaces tie in depth across the cut. Composited the other way round the
-// ties go to the later draw: the frame differs, so the scene does test the ties.
-TEST_F(Materials, SortLastHalvesCompositeToTheWholeFrame) {
-  GltfBuilder b = builder();
-  // Eight opaque quads on one plane, each overlapping its neighbours (depth ties), two nearer ones,
-  // and a glass pane in front of them all.
-  for (int i = 0; i < 8; ++i) {
-    const float f = float(i) / 7.0f;
-    b.node(b.quad(b.material(mat({f, 1.0f - f, float(i % 2), 1}))), {-0.7 + 0.2 * i, 0.06 * (i % 3), 0}, glm::dvec3(0.5));
-  }
-  b.node(b.quad(b.material(mat({1, 1, 0, 1}))), {0.2, -0.2, 0.3}, glm::dvec3(0.3));
-  b.node(b.quad(b.material(mat({0, 1, 1, 1}))), {-0.3, 0.25, 0.2}, glm::dvec3(0.25));
-  b.node(b.quad(b.material(mat({0, 0, 1, 0.5f}, "BLEND"))), {0, 0, 0.6}, glm::dvec3(0.8));
-  Scene scene = load(b);
-  Hierarchy h = Hierarchy::build(scene, {});
-  SceneRenderer r(*ctx_, scene, h);
-  DepthCompositor compositor(*ctx_);
-  const Renderables rs(h, nullptr);
-  std::vector<uint32_t> leaves;  // renderable id = node id for leaves at full detail
-  for (uint32_t n = 0; n < h.nodes().size(); ++n)
-    if (h.node(n).leaf() && h.node(n).item_count > 0) leaves.push_back(n);
-  using Part = SceneRenderer::Part;
-  for (const Camera& cam : {kFront, camera_at({0.7, 0.4, 1.8}), camera_at({-0.5, -0.3, 1.2}, {0.1, 0, 0})}) {
-    r.begin_frame(cam, true, true);
-    const DrawStats whole = r.draw_renderables(rs, leaves, SceneRenderer::Mode::Shaded);
-    const Image opaque = ctx_->read_rgba();  // before the glass
-    r.end_frame();
-    const Image expected = ctx_->read_rgba();
-    // Each half alone, as another process would read it back.
-    std::array<Image, 2> color;
-    std::array<std::vector<float>, 2> depth;
-    std::array<DrawStats, 2> half;
-    for (int k = 0; k < 2; ++k) {
-      r.begin_frame(cam, true, true);  // the glass waits (and is dropped with the next frame)
-      half[k] = r.draw_renderables(rs, leaves, SceneRenderer::Mode::Shaded, k == 0 ? Part::first : Part::second);
-      color[k] = ctx_->read_rgba();
-      depth[k] = ctx_->read_depth();
-    }
-    EXPECT_GT(half[0].items, 0u);
-    EXPECT_GT(half[1].items, 0u);
-    EXPECT_EQ(half[0].items + half[1].items, whole.items);  // opaque draws (the glass is deferred)
-    EXPECT_GE(2 * half[0].triangles, half[1].triangles);
-    // First here, second composited, then the glass.
-    r.begin_frame(cam, true, true);
-    r.draw_renderables(rs, leaves, SceneRenderer::Mode::Shaded, Part::first);
-    compositor.composite(color[1], depth[1]);
-    EXPECT_EQ(ctx_->read_rgba().rgba, opaque.rgba);
-    r.end_frame();
-    EXPECT_EQ(ctx_->read_rgba().rgba, expected.rgba);
-    EXPECT_NE(expected.rgba, opaque.rgba);  // the glass is there
-    // The other way round (no glass either way): ties go to the second half's draws.
-    r.begin_frame(cam, true, true);
-    r.draw_renderables(rs, leaves, SceneRenderer::Mode::Shaded, Part::second);
-    compositor.composite(color[0], depth[0]);
-    EXPECT_NE(ctx_->read_rgba().rgba, opaque.rgba);
-  }
-  EXPECT_THROW(compositor.composite(Image{1, 1, {0, 0, 0, 0}}, std::vector<float>(1)), std::invalid_argument);
-}
-
-// The same on the shared duplex (single-sided walls, glass, coplanar CAD faces), the frustum set
-// of an orbit and a walk, each cut in two.
-TEST_F(Materials, SortLastHalvesOfTheDuplexCompositeToTheWholeFrame) {
-  const std::string file = std::string(OCC_SHARED_DIR) + "/scenes/duplex/Duplex_A_20110505.gltf";
-  if (!fs::exists(file)) GTEST_SKIP() << file << " not found";
-  Scene scene = load_scene(file);
-  Hierarchy h = Hierarchy::build(scene, {});
-  SceneRenderer r(*ctx_, scene, h);
-  DepthCompositor compositor(*ctx_);
-  const Renderables rs(h, nullptr);
-  using Part = SceneRenderer::Part;
-  std::vector<Camera> cams = load_camera_path("orbit:4", scene.bounds(), {kSize, kSize});
-  for (const Camera& c : load_camera_path("walk:40", scene.bounds(), {kSize, kSize})) cams.push_back(c);
-  int compared = 0;
-  for (size_t i = 0; i < cams.size(); i += (i < 4 ? 1 : 9)) {
-    const Camera& cam = cams[i];
-    const std::vector<uint32_t> ids = frustum_cull(h, cam);
-    r.begin_frame(cam, true);
-    r.draw_renderables(rs, ids, SceneRenderer::Mode::Shaded);
-    const Image expected = ctx_->read_rgba();
-    r.begin_frame(cam, true, true);
-    if (r.draw_renderables(rs, ids, SceneRenderer::Mode::Shaded, Part::second).items == 0) continue;
-    const Image color = ctx_->read_rgba();
-    const std::vector<float> depth = ctx_->read_depth();
-    r.begin_frame(cam, true, true);
-    r.draw_renderables(rs, ids, SceneRenderer::Mode::Shaded, Part::first);
-    compositor.composite(color, depth);
-    r.end_frame();
-    EXPECT_EQ(ctx_->read_rgba().rgba, expected.rgba) << "camera " << i;
-    ++compared;
-  }
-  EXPECT_GE(compared, 6);
 }

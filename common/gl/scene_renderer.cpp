@@ -636,10 +636,6 @@ void SceneRenderer::add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode,
 }
 
 DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode) {
-  return draw_renderables(r, ids, mode, Part::whole);
-}
-
-DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode, Part part) {
   std::vector<std::pair<uint64_t, uint32_t>> order;  // (first item << 8 | level, id)
   order.reserve(ids.size());
   for (uint32_t id : ids) {
@@ -652,7 +648,7 @@ DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const 
   std::sort(order.begin(), order.end());
   DrawStats stats;
   for (auto [key, id] : order) add_renderable(r, id, mode, stats);
-  return submit(mode, stats, part);
+  return submit(mode, stats);
 }
 
 void SceneRenderer::add_renderable(const Renderables& r, uint32_t id, Mode mode, DrawStats& stats) {
@@ -791,8 +787,7 @@ DrawStats SceneRenderer::draw_nodes_ids(std::span<const uint32_t> node_ids) {
 
 DrawStats SceneRenderer::end_frame() { return draw_blended(); }
 
-DrawStats SceneRenderer::submit(Mode mode, DrawStats stats, Part part) {
-  if (part == Part::second) blended_.clear();  // the first half's process draws them
+DrawStats SceneRenderer::submit(Mode mode, DrawStats stats) {
   if (!pending_.empty()) {
     // Batches by key, each batch by segment, then near to far (the squared distance from the eye
     // to the object's box centre), then the given order: the nearer surfaces fill the depth
@@ -811,19 +806,7 @@ DrawStats SceneRenderer::submit(Mode mode, DrawStats stats, Part part) {
     });
     sorted_.clear();
     for (const BatchOrder& o : batch_order_) sorted_.push_back(pending_[o.index]);
-    if (part != Part::whole) {
-      // The cut: the first draw at which the triangles before it reach half of the call's.
-      size_t cut = 0;
-      uint64_t before = 0;
-      while (cut < sorted_.size() && 2 * before < stats.triangles) before += sorted_[cut++].draw.index_count / 3;
-      if (part == Part::first)
-        sorted_.resize(cut);
-      else
-        sorted_.erase(sorted_.begin(), sorted_.begin() + std::ptrdiff_t(cut));
-      stats = {};
-      for (const Pending& p : sorted_) stats += DrawStats{1, p.draw.index_count / 3};
-    }
-    if (!sorted_.empty()) draw_batches(sorted_, mode, false);
+    draw_batches(sorted_, mode, false);
     pending_.clear();
   }
   if (mode == Mode::Shaded && !defer_blended_) stats += draw_blended();

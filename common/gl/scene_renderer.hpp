@@ -171,16 +171,6 @@ class SceneRenderer {
   // near to far, then that order (submit), so z-ties resolve identically in every renderer.
   // Without LOD data uploaded, LOD ids fall back to full detail.
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
-  // Sort-last halves of one draw call (for a frame drawn by two processes, composited by
-  // DepthCompositor): the call's opaque and MASK draws in the order above, cut where the drawn
-  // triangles first reach half of the call's (the cut depends only on the draws and the camera,
-  // so two renderers given the same ids cut alike). First: the draws before the cut, and the
-  // BLEND draws as usual (deferred or at the end of the call); second: the draws from the cut on,
-  // no BLEND draws. A frame of First, then Second's colour and depth composited where strictly
-  // nearer, then the BLEND draws equals the frame of the whole call, pixel for pixel: ties keep
-  // the earlier draw, as in one pass (test SceneRenderer.SortLastHalvesCompositeToTheWholeFrame).
-  enum class Part { whole, first, second };
-  DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode, Part part);
   // Occlusion queries with real geometry (geometry_query.hpp): for each renderable ids[k], a
   // GL_SAMPLES_PASSED query queries[k] around its DepthOnly draws — the same programs, vertices,
   // face culling and MASK alpha test as draw_renderables(..., DepthOnly), so its depth is
@@ -267,7 +257,7 @@ class SceneRenderer {
   uint64_t batch_key(uint32_t object, Mode mode, bool lod) const;
   const ObjectMatrices& object_matrices(uint32_t object);
   void add_renderable(const Renderables& r, uint32_t id, Mode mode, DrawStats& stats);
-  DrawStats submit(Mode mode, DrawStats stats, Part part = Part::whole);
+  DrawStats submit(Mode mode, DrawStats stats);
   DrawStats draw_blended();
   // Uploads `draws` as records and commands and draws them in runs of equal key.
   void draw_batches(std::span<const Pending> draws, Mode mode, bool blended);
