@@ -493,3 +493,84 @@ TEST(SceneRenderer, AutomaticFlushPartsAreAnEighthOfTheCallWithinBounds) {
     }
   }
 }
+
+// The plant's solids are closed with outward faces (plant.hpp), so culling their back faces (its
+// single-sided material) hides nothing the double-sided drawing shows: from cameras along the walk
+// and looking across the bays, all but a few pixels (slits between abutting faces, sub-pixel
+// ends of thin open tubes) are equal. A mesh wound inside out would lose all its front pixels.
+TEST(SceneRenderer, PlantSolidsLookTheSameWithBackFacesCulled) {
+  Scene single = load_scene("plant:0.3");
+  ASSERT_EQ(single.materials.size(), 1u);
+  EXPECT_FALSE(single.materials[0].double_sided);
+  for (const Mesh& m : single.meshes) ASSERT_EQ(m.material, 0u) << m.name;
+  Scene both = single;
+  both.materials[0].double_sided = true;
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  const Aabb box = single.bounds();
+  size_t differing = 0, shown = 0, frames = 0;
+  for (double t : {0.1, 0.4, 0.7}) {
+    const glm::dvec3 eye(box.min.x + t * (box.max.x - box.min.x), 1.7 + 8.0 * t, 0.0);
+    for (const glm::dvec3 dir : {glm::dvec3(1, -0.05, 0), glm::dvec3(0.3, 0.1, 1), glm::dvec3(-0.2, 0.3, -1)}) {
+      const Camera cam = Camera::look_at(eye, eye + dir, {0, 1, 0}, 60.0, 1.0, 0.1, 500.0);
+      const Image a = render_shaded(*ctx, single, cam), b = render_shaded(*ctx, both, cam);
+      ASSERT_EQ(a.rgba.size(), b.rgba.size());
+      for (size_t i = 0; i < a.rgba.size(); i += 4) {
+        differing += !std::equal(&a.rgba[i], &a.rgba[i] + 3, &b.rgba[i]);
+        shown += b.rgba[i] || b.rgba[i + 1] || b.rgba[i + 2];
+      }
+      ++frames;
+    }
+  }
+  const size_t pixels = frames * size_t(kSize) * kSize;
+  std::cout << "plant single- vs double-sided: " << differing << " of " << pixels << " pixels differ\n";
+  EXPECT_GT(shown, pixels / 2);             // the views show the plant
+  EXPECT_LT(differing, pixels / 1000 + 1);  // under 0.1 %
+}
+
+// The exact count's glass (reference --exact): a BLEND item counts as shown when it passes the
+// depth test against the opaque depth, as the Shaded pass draws it. Glass in front of a wall and
+// glass beside it show; glass behind the wall does not; an opaque item is refused.
+TEST(SceneRenderer, BlendedItemsShowOnlyWhereTheyAreInFrontOfOpaqueDepth) {
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  Scene scene;
+  scene.meshes.push_back(quad_mesh());  // opaque: no material
+  scene.meshes.push_back(quad_mesh());
+  scene.materials.push_back({.name = "glass", .base_color = {0.2f, 0.4f, 1.0f, 0.5f}, .alpha_mode = AlphaMode::Blend,
+                             .double_sided = true});
+  scene.meshes[1].material = 0;
+  scene.objects.push_back({0, place({0, 0, -4}, 2.0), "wall"});
+  scene.objects.push_back({1, place({0, 0, -3}, 0.5), "glass in front"});
+  scene.objects.push_back({1, place({0, 0, -6}, 0.5), "glass behind"});
+  scene.objects.push_back({1, place({2.5, 0, -6}, 0.5), "glass beside"});
+  const Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer r(*ctx, scene, h);
+  ASSERT_TRUE(r.has_blended());
+  std::vector<uint32_t> glass;
+  std::vector<std::string> names;
+  for (uint32_t i = 0; i < h.items().size(); ++i) {
+    const uint32_t object = h.items()[i].object;
+    EXPECT_EQ(r.item_blended(i), scene.objects[object].mesh == 1) << scene.objects[object].name;
+    if (r.item_blended(i)) {
+      glass.push_back(i);
+      names.push_back(scene.objects[object].name);
+    }
+  }
+  ASSERT_EQ(glass.size(), 3u);
+  r.begin_id_frame(camera_at({0, 0, 0}));
+  r.draw_items(all_items(h), SceneRenderer::Mode::ItemIds);
+  EXPECT_EQ(ids_in_image(ctx->read_rgba()).size(), 1u);  // the wall only: glass is not in the item buffer
+  std::vector<GLuint> queries(glass.size());
+  ctx->gl().CreateQueries(GL_SAMPLES_PASSED, GLsizei(queries.size()), queries.data());
+  r.query_blended_items(glass, queries);
+  for (size_t k = 0; k < glass.size(); ++k) {
+    GLuint64 samples = 0;
+    ctx->gl().GetQueryObjectui64v(queries[k], GL_QUERY_RESULT, &samples);
+    EXPECT_EQ(samples > 0, names[k] != "glass behind") << names[k] << ": " << samples << " samples";
+  }
+  ctx->gl().DeleteQueries(GLsizei(queries.size()), queries.data());
+  uint32_t wall_item = 0;
+  while (r.item_blended(wall_item)) ++wall_item;
+  const uint32_t bad[] = {wall_item};
+  const GLuint q[] = {0};
+  EXPECT_THROW(r.query_blended_items(bad, q), std::invalid_argument);
+}
