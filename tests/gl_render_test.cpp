@@ -450,12 +450,13 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   for (SceneRenderer::Mode mode : {SceneRenderer::Mode::Shaded, SceneRenderer::Mode::ItemIds}) {
     Image first;
     DrawStats first_stats;
-    // ~0u: automatic part sizes (flush_part), the default.
-    for (uint32_t flush : {0u, 1u, 97u, 5000u, SceneRenderer::kFlushTriangles, ~0u}) {
-      if (flush == ~0u)
-        r.set_flush_automatic();
+    // nullopt: automatic part sizes (flush_part).
+    for (std::optional<uint32_t> flush : {std::optional<uint32_t>(0u), {1u}, {97u}, {5000u},
+                                          {SceneRenderer::kFlushTriangles}, std::optional<uint32_t>()}) {
+      if (flush)
+        r.set_flush_triangles(*flush);
       else
-        r.set_flush_triangles(flush);
+        r.set_flush_automatic();
       if (mode == SceneRenderer::Mode::ItemIds)
         r.begin_id_frame(cam);
       else
@@ -471,7 +472,8 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
       }
       EXPECT_EQ(st.items, first_stats.items);
       EXPECT_EQ(st.triangles, first_stats.triangles);
-      ASSERT_EQ(img.rgba, first.rgba) << "mode " << int(mode) << ", flush every " << flush << " triangles";
+      ASSERT_EQ(img.rgba, first.rgba) << "mode " << int(mode) << ", flush every "
+                                      << (flush ? std::to_string(*flush) : std::string("automatic")) << " triangles";
     }
   }
 }

@@ -923,15 +923,16 @@ void SceneRenderer::draw_runs(std::span<const Pending> draws, size_t first, size
   }
 }
 
+uint32_t SceneRenderer::part_for(std::span<const Pending> draws) const {
+  if (flush_triangles_) return *flush_triangles_;
+  uint64_t triangles = 0;
+  for (const Pending& p : draws) triangles += p.draw.index_count / 3;
+  return flush_part(triangles);
+}
+
 void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool blended) {
   upload_draws(draws);
-  if (flush_triangles_) {
-    part_triangles_ = *flush_triangles_;
-  } else {
-    uint64_t triangles = 0;
-    for (const Pending& p : draws) triangles += p.draw.index_count / 3;
-    part_triangles_ = flush_part(triangles);
-  }
+  part_triangles_ = part_for(draws);
   const bool color = mode != Mode::DepthOnly;
   const bool offset = !color && occluder_offset_;  // see set_occluder_offset()
   if (offset) {

@@ -261,6 +261,7 @@ class SceneRenderer {
   DrawStats draw_blended();
   // Uploads `draws` as records and commands and draws them in runs of equal key.
   void draw_batches(std::span<const Pending> draws, Mode mode, bool blended);
+  uint32_t part_for(std::span<const Pending> draws) const;  // the fixed part size, or flush_part
   void upload_draws(std::span<const Pending> draws);  // draw i = record i = command i
   struct RunState {  // GL state bound by draw_runs
     unsigned bits = ~0u;
