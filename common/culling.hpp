@@ -232,7 +232,7 @@ enum class LeafTest {
 // pyramid first with queries for the boxes it cannot prove occluded (every batch, or where it pays:
 // automatic); or a whole batch in one draw counting samples in a buffer (batch). The answers are
 // the same: only what they cost differs.
-enum class HcTest { queries, pyramid, automatic, batch };
+enum class HcTest { queries, pyramid, automatic, batch, cpu_pyramid };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {

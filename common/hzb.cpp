@@ -2,6 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#ifdef __SSE2__
+#include <immintrin.h>
+#endif
+#include <stdexcept>
+#include <string>
 
 namespace occ {
 
@@ -39,23 +44,51 @@ BoxFootprint box_footprint(const Aabb& box, const Camera& cam, const Viewport& v
 }
 
 void DepthPyramid::build(const std::vector<float>& depth, int width, int height) {
-  levels_.clear();
-  levels_.push_back({width, height, depth});
-  while (levels_.back().w > 1 || levels_.back().h > 1) {
-    const Level& lo = levels_.back();
-    Level up{(lo.w + 1) / 2, (lo.h + 1) / 2, {}};
-    up.d.resize(size_t(up.w) * up.h);
-    for (int y = 0; y < up.h; ++y)
-      for (int x = 0; x < up.w; ++x) {
-        float m = 1.0f;
-        for (int dy = 0; dy < 2; ++dy)
-          for (int dx = 0; dx < 2; ++dx) {
-            const int sx = 2 * x + dx, sy = 2 * y + dy;
-            if (sx < lo.w && sy < lo.h) m = std::min(m, lo.d[size_t(sy) * lo.w + sx]);
-          }
-        up.d[size_t(y) * up.w + x] = m;
+  if (depth.size() != size_t(std::max(width, 0)) * size_t(std::max(height, 0)))
+    throw std::invalid_argument("DepthPyramid::build: " + std::to_string(depth.size()) + " depths for " +
+                                std::to_string(width) + "x" + std::to_string(height));
+  std::copy(depth.begin(), depth.end(), level0(width, height));
+  build_levels();
+}
+
+float* DepthPyramid::level0(int width, int height) {
+  if (width < 1 || height < 1)
+    throw std::invalid_argument("DepthPyramid: viewport " + std::to_string(width) + "x" + std::to_string(height));
+  if (levels_.empty() || levels_[0].w != width || levels_[0].h != height) {
+    levels_.clear();
+    for (int w = width, h = height;; w = (w + 1) / 2, h = (h + 1) / 2) {
+      levels_.push_back({w, h, std::vector<float>(size_t(w) * size_t(h))});
+      if (w == 1 && h == 1) break;
+    }
+  }
+  return levels_[0].d.data();
+}
+
+void DepthPyramid::build_levels() {
+  // Each texel the minimum of its up to 2 x 2 texels below; a missing last row or column repeats
+  // the one before it (the minimum is unchanged). Four texels at a time with SSE (a 1024 x 1024
+  // build: 0.58 ms as plain loops, which g++ -O2 does not vectorise).
+  for (size_t k = 1; k < levels_.size(); ++k) {
+    const Level& lo = levels_[k - 1];
+    Level& up = levels_[k];
+    const int pairs = lo.w / 2;  // texels of `up` with two columns below
+    for (int y = 0; y < up.h; ++y) {
+      const float* r0 = lo.d.data() + size_t(2 * y) * lo.w;
+      const float* r1 = lo.d.data() + size_t(std::min(2 * y + 1, lo.h - 1)) * lo.w;
+      float* out = up.d.data() + size_t(y) * up.w;
+      int x = 0;
+#ifdef __SSE2__
+      for (; x + 4 <= pairs; x += 4) {
+        const __m128 v0 = _mm_min_ps(_mm_loadu_ps(r0 + 2 * x), _mm_loadu_ps(r1 + 2 * x));
+        const __m128 v1 = _mm_min_ps(_mm_loadu_ps(r0 + 2 * x + 4), _mm_loadu_ps(r1 + 2 * x + 4));
+        _mm_storeu_ps(out + x, _mm_min_ps(_mm_shuffle_ps(v0, v1, _MM_SHUFFLE(2, 0, 2, 0)),
+                                          _mm_shuffle_ps(v0, v1, _MM_SHUFFLE(3, 1, 3, 1))));
       }
-    levels_.push_back(std::move(up));
+#endif
+      for (; x < pairs; ++x)
+        out[x] = std::min(std::min(r0[2 * x], r0[2 * x + 1]), std::min(r1[2 * x], r1[2 * x + 1]));
+      if (pairs < up.w) out[pairs] = std::min(r0[2 * pairs], r1[2 * pairs]);
+    }
   }
 }
 
@@ -82,6 +115,100 @@ bool DepthPyramid::occludes(const PyramidProbe& p) const {
     for (int x = p.x0; x <= p.x1; ++x)
       if (!(p.depth < l.d[size_t(y) * l.w + x])) return false;
   return true;
+}
+
+bool DepthPyramid::shows(const Aabb& box, const Camera& cam, int samples_per_axis) const {
+  if (box.empty() || levels_.empty() || samples_per_axis < 1) return false;
+  const Level& l0 = levels_[0];
+  const glm::dvec3 lo = box.min - cam.eye, hi = box.max - cam.eye;  // camera-relative, as drawn
+  const glm::dmat4 proj = cam.projection();
+  const glm::dmat4 vpm = proj * cam.view_rotation();
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, wmin = 1e300, zmax = -1e300;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec3 c{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
+    const glm::dvec4 clip = vpm * glm::dvec4(c, 1.0);
+    if (!(clip.w >= cam.near_dist * (1.0 + 1e-3))) return false;
+    xmin = std::min(xmin, clip.x / clip.w);
+    xmax = std::max(xmax, clip.x / clip.w);
+    ymin = std::min(ymin, clip.y / clip.w);
+    ymax = std::max(ymax, clip.y / clip.w);
+    zmax = std::max(zmax, clip.z / clip.w);
+    wmin = std::min(wmin, clip.w);
+  }
+  auto to_px = [](double ndc, int size) { return (ndc * 0.5 + 0.5) * size; };
+  const int x0 = std::max(0, int(std::floor(to_px(xmin, l0.w)))), x1 = std::min(l0.w - 1, int(std::floor(to_px(xmax, l0.w))));
+  const int y0 = std::max(0, int(std::floor(to_px(ymin, l0.h)))), y1 = std::min(l0.h - 1, int(std::floor(to_px(ymax, l0.h))));
+  if (x0 > x1 || y0 > y1) return false;
+  const glm::dmat4 inv = glm::inverse(vpm);
+  const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / wmin;
+  // A pixel's size in world units per unit of distance (the smaller of its two sides).
+  const double pixel = 2.0 * std::tan(cam.fovy_rad * 0.5) * std::min(1.0 / l0.h, cam.aspect / l0.w);
+  // Whether the query would count pixel (px, py): its centre's ray enters the box through the
+  // inside of a face, at least 1/64 pixel from the face's edges (the query's box is padded
+  // outwards besides), and the entry point, less the depth margin, is nearer than the depth there.
+  auto sample = [&](int px, int py) {
+    const glm::dvec4 r = inv * glm::dvec4((px + 0.5) / l0.w * 2.0 - 1.0, (py + 0.5) / l0.h * 2.0 - 1.0, 0.5, 1.0);
+    const glm::dvec3 d = glm::dvec3(r) / r.w;  // a point on the pixel centre's ray (the eye at 0)
+    double t0 = 0;
+    int entry = -1;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] == 0) continue;
+      const double ta = std::min(lo[a] / d[a], hi[a] / d[a]);
+      if (ta > t0) t0 = ta, entry = a;
+    }
+    if (entry < 0) return false;
+    const glm::dvec3 at = t0 * d;
+    const double margin = glm::length(at) * pixel / 64.0;
+    for (int a = 0; a < 3; ++a)
+      if (a != entry && !(lo[a] + margin < at[a] && at[a] < hi[a] - margin)) return false;
+    const glm::dvec4 clip = vpm * glm::dvec4(at, 1.0);
+    const double z = clip.z / clip.w;
+    return z - 1e-3 * std::abs(z) - 1e-5 * terms > double(l0.d[size_t(py) * l0.w + px]);
+  };
+  // First where the depth is farthest: the texels of a coarse level over the rectangle, farthest
+  // first, each followed down to the farthest pixel below it (no pixel under a texel at least as
+  // near as the box's nearest corner can show).
+  const uint32_t level = pyramid_level_for(x0, y0, x1, y1, uint32_t(levels_.size()), 4);
+  struct Texel { float d; int x, y; };
+  Texel found[16];
+  int n = 0;
+  const Level& lc = levels_[level];
+  for (int y = y0 >> level; y <= (y1 >> level); ++y)
+    for (int x = x0 >> level; x <= (x1 >> level) && n < 16; ++x) {
+      const float d = lc.d[size_t(y) * lc.w + x];
+      if (double(d) < zmax) found[n++] = {d, x, y};
+    }
+  std::sort(found, found + n, [](const Texel& a, const Texel& b) { return a.d < b.d; });
+  for (int k = 0; k < std::min(n, 4); ++k) {
+    int x = found[k].x, y = found[k].y;
+    for (uint32_t l = level; l > 0; --l) {
+      const Level& below = levels_[l - 1];
+      int bx = 2 * x, by = 2 * y;
+      float best = 2.0f;
+      for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+          const int cx = 2 * x + dx, cy = 2 * y + dy;
+          if (cx < below.w && cy < below.h && below.d[size_t(cy) * below.w + cx] < best) {
+            best = below.d[size_t(cy) * below.w + cx];
+            bx = cx;
+            by = cy;
+          }
+        }
+      x = bx;
+      y = by;
+    }
+    if (x >= x0 && x <= x1 && y >= y0 && y <= y1 && sample(x, y)) return true;
+  }
+  // Then a grid over the rectangle.
+  const int nx = std::min(samples_per_axis, x1 - x0 + 1), ny = std::min(samples_per_axis, y1 - y0 + 1);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      // The pixel at the middle of cell (i, j) of an nx x ny grid over the rectangle.
+      const int px = x0 + int((int64_t(2 * i + 1) * (x1 - x0 + 1)) / (2 * nx));
+      const int py = y0 + int((int64_t(2 * j + 1) * (y1 - y0 + 1)) / (2 * ny));
+      if (sample(px, py)) return true;
+    }
+  return false;
 }
 
 uint32_t pyramid_level_count(const Viewport& vp) {

@@ -57,6 +57,11 @@ class DepthPyramid {
  public:
   // depth: width*height floats, row 0 at the bottom (glReadPixels order).
   void build(const std::vector<float>& depth, int width, int height);
+  // The same in two steps without a copy: level 0's storage (width*height floats, row 0 at the
+  // bottom) for the caller to fill, e.g. by glReadPixels straight into it, then build_levels().
+  // Memory is reused from build to build of one size.
+  float* level0(int width, int height);
+  void build_levels();
   // Conservative: false only if every pixel of the footprint has an occluder strictly in front
   // of the box's nearest point.
   bool may_be_visible(const BoxFootprint& fp) const;
@@ -66,6 +71,17 @@ class DepthPyramid {
   // The CPU twin of the GPU pyramid test (common/gl/hzb_query.*): true when every texel of the
   // probe's rectangle at its level lies strictly in front of probe.depth. Only for Kind::probe.
   bool occludes(const PyramidProbe& p) const;
+  // The converse, from level 0 alone: true when an occlusion query of `box` against this very
+  // depth buffer would count a sample (common/gl/box_query.hpp: the box padded, front faces,
+  // GL_GREATER). Up to samples_per_axis^2 pixel centres spread over the box's screen rectangle
+  // are tried, those under the farthest texels of a coarse level first: a pixel whose centre's
+  // ray enters the box through the inside of a face (1/64 pixel from its edges: the rasteriser
+  // covers that centre, all the more with the query's padded box) and whose depth is strictly
+  // farther than the entry point, less the margin of pyramid_probe() for the GPU's float
+  // transform and interpolation, is a sample the query would count (the padded box's front face
+  // on that ray is at least as near). False proves nothing; a box not wholly in front of the near
+  // plane (by 1e-3) is never proven.
+  bool shows(const Aabb& box, const Camera& cam, int samples_per_axis = 8) const;
   int width() const { return levels_.empty() ? 0 : levels_[0].w; }
   int height() const { return levels_.empty() ? 0 : levels_[0].h; }
   size_t level_count() const { return levels_.size(); }

@@ -23,7 +23,7 @@
 # --keep-frames. Prints figures; asserts nothing about speed.
 #
 #   scripts/bench.sh --scene S [--path P] [--frames N] [--width W --height H] [--out DIR]
-#                    [--model-delay-ms D] [--keep-frames] [--hc-test queries|pyramid|auto|batch]
+#                    [--model-delay-ms D] [--keep-frames] [--hc-test queries|pyramid|auto|batch|cpu-pyramid]
 #
 # --path walk|orbit|fly gets --frames frames (default walk, 200); the viewport defaults to 512x512 as
 # everywhere. --hc-test goes to the switch nodes (how HC tests boxes; switch_node --help); without

@@ -781,14 +781,14 @@ class SwitchNode {
                 << " HC frames served alone\n";
     if (querier_) {
       const HcQuerier::Stats& q = querier_->stats();
-      static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch"};
+      static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch", "cpu-pyramid"};
       std::fprintf(stderr,
                    "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
-                   "batch draws, %llu proven occluded by the depth pyramid (of %llu tested against it in %llu "
-                   "dispatches; %llu pyramid builds)\n",
+                   "batch draws, %llu proven occluded by the depth pyramid (%.2f M pixels of their rectangles) and %llu shown; of %llu "
+                   "tested against it in %llu dispatches; %llu pyramid builds)\n",
                    who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
                    (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
-                   (unsigned long long)q.pyramid_occluded,
+                   (unsigned long long)q.pyramid_occluded, double(q.pyramid_pixels) / 1e6, (unsigned long long)q.shown,
                    (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds);
     }
     std::fprintf(stderr,

@@ -197,3 +197,60 @@ TEST(HzbProbe, OccludesNeverWhereBruteForceSeesAPixelAndFinerSpansProveMore) {
   EXPECT_GT(proven16, proven2);
   EXPECT_GT(proven2, brute_hidden / 4);
 }
+
+// DepthPyramid::shows (the CPU proof that a box's query counts a sample) on synthetic buffers: a
+// cleared buffer shows nearly every box wholly in front of the near plane that is on screen; a buffer at
+// the near plane shows none; on random rectangles it claims a box only where brute force over the
+// pixel centres (ray through the centre enters the box at a depth nearer than the pixel's) agrees.
+TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
+  const int w = 160, h = 120;
+  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
+  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
+  const glm::dmat4 inv = glm::inverse(vpm);
+  DepthPyramid cleared, nearest;
+  cleared.build(std::vector<float>(size_t(w) * h, 0.0f), w, h);
+  nearest.build(std::vector<float>(size_t(w) * h, 1.0f), w, h);
+  int probed = 0, brute_shows = 0, shown = 0, shown_cleared = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    auto d = random_depth(w, h, 20);
+    DepthPyramid p;
+    p.build(d, w, h);
+    for (int i = 0; i < 200; ++i) {
+      glm::dvec3 c(rnd() * 40 - 20, rnd() * 30 - 15, -(0.2 + rnd() * 60));
+      glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 3);
+      const Aabb box{c - e, c + e};
+      const bool in_front = pyramid_probe(box, cam, {w, h}, 1e-5).kind == PyramidProbe::Kind::probe;
+      EXPECT_FALSE(nearest.shows(box, cam));
+      if (!in_front) {
+        EXPECT_FALSE(p.shows(box, cam)) << "only boxes wholly in front of the near plane, on screen";
+        continue;
+      }
+      ++probed;
+      shown_cleared += cleared.shows(box, cam);
+      bool brute = false;
+      for (int y = 0; y < h && !brute; ++y)
+        for (int x = 0; x < w && !brute; ++x) {
+          const glm::dvec4 r = inv * glm::dvec4((x + 0.5) / w * 2 - 1, (y + 0.5) / h * 2 - 1, 0.5, 1.0);
+          const glm::dvec3 dir = glm::dvec3(r) / r.w;
+          double t0 = 0, t1 = 1e300;
+          for (int a = 0; a < 3; ++a) {
+            double ta = (box.min[a] - cam.eye[a]) / dir[a], tb = (box.max[a] - cam.eye[a]) / dir[a];
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+          }
+          if (!(t0 < t1)) continue;
+          const glm::dvec4 clip = vpm * glm::dvec4(t0 * dir, 1.0);
+          brute = clip.z / clip.w > d[size_t(y) * w + x];
+        }
+      const bool s = p.shows(box, cam);
+      ASSERT_TRUE(brute || !s) << "shows a box no pixel centre sees, trial " << trial << " box " << i;
+      brute_shows += brute;
+      shown += s;
+    }
+  }
+  EXPECT_GT(probed, 1000);
+  EXPECT_GT(shown_cleared, probed * 9 / 10) << "a cleared buffer shows nearly every box (not those between pixel centres)";
+  EXPECT_GT(brute_shows, probed / 4);
+  EXPECT_GT(shown, brute_shows / 2) << "the proof finds most of them";
+}

@@ -140,6 +140,44 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
   }
 }
 
+// The converse proof (DepthPyramid::shows, HcTest::cpu_pyramid) against the occlusion query, box
+// by box on the read-back depth: "shows" only where the query counts a sample, and for a good
+// share of the boxes whose queries pass (one that proves nothing would pass the first check).
+TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
+  for (const Viewport vp : {Viewport{256, 256}, Viewport{203, 117}}) {
+    Plant p(vp.width, vp.height, "plant:0.05", 6);
+    BoxQuerier q(*p.ctx);
+    size_t passed = 0, shown = 0, total = 0;
+    for (const Camera& cam : p.path) {
+      p.draw_occluders(cam);
+      DepthPyramid cpu;
+      cpu.build(p.ctx->read_depth(), vp.width, vp.height);
+      const std::vector<Aabb> boxes = test_boxes(p, cam, 1500);
+      q.begin(cam);
+      std::vector<uint32_t> handles;
+      for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        const uint64_t samples = q.result(handles[i]);
+        const bool shows = cpu.shows(boxes[i], cam);
+        ASSERT_TRUE(!shows || samples > 0) << "box " << i << " proven to show but its query saw no sample";
+        // Boxes not wholly in front of the near plane are never proven (their queries draw both sides).
+        if (shows) {
+          EXPECT_EQ(pyramid_probe(boxes[i], cam, vp, BoxQuerier::kRelativePad).kind, PyramidProbe::Kind::probe);
+        }
+        passed += samples > 0;
+        shown += shows;
+      }
+      q.end_batch();
+      q.end();
+      total += boxes.size();
+    }
+    EXPECT_GT(passed, total / 10) << "a good share of the boxes show";
+    EXPECT_GT(shown, passed / 3) << "the CPU proves a good share of those";
+    std::printf("viewport %dx%d: %zu boxes, %zu with samples, %zu proven to show on the CPU\n", vp.width, vp.height,
+                total, passed, shown);
+  }
+}
+
 // One draw per batch with per-box counters gives each box exactly its occlusion query's sample
 // count (same boxes, same triangles, same depth test), near boxes and empty ones included; without
 // exact counts, 1 where the query counts any sample and 0 where it counts none.
@@ -185,7 +223,7 @@ TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
 // between batches, adaptive queries, visibility hold), once per --hc-test: the visible sets of
 // every frame are those of queries only (tau = 0), and the pyramid did prove boxes occluded.
 // (--hc-test batch too: one draw per batch.)
-TEST(HcQuerier, PyramidAutoAndBatchFindTheVisibleSetsOfQueriesOnAWalk) {
+TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
   const int w = 256, hgt = 192, frames = 24;
   Plant p(w, hgt, "plant:0.3", frames);
   const Renderables renderables(p.h, nullptr);
@@ -225,16 +263,25 @@ TEST(HcQuerier, PyramidAutoAndBatchFindTheVisibleSetsOfQueriesOnAWalk) {
     *stats = querier.stats();
     return sets;
   };
-  HcQuerier::Stats q{}, py{}, au{}, ba{};
+  HcQuerier::Stats q{}, py{}, au{}, ba{}, cp{};
   const auto reference = replay(HcTest::queries, &q);
   const auto pyramid = replay(HcTest::pyramid, &py);
   const auto automatic = replay(HcTest::automatic, &au);
   const auto batch = replay(HcTest::batch, &ba);
+  const auto cpu = replay(HcTest::cpu_pyramid, &cp);
   for (int f = 0; f < frames; ++f) {
     ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--hc-test pyramid, frame " << f;
     ASSERT_EQ(automatic[size_t(f)], reference[size_t(f)]) << "--hc-test auto, frame " << f;
     ASSERT_EQ(batch[size_t(f)], reference[size_t(f)]) << "--hc-test batch, frame " << f;
+    ASSERT_EQ(cpu[size_t(f)], reference[size_t(f)]) << "--hc-test cpu-pyramid, frame " << f;
   }
+  EXPECT_EQ(cp.tests, q.tests);
+  EXPECT_EQ(cp.occluded, q.occluded);
+  EXPECT_GT(cp.pyramid_occluded, 0u);
+  EXPECT_GT(cp.shown, 0u);
+  EXPECT_EQ(cp.batched + cp.queries + cp.pyramid_occluded + cp.shown, cp.tests)
+      << "cpu-pyramid: every box proven on the CPU, batched or a query";
+  EXPECT_LT(cp.batched + cp.queries, ba.batched + ba.queries) << "the CPU decided some boxes";
   EXPECT_EQ(ba.tests, q.tests);
   EXPECT_EQ(ba.occluded, q.occluded);
   EXPECT_EQ(ba.batched + ba.queries, ba.tests) << "batch: small boxes in the draws, big ones queries";
@@ -248,10 +295,13 @@ TEST(HcQuerier, PyramidAutoAndBatchFindTheVisibleSetsOfQueriesOnAWalk) {
   EXPECT_GT(py.builds, uint64_t(frames) - 1) << "at least one build per frame with tests";
   EXPECT_LE(au.queries, q.queries);
   std::printf("%d frames: %llu boxes tested; pyramid: %llu queries, %llu proven occluded, %llu builds; auto: %llu "
-              "queries, %llu proven occluded, %llu builds\n",
+              "queries, %llu proven occluded, %llu builds; cpu-pyramid: %llu batched, %llu queries, %llu proven "
+              "occluded, %llu shown, %llu builds\n",
               frames, (unsigned long long)q.tests, (unsigned long long)py.queries,
               (unsigned long long)py.pyramid_occluded, (unsigned long long)py.builds, (unsigned long long)au.queries,
-              (unsigned long long)au.pyramid_occluded, (unsigned long long)au.builds);
+              (unsigned long long)au.pyramid_occluded, (unsigned long long)au.builds, (unsigned long long)cp.batched,
+              (unsigned long long)cp.queries, (unsigned long long)cp.pyramid_occluded, (unsigned long long)cp.shown,
+              (unsigned long long)cp.builds);
 }
 
 // Automatic mode where the pyramid proves nothing (nothing drawn: every box shows): after its first
@@ -281,6 +331,31 @@ TEST(HcQuerier, AutomaticStopsBuildingThePyramidWhereItProvesNothing) {
   EXPECT_EQ(q.stats().pyramid_occluded, 0u);
   EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
   EXPECT_EQ(q.stats().tests, uint64_t(frames) * boxes.size());
+}
+
+// cpu-pyramid where sample counts matter (visible-pixel LOD): every answer is the query's count
+// (boxes proven occluded answer 0, none is answered "shows" without its count).
+TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
+  Plant p(192, 160, "plant:0.05", 3);
+  HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
+  BoxQuerier reference(*p.ctx);
+  for (const Camera& cam : p.path) {
+    const std::vector<Aabb> boxes = test_boxes(p, cam, 400);
+    p.draw_occluders(cam);
+    reference.begin(cam);
+    std::vector<uint64_t> expected;
+    for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
+    reference.end_batch();
+    reference.end();
+    q.begin(cam);
+    std::vector<uint32_t> handles;
+    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "box " << i;
+    q.end_batch();
+    q.end();
+  }
+  EXPECT_GT(q.stats().pyramid_occluded, 0u);
+  EXPECT_EQ(q.stats().shown, 0u);
 }
 
 // Not a check (no timing assertions): what a build and a test dispatch cost at 1024 x 1024 here.

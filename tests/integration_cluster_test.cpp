@@ -186,10 +186,11 @@ TEST(Cluster, SelectedOccludersEqualReferenceWithNoFewerLeaves) {
   for (size_t f = 0; f < 40; ++f) EXPECT_EQ(all_stats["occlusion"][f], 1.0) << "frame " << f;
 }
 
-// The default HC test is batch (one draw per batch counting samples in a buffer); occlusion queries
-// stay available. Node 0 with --hc-test queries, node 1 with the default: the reference's frames,
-// node 0 drew no batch and node 1 counted boxes in batch draws.
-TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultBatchOnNode1EqualsReference) {
+// The default HC test is cpu-pyramid (a depth pyramid read back to the CPU decides what it can,
+// the rest are counted by one draw per batch); occlusion queries stay available. Node 0 with
+// --hc-test queries, node 1 with the default: the reference's frames, node 0 drew no batch and
+// node 1 proved boxes on the CPU and counted others in batch draws.
+TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsReference) {
   fs::path dir = fresh_dir("plant_queries_batch");
   ClusterOptions o = cluster("plant:0.3", "walk:40");
   o.node0 = {"--hc-test", "queries"};
@@ -204,11 +205,16 @@ TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultBatchOnNode1EqualsReference) 
     const size_t boxes = log.rfind(", ", in);
     return {std::stoul(log.substr(boxes + 2, in - boxes - 2)), std::stoul(log.substr(in + 10, draws - in - 10))};
   };
-  const auto q = batch_draws(r->node0_log, "queries"), b = batch_draws(r->node1_log, "batch");
+  const auto q = batch_draws(r->node0_log, "queries"), b = batch_draws(r->node1_log, "cpu-pyramid");
   EXPECT_EQ(q, std::make_pair(0ul, 0ul)) << r->node0_log;
-  ASSERT_NE(b.first, ~0ul) << "node 1 (default) did not report HC test batch:\n" << r->node1_log;
+  ASSERT_NE(b.first, ~0ul) << "node 1 (default) did not report HC test cpu-pyramid:\n" << r->node1_log;
   EXPECT_GT(b.first, 0u) << r->node1_log;
   EXPECT_GT(b.second, 0u) << r->node1_log;
+  // "..., N proven occluded by the depth pyramid"
+  const size_t at = r->node1_log.find(" proven occluded by the depth pyramid");
+  ASSERT_NE(at, std::string::npos) << r->node1_log;
+  const size_t from = r->node1_log.rfind(", ", at);
+  EXPECT_GT(std::stoul(r->node1_log.substr(from + 2, at - from - 2)), 0u) << r->node1_log;
 }
 
 TEST(Cluster, DuplexWalkEqualsReference) {

@@ -149,8 +149,12 @@ Image GlContext::read_rgba() const {
 
 std::vector<float> GlContext::read_depth() const {
   std::vector<float> depth(size_t(width_) * height_);
-  gl_.ReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  read_depth(depth.data());
   return depth;
+}
+
+void GlContext::read_depth(float* out) const {
+  gl_.ReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, out);
 }
 
 }  // namespace occ

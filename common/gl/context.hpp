@@ -53,6 +53,7 @@ class GlContext {
   Image read_rgba() const;
   // The depth buffer (reverse-Z: 1 = near, 0 = far), row 0 at the bottom (waits for rendering).
   std::vector<float> read_depth() const;
+  void read_depth(float* out) const;  // width() * height() floats
   // The depth attachment: a GL_DEPTH_COMPONENT32F texture (one level), sampled by compute
   // shaders (texelFetch(...).r is the depth) while it stays attached.
   GLuint depth_texture() const { return depth_tex_; }

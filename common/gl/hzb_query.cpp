@@ -219,12 +219,21 @@ HcQuerier::Policy HcQuerier::policy(HcTest test) {
     p.min_probes = 32;
     p.min_proven_per_frame = 32;
   }
+  if (test == HcTest::cpu_pyramid) p.min_decided_screens = 0.25;
   return p;
 }
 
+namespace {
+// The pixels a probe's rectangle covers (at level 0).
+uint64_t probe_pixels(const PyramidProbe& p) {
+  return (uint64_t(p.x1 - p.x0 + 1) * uint64_t(p.y1 - p.y0 + 1)) << (2 * p.level);
+}
+}  // namespace
+
 HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
-    : test_(test), policy_(policy), ctx_(ctx), queries_(ctx) {
-  batched_ = test_ == HcTest::batch;
+    : test_(test), sample_counts_(sample_counts), policy_(policy), ctx_(ctx), queries_(ctx) {
+  batched_ = test_ == HcTest::batch || test_ == HcTest::cpu_pyramid;
+  if (test_ == HcTest::cpu_pyramid) cpu_pyramid_ = std::make_unique<DepthPyramid>();
   if (batched_) counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);
   if (test_ == HcTest::pyramid || test_ == HcTest::automatic) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
@@ -233,9 +242,10 @@ void HcQuerier::begin(const Camera& cam) {
   // Automatic: the frame just ended proved that many boxes occluded; frames whose pyramid would
   // not pay are all queries, with a frame with the pyramid every kRetryFrames to look again.
   if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
-  use_pyramid_ = pyramid_ &&
-                 (policy_.min_proven_per_frame == 0 || proven_avg_ < 0 ||
-                  proven_avg_ >= double(policy_.min_proven_per_frame) || ++frames_off_ % kRetryFrames == 0);
+  const double need = cpu_pyramid_ ? policy_.min_decided_screens * ctx_.width() * ctx_.height()
+                                   : double(policy_.min_proven_per_frame);
+  use_pyramid_ = (pyramid_ || cpu_pyramid_) &&
+                 (need == 0 || proven_avg_ < 0 || proven_avg_ >= need || ++frames_off_ % kRetryFrames == 0);
   if (use_pyramid_) frames_off_ = 0;
   proven_frame_ = 0;
   cam_ = cam;
@@ -253,7 +263,7 @@ uint32_t HcQuerier::issue(const Aabb& box) {
   if (!use_pyramid_) return q_issue(box);
   if (resolved_) throw std::logic_error("HcQuerier: issue() after result() in one batch (call end_batch() first)");
   boxes_.push_back(box);
-  probes_.push_back(pyramid_probe(box, cam_, pyramid_->viewport(), BoxQuerier::kRelativePad, policy_.span));
+  probes_.push_back(pyramid_probe(box, cam_, {ctx_.width(), ctx_.height()}, BoxQuerier::kRelativePad, policy_.span));
   return uint32_t(boxes_.size() - 1);
 }
 
@@ -272,22 +282,44 @@ void HcQuerier::resolve() {
   }
   if (!batch_.empty() && batch_.size() >= policy_.min_probes) {
     if (!built_ || (stale_ && batch_.size() >= policy_.rebuild_min_probes)) {
-      pyramid_->build();
+      if (cpu_pyramid_) {
+        ctx_.read_depth(cpu_pyramid_->level0(ctx_.width(), ctx_.height()));
+        cpu_pyramid_->build_levels();
+      } else {
+        pyramid_->build();
+      }
       built_ = true;
       stale_ = false;
       ++stats_.builds;
     }
-    pyramid_->test(batch_, occluded_);
-    ++stats_.dispatches;
+    if (cpu_pyramid_) {
+      occluded_.resize(batch_.size());
+      for (size_t j = 0; j < batch_.size(); ++j) occluded_[j] = cpu_pyramid_->occludes(batch_[j]);
+    } else {
+      pyramid_->test(batch_, occluded_);
+      ++stats_.dispatches;
+    }
     stats_.pyramid_tested += batch_.size();
     for (size_t j = 0; j < batch_.size(); ++j)
       if (occluded_[j]) {
         handle_[batch_index_[j]] = kZero;
         ++stats_.pyramid_occluded;
-        ++proven_frame_;
+        const uint64_t pixels = probe_pixels(batch_[j]);
+        stats_.pyramid_pixels += pixels;
+        proven_frame_ += cpu_pyramid_ ? pixels : 1;
       }
-    q_begin(cam_);  // the dispatches changed the program
+    if (!cpu_pyramid_) q_begin(cam_);  // the dispatches changed the program
   }
+  // cpu_pyramid without sample counts also proves boxes that show, from level 0, which must be
+  // the current depth: only until occluder fusion draws more (reading it back again then cost
+  // more HC time than the queries it saved: duplex 1024^2, docs/results.md).
+  if (cpu_pyramid_ && !sample_counts_ && built_ && !stale_)
+    for (size_t i = 0; i < boxes_.size(); ++i)
+      if (handle_[i] == kPending && probes_[i].kind == PyramidProbe::Kind::probe && cpu_pyramid_->shows(boxes_[i], cam_)) {
+        handle_[i] = kShows;
+        ++stats_.shown;
+        proven_frame_ += probe_pixels(probes_[i]);
+      }
   for (size_t i = 0; i < boxes_.size(); ++i)
     if (handle_[i] == kPending) {
       handle_[i] = q_issue(boxes_[i]);
@@ -303,7 +335,7 @@ uint64_t HcQuerier::result(uint32_t handle) {
       throw std::out_of_range("HcQuerier: handle " + std::to_string(handle) + " not issued in this batch (" +
                               std::to_string(boxes_.size()) + " issued)");
     if (!resolved_) resolve();
-    samples = handle_[handle] == kZero ? 0 : q_result(handle_[handle]);
+    samples = handle_[handle] == kZero ? 0 : handle_[handle] == kShows ? 1 : q_result(handle_[handle]);
   }
   stats_.occluded += samples == 0;
   return samples;

@@ -18,10 +18,20 @@
 //   automatic  the pyramid for batches of at least 32 probe-able boxes (a dispatch and its
 //              read-back cost more than a few queries), and only in frames where it pays: while
 //              the pyramid proved fewer than 32 boxes a frame (a running average), frames are all
-//              queries, with one frame with the pyramid every kRetryFrames to look again.
-// The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision") and the batch
-// draw counts the same samples: the results, and so the visible sets, are those of `queries`
-// (without `sample_counts` a batch-counted box answers 1 for any number of samples).
+//              queries, with one frame with the pyramid every kRetryFrames to look again;
+//   cpu_pyramid  batch, with the pyramid on the CPU in front (the default, issue 14): HC's depth
+//              read back once a frame (glReadPixels) into a DepthPyramid (common/hzb) that proves
+//              boxes occluded (DepthPyramid::occludes) and, without sample counts and until
+//              occluder fusion draws more, boxes that show (DepthPyramid::shows: answered 1 with
+//              no test); the rest are batch boxes or queries. Frames whose pyramid decides boxes
+//              covering less than Policy::min_decided_screens viewports (a running average) do
+//              without it, retrying every kRetryFrames. On llvmpipe a box's test is the cost of
+//              rasterising it, so this is where HC's time went (duplex orbit: HC CPU per frame
+//              0.64x at 512^2, 0.75x at 1024^2; docs/results.md).
+// The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"), a box shown
+// on the CPU has a sample its query would count, and the batch draw counts the same samples:
+// the results, and so the visible sets, are those of `queries` (without `sample_counts` a
+// batch-counted or shown box answers 1 for any number of samples).
 //
 // Which depth the pyramid holds: begin() starts a frame's tests against a depth buffer drawn
 // since the last build (the OR): the pyramid is built before its first use in the frame.
@@ -82,6 +92,9 @@ class HcQuerier final : public OcclusionQueries {
     size_t min_probes = 1;             // batches with fewer probe-able boxes are all queries
     size_t rebuild_min_probes = 256;   // rebuild a stale pyramid (depth_added) for batches this large
     size_t min_proven_per_frame = 0;   // > 0: frames whose pyramid proves fewer (average) are all queries
+    // cpu_pyramid, > 0: frames whose pyramid decides (proves occluded or showing) boxes whose
+    // rectangles cover fewer pixels than this many viewports (average) do without it (batch).
+    double min_decided_screens = 0;
     // Probe rectangles span at most span x span texels (hzb.hpp): 2 proved a third of the boxes
     // the queries found occluded on a plant walk, 16 nearly two thirds (docs/scale.md).
     int span = 16;
@@ -102,6 +115,8 @@ class HcQuerier final : public OcclusionQueries {
     uint64_t builds = 0;           // pyramid builds
     uint64_t dispatches = 0;       // test dispatches
     uint64_t occluded = 0;         // boxes answered 0 samples (by the pyramid or a query)
+    uint64_t pyramid_pixels = 0;   // pixels of the rectangles of the boxes the pyramid proved
+    uint64_t shown = 0;            // cpu_pyramid: boxes proven to show (DepthPyramid::shows), no query
   };
 
   // `sample_counts`: result() must be the number of samples (visible-pixel LOD), not just > 0.
@@ -123,22 +138,25 @@ class HcQuerier final : public OcclusionQueries {
   BoxQuerier& box_querier() { return queries_; }
 
  private:
-  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kQueryBit = 1u << 31 };
+  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kShows = ~0u - 2, kQueryBit = 1u << 31 };
   void resolve();
   void q_begin(const Camera& cam);
   uint32_t q_issue(const Aabb& box);
   uint64_t q_result(uint32_t h);
 
   HcTest test_;
+  bool sample_counts_;
   Policy policy_;
   GlContext& ctx_;
   BoxQuerier queries_;
   std::unique_ptr<BoxBatchCounter> counter_;  // batch only
   bool batched_ = false;
   std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid / automatic only
+  std::unique_ptr<DepthPyramid> cpu_pyramid_;  // cpu_pyramid only
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
-  uint64_t proven_frame_ = 0;   // boxes the pyramid proved occluded in this frame
+  uint64_t proven_frame_ = 0;   // boxes the pyramid proved occluded in this frame (cpu_pyramid:
+                                // pixels of the rectangles of the boxes it decided)
   double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
   uint32_t frames_off_ = 0;     // frames without the pyramid since it was last used
   std::vector<Aabb> boxes_;             // this batch's boxes

@@ -112,12 +112,14 @@ void add_hc_options(Cli& cli, HcChoices& c) {
              "projected area (a box that shows mostly has geometry that shows; 1: every leaf whose box passed)");
   cli.choice<HcTest>("hc-test", &c.test,
                      {{"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"auto", HcTest::automatic},
-                      {"batch", HcTest::batch}},
+                      {"batch", HcTest::batch}, {"cpu-pyramid", HcTest::cpu_pyramid}},
                      "how HC tests a box: queries = an occlusion query each; pyramid = a depth pyramid built on the "
                      "GPU from HC's depth buffer first proves boxes occluded (one compute dispatch per batch), "
                      "queries only for the rest; auto = the pyramid for batches of 32 boxes or more in frames where "
                      "it proves enough; batch = each batch's boxes in one draw that counts their samples in a "
-                     "buffer (no query objects; boxes over 16384 pixels stay queries; the default). Same results");
+                     "buffer (no query objects; boxes over 16384 pixels stay queries); cpu-pyramid = batch, after a "
+                     "depth pyramid read back to the CPU once a frame proves what it can (boxes occluded and, "
+                     "without --visible-pixel-lod boxes that show; the default). Same results");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }

@@ -72,9 +72,10 @@ struct HcChoices {
   // (LeafTest in common/culling.hpp; the switch node's GeometryQuerier).
   LeafTest leaf_test = LeafTest::box;
   double geometry_below = 0.1;  // only leaves whose box showed less than this of its area (HcOptions)
-  // How each box is tested (common/gl/hzb_query.hpp). batch (the default) measured 0.64x the HC
-  // CPU of queries (plant:13, 1024^2, docs/scale.md).
-  HcTest test = HcTest::batch;
+  // How each box is tested (common/gl/hzb_query.hpp). batch measured 0.64x the HC CPU of queries
+  // (plant:13, 1024^2, docs/scale.md); cpu_pyramid (the default) 0.64-0.75x that of batch (duplex
+  // orbit, docs/results.md).
+  HcTest test = HcTest::cpu_pyramid;
 };
 // --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
 // --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below, --hc-test.
