@@ -92,6 +92,21 @@ void DepthPyramid::build_levels() {
   }
 }
 
+void DepthPyramid::build_levels(int x0, int y0, int x1, int y1) {
+  for (size_t k = 1; k < levels_.size(); ++k) {
+    const Level& lo = levels_[k - 1];
+    Level& up = levels_[k];
+    x0 >>= 1, y0 >>= 1, x1 >>= 1, y1 >>= 1;
+    for (int y = y0; y <= std::min(y1, up.h - 1); ++y)
+      for (int x = x0; x <= std::min(x1, up.w - 1); ++x) {
+        const int sx1 = std::min(2 * x + 1, lo.w - 1), sy1 = std::min(2 * y + 1, lo.h - 1);
+        const float* r0 = lo.d.data() + size_t(2 * y) * lo.w;
+        const float* r1 = lo.d.data() + size_t(sy1) * lo.w;
+        up.d[size_t(y) * up.w + x] = std::min(std::min(r0[2 * x], r0[sx1]), std::min(r1[2 * x], r1[sx1]));
+      }
+  }
+}
+
 bool DepthPyramid::may_be_visible(const BoxFootprint& fp) const {
   if (fp.kind == BoxFootprint::Kind::NearPlane) return true;
   if (fp.kind == BoxFootprint::Kind::Offscreen || levels_.empty()) return fp.kind != BoxFootprint::Kind::Offscreen;
@@ -123,29 +138,47 @@ bool DepthPyramid::shows(const Aabb& box, const Camera& cam, int samples_per_axi
   const glm::dvec3 lo = box.min - cam.eye, hi = box.max - cam.eye;  // camera-relative, as drawn
   const glm::dmat4 proj = cam.projection();
   const glm::dmat4 vpm = proj * cam.view_rotation();
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, wmin = 1e300, zmax = -1e300;
+  // The screen rectangle of the box's part in front of the near plane (plus margin): its corners
+  // there and where its edges cross that plane.
+  const double near_w = cam.near_dist * (1.0 + 1e-3);
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300;
+  glm::dvec4 clip[8];
+  for (int i = 0; i < 8; ++i)
+    clip[i] = vpm * glm::dvec4((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z, 1.0);
+  auto add = [&](const glm::dvec4& c) {
+    xmin = std::min(xmin, c.x / c.w);
+    xmax = std::max(xmax, c.x / c.w);
+    ymin = std::min(ymin, c.y / c.w);
+    ymax = std::max(ymax, c.y / c.w);
+    zmax = std::max(zmax, c.z / c.w);
+  };
   for (int i = 0; i < 8; ++i) {
-    const glm::dvec3 c{(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
-    const glm::dvec4 clip = vpm * glm::dvec4(c, 1.0);
-    if (!(clip.w >= cam.near_dist * (1.0 + 1e-3))) return false;
-    xmin = std::min(xmin, clip.x / clip.w);
-    xmax = std::max(xmax, clip.x / clip.w);
-    ymin = std::min(ymin, clip.y / clip.w);
-    ymax = std::max(ymax, clip.y / clip.w);
-    zmax = std::max(zmax, clip.z / clip.w);
-    wmin = std::min(wmin, clip.w);
+    if (clip[i].w >= near_w) add(clip[i]);
+    for (int bit = 1; bit < 8; bit <<= 1) {  // the edge to corner i | bit, once
+      if (i & bit) continue;
+      const glm::dvec4 &a = clip[i], &b = clip[i | bit];
+      if ((a.w < near_w) != (b.w < near_w)) add(a + (b - a) * ((near_w - a.w) / (b.w - a.w)));
+    }
   }
+  if (!(xmax >= xmin)) return false;  // nothing in front of the near plane
   auto to_px = [](double ndc, int size) { return (ndc * 0.5 + 0.5) * size; };
   const int x0 = std::max(0, int(std::floor(to_px(xmin, l0.w)))), x1 = std::min(l0.w - 1, int(std::floor(to_px(xmax, l0.w))));
   const int y0 = std::max(0, int(std::floor(to_px(ymin, l0.h)))), y1 = std::min(l0.h - 1, int(std::floor(to_px(ymax, l0.h))));
   if (x0 > x1 || y0 > y1) return false;
   const glm::dmat4 inv = glm::inverse(vpm);
-  const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / wmin;
   // A pixel's size in world units per unit of distance (the smaller of its two sides).
   const double pixel = 2.0 * std::tan(cam.fovy_rad * 0.5) * std::min(1.0 / l0.h, cam.aspect / l0.w);
+  // Twice the most the query pads the box (box_query.cpp: 1e-5 of the farthest coordinate, or
+  // 4 sub-pixel steps of at least 1/16 pixel at the farthest corner): its front face on a ray lies
+  // between the entry points of the box and of the box padded by this.
+  const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+  const double pad = 2.0 * std::max(1e-5 * std::max({far.x, far.y, far.z}),
+                                    0.25 * 2.0 * std::tan(cam.fovy_rad * 0.5) / l0.h * glm::length(far));
   // Whether the query would count pixel (px, py): its centre's ray enters the box through the
   // inside of a face, at least 1/64 pixel from the face's edges (the query's box is padded
-  // outwards besides), and the entry point, less the depth margin, is nearer than the depth there.
+  // outwards besides), the padded box's entry point is in front of the near plane (the face is
+  // not clipped there), and the box's entry point, less the depth margin, is nearer than the
+  // depth there.
   auto sample = [&](int px, int py) {
     const glm::dvec4 r = inv * glm::dvec4((px + 0.5) / l0.w * 2.0 - 1.0, (py + 0.5) / l0.h * 2.0 - 1.0, 0.5, 1.0);
     const glm::dvec3 d = glm::dvec3(r) / r.w;  // a point on the pixel centre's ray (the eye at 0)
@@ -161,8 +194,13 @@ bool DepthPyramid::shows(const Aabb& box, const Camera& cam, int samples_per_axi
     const double margin = glm::length(at) * pixel / 64.0;
     for (int a = 0; a < 3; ++a)
       if (a != entry && !(lo[a] + margin < at[a] && at[a] < hi[a] - margin)) return false;
-    const glm::dvec4 clip = vpm * glm::dvec4(at, 1.0);
-    const double z = clip.z / clip.w;
+    double tp = -1e300;
+    for (int a = 0; a < 3; ++a)
+      if (d[a] != 0) tp = std::max(tp, std::min((lo[a] - pad) / d[a], (hi[a] + pad) / d[a]));
+    if (!(tp > 0) || !((vpm * glm::dvec4(tp * d, 1.0)).w >= near_w)) return false;
+    const glm::dvec4 c = vpm * glm::dvec4(at, 1.0);
+    const double z = c.z / c.w;
+    const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / c.w;
     return z - 1e-3 * std::abs(z) - 1e-5 * terms > double(l0.d[size_t(py) * l0.w + px]);
   };
   // First where the depth is farthest: the texels of a coarse level over the rectangle, farthest

@@ -62,6 +62,8 @@ class DepthPyramid {
   // Memory is reused from build to build of one size.
   float* level0(int width, int height);
   void build_levels();
+  // After level 0 changed only inside pixels [x0, x1] x [y0, y1]: the texels above them.
+  void build_levels(int x0, int y0, int x1, int y1);
   // Conservative: false only if every pixel of the footprint has an occluder strictly in front
   // of the box's nearest point.
   bool may_be_visible(const BoxFootprint& fp) const;
@@ -79,8 +81,9 @@ class DepthPyramid {
   // covers that centre, all the more with the query's padded box) and whose depth is strictly
   // farther than the entry point, less the margin of pyramid_probe() for the GPU's float
   // transform and interpolation, is a sample the query would count (the padded box's front face
-  // on that ray is at least as near). False proves nothing; a box not wholly in front of the near
-  // plane (by 1e-3) is never proven.
+  // on that ray is at least as near), if the padded box's entry point is in front of the near
+  // plane (by 1e-3: the GPU does not clip the face there). Boxes crossing the near plane are
+  // sampled over the screen rectangle of their part in front of it. False proves nothing.
   bool shows(const Aabb& box, const Camera& cam, int samples_per_axis = 8) const;
   int width() const { return levels_.empty() ? 0 : levels_[0].w; }
   int height() const { return levels_.empty() ? 0 : levels_[0].h; }

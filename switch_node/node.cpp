@@ -480,6 +480,7 @@ class SwitchNode {
   struct NewOccluders {
     size_t renderables = 0;
     uint64_t triangles = 0;
+    std::vector<Aabb> boxes;  // the world boxes of what was drawn
   };
   NewOccluders draw_new_occluders(std::span<const uint32_t> ids, const Camera& cam) {
     std::vector<uint32_t> fresh;
@@ -490,8 +491,12 @@ class SwitchNode {
       }
     selection().filter(fresh, *g_.renderables, cam, o_.height);
     if (fresh.empty()) return {};
-    return {fresh.size(),
-            g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles};
+    NewOccluders drawn{fresh.size(),
+                       g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles, {}};
+    drawn.boxes.reserve(fresh.size());
+    const Hierarchy& h = g_.renderables->hierarchy();
+    for (uint32_t id : fresh) drawn.boxes.push_back(h.node(g_.renderables->node_of(id)).box);
+    return drawn;
   }
 
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
@@ -712,8 +717,9 @@ class SwitchNode {
     local.geometry_below = o_.hc.geometry_below;
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
-        // Restores the GL state the queries need; the pyramid is stale.
-        if (draw_new_occluders(found, cam).renderables) querier_->depth_added();
+        // Restores the GL state the queries need; the pyramid is stale where they were drawn.
+        const NewOccluders drawn = draw_new_occluders(found, cam);
+        if (drawn.renderables) querier_->depth_added(drawn.boxes);
       };
     querier_->begin(cam);
     OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;

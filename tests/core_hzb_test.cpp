@@ -221,12 +221,10 @@ TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
       const Aabb box{c - e, c + e};
       const bool in_front = pyramid_probe(box, cam, {w, h}, 1e-5).kind == PyramidProbe::Kind::probe;
       EXPECT_FALSE(nearest.shows(box, cam));
-      if (!in_front) {
-        EXPECT_FALSE(p.shows(box, cam)) << "only boxes wholly in front of the near plane, on screen";
-        continue;
+      if (in_front) {
+        ++probed;
+        shown_cleared += cleared.shows(box, cam);
       }
-      ++probed;
-      shown_cleared += cleared.shows(box, cam);
       bool brute = false;
       for (int y = 0; y < h && !brute; ++y)
         for (int x = 0; x < w && !brute; ++x) {

@@ -147,7 +147,7 @@ TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
   for (const Viewport vp : {Viewport{256, 256}, Viewport{203, 117}}) {
     Plant p(vp.width, vp.height, "plant:0.05", 6);
     BoxQuerier q(*p.ctx);
-    size_t passed = 0, shown = 0, total = 0;
+    size_t passed = 0, shown = 0, total = 0, near_shown = 0;
     for (const Camera& cam : p.path) {
       p.draw_occluders(cam);
       DepthPyramid cpu;
@@ -160,10 +160,7 @@ TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
         const uint64_t samples = q.result(handles[i]);
         const bool shows = cpu.shows(boxes[i], cam);
         ASSERT_TRUE(!shows || samples > 0) << "box " << i << " proven to show but its query saw no sample";
-        // Boxes not wholly in front of the near plane are never proven (their queries draw both sides).
-        if (shows) {
-          EXPECT_EQ(pyramid_probe(boxes[i], cam, vp, BoxQuerier::kRelativePad).kind, PyramidProbe::Kind::probe);
-        }
+        near_shown += shows && pyramid_probe(boxes[i], cam, vp, BoxQuerier::kRelativePad).kind != PyramidProbe::Kind::probe;
         passed += samples > 0;
         shown += shows;
       }
@@ -173,8 +170,9 @@ TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
     }
     EXPECT_GT(passed, total / 10) << "a good share of the boxes show";
     EXPECT_GT(shown, passed / 3) << "the CPU proves a good share of those";
-    std::printf("viewport %dx%d: %zu boxes, %zu with samples, %zu proven to show on the CPU\n", vp.width, vp.height,
-                total, passed, shown);
+    EXPECT_GT(near_shown, 0u) << "boxes crossing the near plane are proven too";
+    std::printf("viewport %dx%d: %zu boxes, %zu with samples, %zu proven to show on the CPU (%zu of them crossing the "
+                "near plane or off the probe's grounds)\n", vp.width, vp.height, total, passed, shown, near_shown);
   }
 }
 
@@ -251,7 +249,9 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
         for (uint32_t id : found)
           if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
         p.renderer->draw_renderables(renderables, fresh, SceneRenderer::Mode::DepthOnly);
-        querier.depth_added();
+        std::vector<Aabb> boxes;
+        for (uint32_t id : fresh) boxes.push_back(p.h.node(renderables.node_of(id)).box);
+        querier.depth_added(boxes);
       };
       querier.begin(cam);
       step.hc(uint32_t(f), visible, cam, querier, local, nowhere);

@@ -157,4 +157,10 @@ void GlContext::read_depth(float* out) const {
   gl_.ReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, out);
 }
 
+void GlContext::read_depth(int x, int y, int w, int h, float* out) const {
+  gl_.PixelStorei(GL_PACK_ROW_LENGTH, width_);
+  gl_.ReadPixels(x, y, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, out + size_t(y) * size_t(width_) + size_t(x));
+  gl_.PixelStorei(GL_PACK_ROW_LENGTH, 0);
+}
+
 }  // namespace occ

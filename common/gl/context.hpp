@@ -54,6 +54,8 @@ class GlContext {
   // The depth buffer (reverse-Z: 1 = near, 0 = far), row 0 at the bottom (waits for rendering).
   std::vector<float> read_depth() const;
   void read_depth(float* out) const;  // width() * height() floats
+  // Pixels [x, x + w) x [y, y + h) of the depth buffer into a width() x height() array `out`.
+  void read_depth(int x, int y, int w, int h, float* out) const;
   // The depth attachment: a GL_DEPTH_COMPONENT32F texture (one level), sampled by compute
   // shaders (texelFetch(...).r is the depth) while it stays attached.
   GLuint depth_texture() const { return depth_tex_; }

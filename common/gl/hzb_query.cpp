@@ -250,12 +250,58 @@ void HcQuerier::begin(const Camera& cam) {
   proven_frame_ = 0;
   cam_ = cam;
   built_ = stale_ = false;
+  dirty_x0_ = dirty_y0_ = 0;
+  dirty_x1_ = dirty_y1_ = -1;
   q_begin(cam);
 }
 
-void HcQuerier::depth_added() {
+void HcQuerier::depth_added(std::span<const Aabb> drawn) {
   stale_ = built_;
+  const int w = ctx_.width(), h = ctx_.height();
+  auto grow = [&](int x0, int y0, int x1, int y1) {
+    const bool empty = dirty_x0_ > dirty_x1_;
+    dirty_x0_ = empty ? x0 : std::min(dirty_x0_, x0);
+    dirty_y0_ = empty ? y0 : std::min(dirty_y0_, y0);
+    dirty_x1_ = empty ? x1 : std::max(dirty_x1_, x1);
+    dirty_y1_ = empty ? y1 : std::max(dirty_y1_, y1);
+  };
+  if (drawn.empty()) grow(0, 0, w - 1, h - 1);
+  for (const Aabb& box : drawn) {
+    const BoxFootprint fp = box_footprint(box, cam_, {w, h});  // widened by a pixel each side
+    if (fp.kind == BoxFootprint::Kind::NearPlane) grow(0, 0, w - 1, h - 1);
+    if (fp.kind == BoxFootprint::Kind::OnScreen) grow(fp.x0, fp.y0, fp.x1, fp.y1);
+  }
   q_begin(cam_);
+}
+
+// cpu_pyramid: level 0 read back and the levels built once a frame; after occluder fusion drew,
+// the drawn rectangle read again and the levels above it rebuilt, when it is no larger than the
+// rectangles of the batch's boxes (both cost about the same per pixel; otherwise the boxes go to
+// the GPU against a pyramid that is stale there: still conservative for occlusion).
+void HcQuerier::cpu_refresh() {
+  const int w = ctx_.width(), h = ctx_.height();
+  if (!built_) {
+    ctx_.read_depth(cpu_pyramid_->level0(w, h));
+    cpu_pyramid_->build_levels();
+    built_ = true;
+    stale_ = false;
+    dirty_x0_ = dirty_y0_ = 0;
+    dirty_x1_ = dirty_y1_ = -1;
+    ++stats_.builds;
+    return;
+  }
+  if (dirty_x0_ > dirty_x1_) return;
+  double boxes = 0;
+  for (const PyramidProbe& p : probes_)
+    boxes += p.kind == PyramidProbe::Kind::probe ? double(probe_pixels(p)) : p.kind == PyramidProbe::Kind::query ? double(w) * h : 0.0;
+  const double dirty = double(dirty_x1_ - dirty_x0_ + 1) * double(dirty_y1_ - dirty_y0_ + 1);
+  if (dirty > boxes) return;
+  ctx_.read_depth(dirty_x0_, dirty_y0_, dirty_x1_ - dirty_x0_ + 1, dirty_y1_ - dirty_y0_ + 1, cpu_pyramid_->level0(w, h));
+  cpu_pyramid_->build_levels(dirty_x0_, dirty_y0_, dirty_x1_, dirty_y1_);
+  stale_ = false;
+  dirty_x0_ = dirty_y0_ = 0;
+  dirty_x1_ = dirty_y1_ = -1;
+  ++stats_.refreshes;
 }
 
 uint32_t HcQuerier::issue(const Aabb& box) {
@@ -280,14 +326,10 @@ void HcQuerier::resolve() {
       batch_index_.push_back(uint32_t(i));
     }
   }
+  if (cpu_pyramid_) cpu_refresh();
   if (!batch_.empty() && batch_.size() >= policy_.min_probes) {
-    if (!built_ || (stale_ && batch_.size() >= policy_.rebuild_min_probes)) {
-      if (cpu_pyramid_) {
-        ctx_.read_depth(cpu_pyramid_->level0(ctx_.width(), ctx_.height()));
-        cpu_pyramid_->build_levels();
-      } else {
-        pyramid_->build();
-      }
+    if (!cpu_pyramid_ && (!built_ || (stale_ && batch_.size() >= policy_.rebuild_min_probes))) {
+      pyramid_->build();
       built_ = true;
       stale_ = false;
       ++stats_.builds;
@@ -311,19 +353,27 @@ void HcQuerier::resolve() {
     if (!cpu_pyramid_) q_begin(cam_);  // the dispatches changed the program
   }
   // cpu_pyramid without sample counts also proves boxes that show, from level 0, which must be
-  // the current depth: only until occluder fusion draws more (reading it back again then cost
-  // more HC time than the queries it saved: duplex 1024^2, docs/results.md).
-  if (cpu_pyramid_ && !sample_counts_ && built_ && !stale_)
+  // the current depth under the box: not where occluder fusion drew since it was read.
+  if (cpu_pyramid_ && !sample_counts_)
     for (size_t i = 0; i < boxes_.size(); ++i)
-      if (handle_[i] == kPending && probes_[i].kind == PyramidProbe::Kind::probe && cpu_pyramid_->shows(boxes_[i], cam_)) {
+      if (handle_[i] == kPending && clean_under(boxes_[i]) && cpu_pyramid_->shows(boxes_[i], cam_)) {
         handle_[i] = kShows;
         ++stats_.shown;
-        proven_frame_ += probe_pixels(probes_[i]);
+        proven_frame_ += probes_[i].kind == PyramidProbe::Kind::probe ? probe_pixels(probes_[i])
+                                                                       : uint64_t(ctx_.width()) * uint64_t(ctx_.height());
       }
   for (size_t i = 0; i < boxes_.size(); ++i)
     if (handle_[i] == kPending) {
       handle_[i] = q_issue(boxes_[i]);
     }
+}
+
+bool HcQuerier::clean_under(const Aabb& box) const {
+  if (dirty_x0_ > dirty_x1_) return true;
+  const BoxFootprint fp = box_footprint(box, cam_, {ctx_.width(), ctx_.height()});
+  if (fp.kind == BoxFootprint::Kind::Offscreen) return true;
+  return fp.kind == BoxFootprint::Kind::OnScreen &&
+         (fp.x1 < dirty_x0_ || fp.x0 > dirty_x1_ || fp.y1 < dirty_y0_ || fp.y0 > dirty_y1_);
 }
 
 uint64_t HcQuerier::result(uint32_t handle) {

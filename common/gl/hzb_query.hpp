@@ -47,6 +47,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "common/culling.hpp"
@@ -113,6 +114,7 @@ class HcQuerier final : public OcclusionQueries {
     uint64_t pyramid_tested = 0;   // boxes tested against the pyramid
     uint64_t pyramid_occluded = 0; // of those, proven occluded (no query)
     uint64_t builds = 0;           // pyramid builds
+    uint64_t refreshes = 0;        // cpu_pyramid: partial read-backs and rebuilds after occluder fusion
     uint64_t dispatches = 0;       // test dispatches
     uint64_t occluded = 0;         // boxes answered 0 samples (by the pyramid or a query)
     uint64_t pyramid_pixels = 0;   // pixels of the rectangles of the boxes the pyramid proved
@@ -127,7 +129,9 @@ class HcQuerier final : public OcclusionQueries {
   // A frame's tests against a freshly drawn depth buffer, from `cam`.
   void begin(const Camera& cam);
   // More depth was drawn into this frame's buffer (occluder fusion); restores the query state.
-  void depth_added();
+  // `drawn`: the world boxes of what was drawn (cpu_pyramid then refreshes only their screen
+  // rectangles); empty: anything, anywhere.
+  void depth_added(std::span<const Aabb> drawn = {});
   uint32_t issue(const Aabb& box) override;
   uint64_t result(uint32_t handle) override;
   void end_batch() override;
@@ -155,6 +159,10 @@ class HcQuerier final : public OcclusionQueries {
   std::unique_ptr<DepthPyramid> cpu_pyramid_;  // cpu_pyramid only
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
+  // cpu_pyramid: pixels drawn since level 0 was read (inclusive; empty when x0 > x1).
+  int dirty_x0_ = 0, dirty_y0_ = 0, dirty_x1_ = -1, dirty_y1_ = -1;
+  void cpu_refresh();
+  bool clean_under(const Aabb& box) const;  // no pixel of its footprint drawn since read back
   uint64_t proven_frame_ = 0;   // boxes the pyramid proved occluded in this frame (cpu_pyramid:
                                 // pixels of the rectangles of the boxes it decided)
   double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
