@@ -791,11 +791,12 @@ class SwitchNode {
       std::fprintf(stderr,
                    "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
                    "batch draws, %llu proven occluded by the depth pyramid (%.2f M pixels of their rectangles) and %llu shown; of %llu "
-                   "tested against it in %llu dispatches; %llu pyramid builds)\n",
+                   "tested against it in %llu dispatches; %llu pyramid builds, %llu refreshes after occluder fusion)\n",
                    who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
                    (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
                    (unsigned long long)q.pyramid_occluded, double(q.pyramid_pixels) / 1e6, (unsigned long long)q.shown,
-                   (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds);
+                   (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds,
+                   (unsigned long long)q.refreshes);
     }
     std::fprintf(stderr,
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "

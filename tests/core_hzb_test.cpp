@@ -252,3 +252,33 @@ TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
   EXPECT_GT(brute_shows, probed / 4);
   EXPECT_GT(shown, brute_shows / 2) << "the proof finds most of them";
 }
+
+// After level 0 changes inside a rectangle, rebuilding the levels above it alone gives the pyramid
+// a full build of the new buffer gives (cpu-pyramid's refresh after occluder fusion).
+TEST(Hzb, RebuildingTheLevelsAboveAChangedRectangleEqualsAFullBuild) {
+  for (auto [w, h] : {std::pair{37, 21}, {64, 64}, {203, 117}}) {
+    auto d = random_depth(w, h, 12);
+    DepthPyramid part;
+    part.build(d, w, h);
+    for (int round = 0; round < 20; ++round) {
+      const int x0 = int(rnd() * w), y0 = int(rnd() * h);
+      const int x1 = std::min(w - 1, x0 + int(rnd() * w / 3)), y1 = std::min(h - 1, y0 + int(rnd() * h / 3));
+      float* l0 = part.level0(w, h);
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const float z = float(rnd());
+          d[size_t(y) * w + x] = z;
+          l0[size_t(y) * w + x] = z;
+        }
+      part.build_levels(x0, y0, x1, y1);
+      DepthPyramid full;
+      full.build(d, w, h);
+      for (size_t l = 0; l < full.level_count(); ++l) {
+        const int lw = (w + (1 << l) - 1) >> l, lh = (h + (1 << l) - 1) >> l;
+        for (int y = 0; y < lh; ++y)
+          for (int x = 0; x < lw; ++x)
+            ASSERT_EQ(part.texel(l, x, y), full.texel(l, x, y)) << w << "x" << h << " round " << round << " level " << l;
+      }
+    }
+  }
+}

@@ -279,6 +279,7 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
   EXPECT_EQ(cp.occluded, q.occluded);
   EXPECT_GT(cp.pyramid_occluded, 0u);
   EXPECT_GT(cp.shown, 0u);
+  EXPECT_GT(cp.refreshes, 0u) << "occluder fusion's rectangles were read back again";
   EXPECT_EQ(cp.batched + cp.queries + cp.pyramid_occluded + cp.shown, cp.tests)
       << "cpu-pyramid: every box proven on the CPU, batched or a query";
   EXPECT_LT(cp.batched + cp.queries, ba.batched + ba.queries) << "the CPU decided some boxes";
@@ -296,12 +297,12 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
   EXPECT_LE(au.queries, q.queries);
   std::printf("%d frames: %llu boxes tested; pyramid: %llu queries, %llu proven occluded, %llu builds; auto: %llu "
               "queries, %llu proven occluded, %llu builds; cpu-pyramid: %llu batched, %llu queries, %llu proven "
-              "occluded, %llu shown, %llu builds\n",
+              "occluded, %llu shown, %llu builds, %llu refreshes\n",
               frames, (unsigned long long)q.tests, (unsigned long long)py.queries,
               (unsigned long long)py.pyramid_occluded, (unsigned long long)py.builds, (unsigned long long)au.queries,
               (unsigned long long)au.pyramid_occluded, (unsigned long long)au.builds, (unsigned long long)cp.batched,
               (unsigned long long)cp.queries, (unsigned long long)cp.pyramid_occluded, (unsigned long long)cp.shown,
-              (unsigned long long)cp.builds);
+              (unsigned long long)cp.builds, (unsigned long long)cp.refreshes);
 }
 
 // Automatic mode where the pyramid proves nothing (nothing drawn: every box shows): after its first
