@@ -261,6 +261,36 @@ uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels, int 
   return l;
 }
 
+std::vector<glm::dvec4> box_in_view_vertices(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dmat4& vpm,
+                                             double near_dist) {
+  // The convex set's planes as n.p <= d: the box's six, w >= near, -w <= x, y <= w (clip = vpm p).
+  struct Plane { glm::dvec3 n; double d; };
+  auto row = [&](int i) { return glm::dvec3(vpm[0][i], vpm[1][i], vpm[2][i]); };
+  const glm::dvec3 rx = row(0), ry = row(1), rw = row(3);
+  const double tx = vpm[3][0], ty = vpm[3][1], tw = vpm[3][3];
+  const Plane planes[11] = {
+      {{1, 0, 0}, hi.x}, {{-1, 0, 0}, -lo.x}, {{0, 1, 0}, hi.y}, {{0, -1, 0}, -lo.y}, {{0, 0, 1}, hi.z},
+      {{0, 0, -1}, -lo.z}, {-rw, tw - near_dist}, {rx - rw, tw - tx}, {-rx - rw, tw + tx}, {ry - rw, tw - ty},
+      {-ry - rw, tw + ty}};
+  std::vector<glm::dvec4> out;
+  for (int i = 0; i < 11; ++i)
+    for (int j = i + 1; j < 11; ++j)
+      for (int k = j + 1; k < 11; ++k) {
+        const glm::dmat3 m = glm::transpose(glm::dmat3(planes[i].n, planes[j].n, planes[k].n));
+        const double det = glm::determinant(m);
+        if (!(std::abs(det) > 1e-12 * glm::length(planes[i].n) * glm::length(planes[j].n) * glm::length(planes[k].n)))
+          continue;
+        const glm::dvec3 p = glm::inverse(m) * glm::dvec3(planes[i].d, planes[j].d, planes[k].d);
+        bool inside = true;
+        for (const Plane& q : planes)
+          inside = inside && glm::dot(q.n, p) <= q.d + 1e-9 * (std::abs(q.d) + glm::length(q.n) * glm::length(p) + 1.0);
+        if (!inside) continue;
+        const glm::dvec4 clip = vpm * glm::dvec4(p, 1.0);
+        if (clip.w > 0) out.push_back(clip);
+      }
+  return out;
+}
+
 PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad, int span) {
   PyramidProbe p;
   if (box.empty()) {
@@ -274,17 +304,32 @@ PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& v
   const glm::dvec3 plo = lo - pad, phi = hi + pad;
   const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
   double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300, wmin = 1e300;
-  for (int i = 0; i < 8; ++i) {
-    const glm::dvec3 c{(i & 1) ? phi.x : plo.x, (i & 2) ? phi.y : plo.y, (i & 4) ? phi.z : plo.z};
-    const glm::dvec4 clip = vpm * glm::dvec4(c, 1.0);
-    // In front of the near plane with room to spare: no clipping at the near plane on the GPU.
-    if (!(clip.w >= cam.near_dist * (1.0 + 1e-3))) return p;
+  auto add = [&](const glm::dvec4& clip) {
     xmin = std::min(xmin, clip.x / clip.w);
     xmax = std::max(xmax, clip.x / clip.w);
     ymin = std::min(ymin, clip.y / clip.w);
     ymax = std::max(ymax, clip.y / clip.w);
     zmax = std::max(zmax, clip.z / clip.w);
     wmin = std::min(wmin, clip.w);
+  };
+  bool crossing = false;
+  for (int i = 0; i < 8 && !crossing; ++i) {
+    const glm::dvec3 c{(i & 1) ? phi.x : plo.x, (i & 2) ? phi.y : plo.y, (i & 4) ? phi.z : plo.z};
+    const glm::dvec4 clip = vpm * glm::dvec4(c, 1.0);
+    // In front of the near plane with room to spare: no clipping at the near plane on the GPU.
+    crossing = !(clip.w >= cam.near_dist * (1.0 + 1e-3));
+    add(clip);
+  }
+  if (crossing) {
+    // The GPU clips the box at the near plane: its fragments come from the part of the box inside
+    // the view volume, whose nearest point and screen rectangle are at its vertices. The box is
+    // padded here by at least as much as the query pads it (twice the larger of its two pads).
+    const double pad2 = 2.0 * std::max(pad, 0.25 * 2.0 * std::tan(cam.fovy_rad * 0.5) / vp.height * glm::length(far));
+    const std::vector<glm::dvec4> vertices = box_in_view_vertices(lo - pad2, hi + pad2, vpm, cam.near_dist);
+    if (vertices.empty()) return p;  // a query decides
+    xmin = ymin = wmin = 1e300;
+    xmax = ymax = zmax = -1e300;
+    for (const glm::dvec4& v : vertices) add(v);
   }
   if (!(xmax >= -1 && xmin <= 1 && ymax >= -1 && ymin <= 1 && zmax >= 0)) return p;  // a query decides
   auto to_px = [](double ndc, int size) { return (ndc * 0.5 + 0.5) * size; };

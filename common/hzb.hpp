@@ -39,9 +39,12 @@ BoxFootprint box_footprint(const Aabb& box, const Camera& cam, const Viewport& v
 // camera-relative, front faces, depth test GL_GREATER) could pass. Its fragments lie inside the
 // padded box's projected rectangle (widened by a pixel each side) and are at most as near as its
 // nearest corner; `depth` adds a margin (1e-3 relative plus the float rounding of the projection)
-// for the GPU's float transform and depth interpolation. A box is only probed when all 8 padded
-// corners are in front of the near plane by a margin (no near-plane clipping, which would create
-// fragments at depth 1); otherwise, or when its rectangle misses the viewport, a real query decides.
+// for the GPU's float transform and depth interpolation. A box whose padded corners are not all in
+// front of the near plane by a margin is clipped there by the GPU: its fragments come from the part
+// of the box (padded by at least the query's pad) inside the view volume, so that part's vertices
+// give the rectangle and the nearest depth (box_in_view_vertices; fragments at the clipped edge
+// have depth 1 when it is on screen, and then nothing is proven). When the rectangle misses the
+// viewport, or the part is empty, a real query decides.
 struct PyramidProbe {
   enum class Kind : uint8_t {
     no_samples,  // an empty box: its query draws nothing (0 samples)
@@ -106,5 +109,11 @@ uint32_t pyramid_level_count(const Viewport& vp);
 // span x span texels.
 uint32_t pyramid_level_for(int x0, int y0, int x1, int y1, uint32_t levels, int span = 2);
 PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& vp, double relative_pad, int span = 2);
+// The vertices (clip coordinates, w > 0) of the part of the camera-relative box [lo, hi] inside the
+// view volume (in front of the near plane, within the four side planes; vpm = projection x view
+// rotation): where the GPU's fragments of a box crossing the near plane come from. Empty when
+// that part is empty (or degenerate).
+std::vector<glm::dvec4> box_in_view_vertices(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dmat4& vpm,
+                                             double near_dist);
 
 }  // namespace occ
