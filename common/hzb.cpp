@@ -132,35 +132,53 @@ bool DepthPyramid::occludes(const PyramidProbe& p) const {
   return true;
 }
 
+namespace {
+
+// Screen bounds (NDC) and the nearest depth and w of a set of clip-space points.
+struct ClipBounds {
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300, wmin = 1e300;
+  void add(const glm::dvec4& c) {
+    xmin = std::min(xmin, c.x / c.w);
+    xmax = std::max(xmax, c.x / c.w);
+    ymin = std::min(ymin, c.y / c.w);
+    ymax = std::max(ymax, c.y / c.w);
+    zmax = std::max(zmax, c.z / c.w);
+    wmin = std::min(wmin, c.w);
+  }
+  bool empty() const { return !(xmax >= xmin); }
+};
+
+// The camera-relative box [lo, hi]'s corners when all are at least `front` along the view axis;
+// otherwise the vertices of the box [clo, chi] inside the view volume with the near plane at
+// `near` (box_in_view_vertices; empty bounds when nothing is).
+ClipBounds clip_bounds(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dmat4& vpm, double front,
+                       const glm::dvec3& clo, const glm::dvec3& chi, double near) {
+  ClipBounds b;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec4 clip = vpm * glm::dvec4((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z, 1.0);
+    if (!(clip.w >= front)) {
+      b = {};
+      for (const glm::dvec4& v : box_in_view_vertices(clo, chi, vpm, near)) b.add(v);
+      return b;
+    }
+    b.add(clip);
+  }
+  return b;
+}
+
+}  // namespace
+
 bool DepthPyramid::shows(const Aabb& box, const Camera& cam, int samples_per_axis) const {
   if (box.empty() || levels_.empty() || samples_per_axis < 1) return false;
   const Level& l0 = levels_[0];
   const glm::dvec3 lo = box.min - cam.eye, hi = box.max - cam.eye;  // camera-relative, as drawn
   const glm::dmat4 proj = cam.projection();
   const glm::dmat4 vpm = proj * cam.view_rotation();
-  // The screen rectangle of the box's part in front of the near plane (plus margin): its corners
-  // there and where its edges cross that plane.
+  // The screen rectangle of the box's part in front of the near plane (plus margin).
   const double near_w = cam.near_dist * (1.0 + 1e-3);
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300;
-  glm::dvec4 clip[8];
-  for (int i = 0; i < 8; ++i)
-    clip[i] = vpm * glm::dvec4((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z, 1.0);
-  auto add = [&](const glm::dvec4& c) {
-    xmin = std::min(xmin, c.x / c.w);
-    xmax = std::max(xmax, c.x / c.w);
-    ymin = std::min(ymin, c.y / c.w);
-    ymax = std::max(ymax, c.y / c.w);
-    zmax = std::max(zmax, c.z / c.w);
-  };
-  for (int i = 0; i < 8; ++i) {
-    if (clip[i].w >= near_w) add(clip[i]);
-    for (int bit = 1; bit < 8; bit <<= 1) {  // the edge to corner i | bit, once
-      if (i & bit) continue;
-      const glm::dvec4 &a = clip[i], &b = clip[i | bit];
-      if ((a.w < near_w) != (b.w < near_w)) add(a + (b - a) * ((near_w - a.w) / (b.w - a.w)));
-    }
-  }
-  if (!(xmax >= xmin)) return false;  // nothing in front of the near plane
+  const ClipBounds b = clip_bounds(lo, hi, vpm, near_w, lo, hi, near_w);
+  if (b.empty()) return false;  // nothing in front of the near plane
+  const double xmin = b.xmin, xmax = b.xmax, ymin = b.ymin, ymax = b.ymax, zmax = b.zmax;
   auto to_px = [](double ndc, int size) { return (ndc * 0.5 + 0.5) * size; };
   const int x0 = std::max(0, int(std::floor(to_px(xmin, l0.w)))), x1 = std::min(l0.w - 1, int(std::floor(to_px(xmax, l0.w))));
   const int y0 = std::max(0, int(std::floor(to_px(ymin, l0.h)))), y1 = std::min(l0.h - 1, int(std::floor(to_px(ymax, l0.h))));
@@ -303,34 +321,14 @@ PyramidProbe pyramid_probe(const Aabb& box, const Camera& cam, const Viewport& v
   const double pad = relative_pad * std::max({far.x, far.y, far.z});
   const glm::dvec3 plo = lo - pad, phi = hi + pad;
   const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300, wmin = 1e300;
-  auto add = [&](const glm::dvec4& clip) {
-    xmin = std::min(xmin, clip.x / clip.w);
-    xmax = std::max(xmax, clip.x / clip.w);
-    ymin = std::min(ymin, clip.y / clip.w);
-    ymax = std::max(ymax, clip.y / clip.w);
-    zmax = std::max(zmax, clip.z / clip.w);
-    wmin = std::min(wmin, clip.w);
-  };
-  bool crossing = false;
-  for (int i = 0; i < 8 && !crossing; ++i) {
-    const glm::dvec3 c{(i & 1) ? phi.x : plo.x, (i & 2) ? phi.y : plo.y, (i & 4) ? phi.z : plo.z};
-    const glm::dvec4 clip = vpm * glm::dvec4(c, 1.0);
-    // In front of the near plane with room to spare: no clipping at the near plane on the GPU.
-    crossing = !(clip.w >= cam.near_dist * (1.0 + 1e-3));
-    add(clip);
-  }
-  if (crossing) {
-    // The GPU clips the box at the near plane: its fragments come from the part of the box inside
-    // the view volume, whose nearest point and screen rectangle are at its vertices. The box is
-    // padded here by at least as much as the query pads it (twice the larger of its two pads).
-    const double pad2 = 2.0 * std::max(pad, 0.25 * 2.0 * std::tan(cam.fovy_rad * 0.5) / vp.height * glm::length(far));
-    const std::vector<glm::dvec4> vertices = box_in_view_vertices(lo - pad2, hi + pad2, vpm, cam.near_dist);
-    if (vertices.empty()) return p;  // a query decides
-    xmin = ymin = wmin = 1e300;
-    xmax = ymax = zmax = -1e300;
-    for (const glm::dvec4& v : vertices) add(v);
-  }
+  // In front of the near plane with room to spare: no clipping at the near plane on the GPU.
+  // Otherwise the GPU clips the box there: its fragments come from the part of the box inside the
+  // view volume, whose nearest point and screen rectangle are at its vertices. That box is padded
+  // by at least as much as the query pads it (twice the larger of its two pads).
+  const double pad2 = 2.0 * std::max(pad, 0.25 * 2.0 * std::tan(cam.fovy_rad * 0.5) / vp.height * glm::length(far));
+  ClipBounds b = clip_bounds(plo, phi, vpm, cam.near_dist * (1.0 + 1e-3), lo - pad2, hi + pad2, cam.near_dist);
+  if (b.empty()) return p;  // a query decides
+  const double xmin = b.xmin, xmax = b.xmax, ymin = b.ymin, ymax = b.ymax, zmax = b.zmax, wmin = b.wmin;
   if (!(xmax >= -1 && xmin <= 1 && ymax >= -1 && ymin <= 1 && zmax >= 0)) return p;  // a query decides
   auto to_px = [](double ndc, int size) { return (ndc * 0.5 + 0.5) * size; };
   const int px0 = std::max(0, int(std::floor(to_px(xmin, vp.width))) - 1);
