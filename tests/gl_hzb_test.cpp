@@ -341,6 +341,34 @@ TEST(HcQuerier, AutomaticStopsBuildingThePyramidWhereItProvesNothing) {
   EXPECT_EQ(q.stats().tests, uint64_t(frames) * boxes.size());
 }
 
+// cpu-pyramid where its pyramid decides nothing (nothing drawn, sample counts wanted: no box is
+// occluded, none may be answered "shows"): after its first frame it is read back only every
+// kRetryFrames frames; the answers stay the queries' counts.
+TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
+  Plant p(128, 128, "plant:0.05", 1);
+  HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
+  const Camera& cam = p.path[0];
+  const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
+  p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
+  BoxQuerier reference(*p.ctx);
+  reference.begin(cam);
+  std::vector<uint64_t> expected;
+  for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
+  reference.end();
+  const int frames = 2 * int(HcQuerier::kRetryFrames) + 1;
+  for (int f = 0; f < frames; ++f) {
+    p.renderer->begin_frame(cam, false);
+    q.begin(cam);
+    std::vector<uint32_t> handles;
+    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "frame " << f << " box " << i;
+    q.end_batch();
+    q.end();
+  }
+  EXPECT_EQ(q.stats().pyramid_occluded + q.stats().shown, 0u);
+  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
+}
+
 // cpu-pyramid where sample counts matter (visible-pixel LOD): every answer is the query's count
 // (boxes proven occluded answer 0, none is answered "shows" without its count).
 TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
