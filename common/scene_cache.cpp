@@ -16,7 +16,7 @@ namespace occ {
 
 namespace {
 
-constexpr uint32_t kSceneCacheVersion = 2;  // 2: welded vertices, vertex cache order
+constexpr uint32_t kSceneCacheVersion = 3;  // 2: welded vertices, vertex cache order; 3: fetch order
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
 constexpr size_t kHead = CacheHeader::kSize;
 

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <set>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -97,6 +98,35 @@ TEST(Hierarchy, BigMeshIsSplitIntoSpatialClusters) {
   EXPECT_EQ(indices, plane.indices.size());
   EXPECT_LT(area_sum, 100.0 * 100.0 * 1.5);  // spatial: cluster boxes barely overlap
   EXPECT_EQ(h.items().size(), 1 + plane.clusters.size());
+}
+
+// After the split the vertices are numbered in the order the triangles first use them, and the
+// triangles are the same ones (the same corner positions), cluster by cluster.
+TEST(Hierarchy, ClusteredMeshNumbersVerticesInFirstUseOrder) {
+  Scene s = grid_scene(1, 60);
+  const Mesh before = s.meshes[1];
+  std::multiset<std::array<float, 9>> triangles_before;
+  auto corners = [](const Mesh& m, size_t t) {
+    std::array<float, 9> c{};
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) c[size_t(3 * k + a)] = m.positions[m.indices[3 * t + size_t(k)]][a];
+    return c;
+  };
+  for (size_t t = 0; t < before.indices.size() / 3; ++t) triangles_before.insert(corners(before, t));
+  BuildParams p;
+  p.cluster_triangles = 500;
+  Hierarchy::build(s, p);
+  const Mesh& m = s.meshes[1];
+  uint32_t next = 0;
+  for (uint32_t i : m.indices) {
+    ASSERT_LE(i, next) << "vertex " << i << " used before vertex " << next;
+    if (i == next) ++next;
+  }
+  EXPECT_EQ(next, m.positions.size()) << "every vertex is used";
+  EXPECT_EQ(m.normals.size(), m.positions.size());
+  std::multiset<std::array<float, 9>> triangles_after;
+  for (size_t t = 0; t < m.indices.size() / 3; ++t) triangles_after.insert(corners(m, t));
+  EXPECT_EQ(triangles_after, triangles_before);
 }
 
 TEST(Hierarchy, EmptySceneHasARootLeaf) {
