@@ -147,6 +147,23 @@ void split_range(const Mesh& m, const std::vector<glm::dvec3>& centroid, std::ve
   split_range(m, centroid, order, mid, end, max_tris, out);
 }
 
+// Renumbers the mesh's vertices: vertex i becomes remap[i] (meshoptimizer's remap tables), keeping
+// `kept` of them; every per-vertex array and the indices follow.
+void remap_vertices(Mesh& m, const std::vector<unsigned int>& remap, size_t kept) {
+  const size_t n = m.positions.size();
+  meshopt_remapIndexBuffer(m.indices.data(), m.indices.data(), m.indices.size(), remap.data());
+  auto apply = [&](auto& v) {
+    if (v.size() != n) return;
+    meshopt_remapVertexBuffer(v.data(), v.data(), n, sizeof(v[0]), remap.data());
+    v.resize(kept);
+    v.shrink_to_fit();
+  };
+  apply(m.positions);
+  apply(m.normals);
+  apply(m.uvs);
+  apply(m.colors);
+}
+
 }  // namespace
 
 // Merges vertices equal in every attribute (position, normal, uv, colour), keeping first-use
@@ -163,17 +180,7 @@ void weld_vertices(Mesh& m) {
   const size_t unique = meshopt_generateVertexRemapMulti(remap.data(), m.indices.data(), m.indices.size(), n,
                                                          streams.data(), streams.size());
   if (unique == n) return;
-  meshopt_remapIndexBuffer(m.indices.data(), m.indices.data(), m.indices.size(), remap.data());
-  auto shrink = [&](auto& v) {
-    if (v.size() != n) return;
-    meshopt_remapVertexBuffer(v.data(), v.data(), n, sizeof(v[0]), remap.data());
-    v.resize(unique);
-    v.shrink_to_fit();
-  };
-  shrink(m.positions);
-  shrink(m.normals);
-  shrink(m.uvs);
-  shrink(m.colors);
+  remap_vertices(m, remap, unique);
 }
 
 void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
@@ -215,22 +222,10 @@ void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
     // the same pixels. Saw orbit at 512^2, render_client --reference --cull none,
     // LP_NUM_THREADS=1, paired: 0.96-1.01x (median 0.99) on compare.sh's orbit, 0.89-0.96x on
     // another; neutral on the fill-bound duplex.
-    {
-      const size_t n = m.positions.size();
-      std::vector<unsigned int> remap(n);
-      const size_t used = meshopt_optimizeVertexFetchRemap(remap.data(), m.indices.data(), m.indices.size(), n);
-      meshopt_remapIndexBuffer(m.indices.data(), m.indices.data(), m.indices.size(), remap.data());
-      auto apply = [&](auto& v) {
-        if (v.size() != n) return;
-        meshopt_remapVertexBuffer(v.data(), v.data(), n, sizeof(v[0]), remap.data());
-        v.resize(used);
-        v.shrink_to_fit();
-      };
-      apply(m.positions);
-      apply(m.normals);
-      apply(m.uvs);
-      apply(m.colors);
-    }
+    std::vector<unsigned int> remap(m.positions.size());
+    const size_t used =
+        meshopt_optimizeVertexFetchRemap(remap.data(), m.indices.data(), m.indices.size(), m.positions.size());
+    remap_vertices(m, remap, used);
     for (auto [b, e] : ranges) {
       MeshCluster c{uint32_t(3 * b), uint32_t(3 * (e - b)), {}};
       for (size_t i = 3 * b; i < 3 * e; ++i) c.box.grow(glm::dvec3(m.positions[m.indices[i]]));

@@ -478,9 +478,8 @@ class SwitchNode {
   // occluder selection keeps as seen from `cam` (the OR's streamed additions, occluder fusion);
   // all of `ids` count as drawn from now on.
   struct NewOccluders {
-    size_t renderables = 0;
+    std::vector<uint32_t> ids;  // the renderables drawn
     uint64_t triangles = 0;
-    std::vector<Aabb> boxes;  // the world boxes of what was drawn
   };
   NewOccluders draw_new_occluders(std::span<const uint32_t> ids, const Camera& cam) {
     std::vector<uint32_t> fresh;
@@ -491,12 +490,9 @@ class SwitchNode {
       }
     selection().filter(fresh, *g_.renderables, cam, o_.height);
     if (fresh.empty()) return {};
-    NewOccluders drawn{fresh.size(),
-                       g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles, {}};
-    drawn.boxes.reserve(fresh.size());
-    const Hierarchy& h = g_.renderables->hierarchy();
-    for (uint32_t id : fresh) drawn.boxes.push_back(h.node(g_.renderables->node_of(id)).box);
-    return drawn;
+    const uint64_t triangles =
+        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
+    return {std::move(fresh), triangles};
   }
 
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
@@ -680,7 +676,7 @@ class SwitchNode {
         if (occlusion_) {
           const NewOccluders drawn = draw_new_occluders(d->added, or_camera_);
           or_triangles_ += drawn.triangles;
-          if (drawn.renderables) g_.ctx->gl().Flush();  // as in draw_occluders
+          if (!drawn.ids.empty()) g_.ctx->gl().Flush();  // as in draw_occluders
         }
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
@@ -719,7 +715,11 @@ class SwitchNode {
       local.occluders = [&](std::span<const uint32_t> found) {
         // Restores the GL state the queries need; the pyramid is stale where they were drawn.
         const NewOccluders drawn = draw_new_occluders(found, cam);
-        if (drawn.renderables) querier_->depth_added(drawn.boxes);
+        if (drawn.ids.empty()) return;
+        std::vector<Aabb> boxes;
+        boxes.reserve(drawn.ids.size());
+        for (uint32_t id : drawn.ids) boxes.push_back(g_.renderables->hierarchy().node(g_.renderables->node_of(id)).box);
+        querier_->depth_added(boxes);
       };
     querier_->begin(cam);
     OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;

@@ -24,6 +24,13 @@ std::vector<float> random_depth(int w, int h, int rects) {
   return d;
 }
 
+// A box of half-extents up to 3 somewhere in front of a camera at the origin looking down -z.
+Aabb random_box() {
+  glm::dvec3 c(rnd() * 40 - 20, rnd() * 30 - 15, -(0.2 + rnd() * 60));
+  glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 3);
+  return {c - e, c + e};
+}
+
 // Brute force: some pixel of the footprint has depth that does not hide the box.
 bool brute_visible(const std::vector<float>& d, int w, const BoxFootprint& fp) {
   if (fp.kind != BoxFootprint::Kind::OnScreen) return fp.kind == BoxFootprint::Kind::NearPlane;
@@ -61,9 +68,7 @@ TEST(Hzb, NeverCullsABoxThatBruteForceSeesAndCullsMost) {
     DepthPyramid p;
     p.build(d, w, h);
     for (int i = 0; i < 250; ++i) {
-      glm::dvec3 c(rnd() * 40 - 20, rnd() * 30 - 15, -(0.2 + rnd() * 60));
-      glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 3);
-      Aabb box{c - e, c + e};
+      const Aabb box = random_box();
       BoxFootprint fp = box_footprint(box, cam, {w, h});
       bool brute = brute_visible(d, w, fp), hzb = p.may_be_visible(fp);
       ASSERT_TRUE(hzb || !brute) << "false cull at trial " << trial << " box " << i;
@@ -193,9 +198,7 @@ TEST(HzbProbe, OccludesNeverWhereBruteForceSeesAPixelAndFinerSpansProveMore) {
     DepthPyramid p;
     p.build(d, w, h);
     for (int i = 0; i < 250; ++i) {
-      glm::dvec3 c(rnd() * 40 - 20, rnd() * 30 - 15, -(0.2 + rnd() * 60));
-      glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 3);
-      const Aabb box{c - e, c + e};
+      const Aabb box = random_box();
       const BoxFootprint fp = box_footprint(box, cam, {w, h});
       const bool brute = brute_visible(d, w, fp);
       const PyramidProbe p2 = pyramid_probe(box, cam, {w, h}, 1e-5, 2), p16 = pyramid_probe(box, cam, {w, h}, 1e-5, 16);
@@ -230,9 +233,7 @@ TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
     DepthPyramid p;
     p.build(d, w, h);
     for (int i = 0; i < 200; ++i) {
-      glm::dvec3 c(rnd() * 40 - 20, rnd() * 30 - 15, -(0.2 + rnd() * 60));
-      glm::dvec3 e(rnd() * 3, rnd() * 3, rnd() * 3);
-      const Aabb box{c - e, c + e};
+      const Aabb box = random_box();
       const bool in_front = pyramid_probe(box, cam, {w, h}, 1e-5).kind == PyramidProbe::Kind::probe;
       EXPECT_FALSE(nearest.shows(box, cam));
       if (in_front) {

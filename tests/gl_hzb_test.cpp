@@ -68,6 +68,31 @@ std::vector<Aabb> test_boxes(const Plant& p, const Camera& cam, size_t n) {
   return boxes;
 }
 
+// Each box's sample count from a real occlusion query against the current depth buffer.
+std::vector<uint64_t> query_counts(Plant& p, const Camera& cam, const std::vector<Aabb>& boxes) {
+  BoxQuerier reference(*p.ctx);
+  reference.begin(cam);
+  std::vector<uint64_t> counts;
+  for (const Aabb& b : boxes) counts.push_back(reference.result(reference.issue(b)));
+  reference.end();
+  return counts;
+}
+
+// `frames` frames of `q` testing `boxes` from `cam` against a cleared depth buffer: every answer
+// must be the expected count.
+void expect_answers_on_cleared_depth(Plant& p, HcQuerier& q, const Camera& cam, const std::vector<Aabb>& boxes,
+                                     const std::vector<uint64_t>& expected, int frames) {
+  for (int f = 0; f < frames; ++f) {
+    p.renderer->begin_frame(cam, false);
+    q.begin(cam);
+    std::vector<uint32_t> handles;
+    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
+    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "frame " << f << " box " << i;
+    q.end_batch();
+    q.end();
+  }
+}
+
 }  // namespace
 
 TEST(GpuDepthPyramid, LevelsEqualTheCpuPyramidOfTheSameDepth) {
@@ -320,22 +345,11 @@ TEST(HcQuerier, AutomaticStopsBuildingThePyramidWhereItProvesNothing) {
   const Camera& cam = p.path[0];
   const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
   p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
-  BoxQuerier reference(*p.ctx);
-  reference.begin(cam);
-  std::vector<uint64_t> expected;
-  for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
-  reference.end();
+  const std::vector<uint64_t> expected = query_counts(p, cam, boxes);
   ASSERT_GT(std::count_if(expected.begin(), expected.end(), [](uint64_t s) { return s > 0; }), 100);
   const int frames = 2 * int(HcQuerier::kRetryFrames) + 1;
-  for (int f = 0; f < frames; ++f) {
-    p.renderer->begin_frame(cam, false);
-    q.begin(cam);
-    std::vector<uint32_t> handles;
-    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
-    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "frame " << f << " box " << i;
-    q.end_batch();
-    q.end();
-  }
+  expect_answers_on_cleared_depth(p, q, cam, boxes, expected, frames);
+  if (HasFatalFailure()) return;
   EXPECT_EQ(q.stats().pyramid_occluded, 0u);
   EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
   EXPECT_EQ(q.stats().tests, uint64_t(frames) * boxes.size());
@@ -350,21 +364,9 @@ TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
   const Camera& cam = p.path[0];
   const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
   p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
-  BoxQuerier reference(*p.ctx);
-  reference.begin(cam);
-  std::vector<uint64_t> expected;
-  for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
-  reference.end();
-  const int frames = 2 * int(HcQuerier::kRetryFrames) + 1;
-  for (int f = 0; f < frames; ++f) {
-    p.renderer->begin_frame(cam, false);
-    q.begin(cam);
-    std::vector<uint32_t> handles;
-    for (const Aabb& b : boxes) handles.push_back(q.issue(b));
-    for (size_t i = 0; i < boxes.size(); ++i) ASSERT_EQ(q.result(handles[i]), expected[i]) << "frame " << f << " box " << i;
-    q.end_batch();
-    q.end();
-  }
+  const std::vector<uint64_t> expected = query_counts(p, cam, boxes);
+  expect_answers_on_cleared_depth(p, q, cam, boxes, expected, 2 * int(HcQuerier::kRetryFrames) + 1);
+  if (HasFatalFailure()) return;
   EXPECT_EQ(q.stats().pyramid_occluded + q.stats().shown, 0u);
   EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
 }
@@ -374,15 +376,10 @@ TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
 TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
   Plant p(192, 160, "plant:0.05", 3);
   HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
-  BoxQuerier reference(*p.ctx);
   for (const Camera& cam : p.path) {
     const std::vector<Aabb> boxes = test_boxes(p, cam, 400);
     p.draw_occluders(cam);
-    reference.begin(cam);
-    std::vector<uint64_t> expected;
-    for (const Aabb& b : boxes) expected.push_back(reference.result(reference.issue(b)));
-    reference.end_batch();
-    reference.end();
+    const std::vector<uint64_t> expected = query_counts(p, cam, boxes);
     q.begin(cam);
     std::vector<uint32_t> handles;
     for (const Aabb& b : boxes) handles.push_back(q.issue(b));

@@ -250,8 +250,7 @@ void HcQuerier::begin(const Camera& cam) {
   proven_frame_ = 0;
   cam_ = cam;
   built_ = stale_ = false;
-  dirty_x0_ = dirty_y0_ = 0;
-  dirty_x1_ = dirty_y1_ = -1;
+  clear_dirty();
   q_begin(cam);
 }
 
@@ -285,8 +284,7 @@ void HcQuerier::cpu_refresh() {
     cpu_pyramid_->build_levels();
     built_ = true;
     stale_ = false;
-    dirty_x0_ = dirty_y0_ = 0;
-    dirty_x1_ = dirty_y1_ = -1;
+    clear_dirty();
     ++stats_.builds;
     return;
   }
@@ -299,8 +297,7 @@ void HcQuerier::cpu_refresh() {
   ctx_.read_depth(dirty_x0_, dirty_y0_, dirty_x1_ - dirty_x0_ + 1, dirty_y1_ - dirty_y0_ + 1, cpu_pyramid_->level0(w, h));
   cpu_pyramid_->build_levels(dirty_x0_, dirty_y0_, dirty_x1_, dirty_y1_);
   stale_ = false;
-  dirty_x0_ = dirty_y0_ = 0;
-  dirty_x1_ = dirty_y1_ = -1;
+  clear_dirty();
   ++stats_.refreshes;
 }
 
@@ -366,6 +363,11 @@ void HcQuerier::resolve() {
     if (handle_[i] == kPending) {
       handle_[i] = q_issue(boxes_[i]);
     }
+}
+
+void HcQuerier::clear_dirty() {
+  dirty_x0_ = dirty_y0_ = 0;
+  dirty_x1_ = dirty_y1_ = -1;
 }
 
 bool HcQuerier::clean_under(const Aabb& box) const {

@@ -163,6 +163,7 @@ class HcQuerier final : public OcclusionQueries {
   int dirty_x0_ = 0, dirty_y0_ = 0, dirty_x1_ = -1, dirty_y1_ = -1;
   void cpu_refresh();
   bool clean_under(const Aabb& box) const;  // no pixel of its footprint drawn since read back
+  void clear_dirty();
   uint64_t proven_frame_ = 0;   // boxes the pyramid proved occluded in this frame (cpu_pyramid:
                                 // pixels of the rectangles of the boxes it decided)
   double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
