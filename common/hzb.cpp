@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #ifdef __SSE2__
 #include <immintrin.h>
 #endif
@@ -265,6 +266,114 @@ bool DepthPyramid::shows(const Aabb& box, const Camera& cam, int samples_per_axi
       if (sample(px, py)) return true;
     }
   return false;
+}
+
+namespace {
+
+// The nearest reverse-Z depth (max z/w) of the camera-relative box [lo, hi] inside the part of
+// the view volume over NDC [xa, xb] x [ya, yb]; -inf when the two do not meet. The maximum of z/w
+// (a linear-fractional function) over that convex set is at one of its vertices: a box corner
+// inside the sub-frustum, a box edge crossing one of its four side planes, or one of its four edge
+// rays entering the box. The caller has every corner in front of the near plane.
+struct SubFrustumDepth {
+  glm::dvec3 lo, hi;
+  glm::dmat4 vpm, inv;
+  glm::dvec4 corner[8];  // clip coordinates of the box's corners
+  explicit SubFrustumDepth(const glm::dvec3& l, const glm::dvec3& h, const glm::dmat4& m) : lo(l), hi(h), vpm(m) {
+    inv = glm::inverse(m);
+    for (int i = 0; i < 8; ++i)
+      corner[i] = vpm * glm::dvec4((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z, 1.0);
+  }
+  double nearest(double xa, double xb, double ya, double yb) const {
+    double best = -std::numeric_limits<double>::infinity();
+    auto inside = [&](const glm::dvec4& c) {
+      const double e = 1e-12 * c.w;
+      return c.x >= xa * c.w - e && c.x <= xb * c.w + e && c.y >= ya * c.w - e && c.y <= yb * c.w + e;
+    };
+    for (const glm::dvec4& c : corner)
+      if (inside(c)) best = std::max(best, c.z / c.w);
+    // Box edges against the side planes x = a w, y = a w (clip coordinates are linear along an edge).
+    static constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
+                                          {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+    for (const auto& e : kEdges) {
+      const glm::dvec4 &c0 = corner[e[0]], &c1 = corner[e[1]];
+      for (int plane = 0; plane < 4; ++plane) {
+        const int axis = plane >> 1;
+        const double a = plane == 0 ? xa : plane == 1 ? xb : plane == 2 ? ya : yb;
+        const double f0 = c0[axis] - a * c0.w, f1 = c1[axis] - a * c1.w;
+        if ((f0 > 0) == (f1 > 0) || f0 == f1) continue;
+        const double t = f0 / (f0 - f1);
+        const glm::dvec4 c = c0 + t * (c1 - c0);
+        if (inside(c)) best = std::max(best, c.z / c.w);
+      }
+    }
+    // The sub-frustum's four edge rays entering the box (slabs; the eye is outside the box).
+    for (int k = 0; k < 4; ++k) {
+      const glm::dvec4 r = inv * glm::dvec4((k & 1) ? xb : xa, (k & 2) ? yb : ya, 0.5, 1.0);
+      const glm::dvec3 d = glm::dvec3(r) / r.w;
+      double t0 = 0, t1 = std::numeric_limits<double>::infinity();
+      for (int a = 0; a < 3 && t0 <= t1; ++a) {
+        if (d[a] == 0) {
+          if (!(lo[a] <= 0 && 0 <= hi[a])) t0 = 1, t1 = 0;
+          continue;
+        }
+        const double u = lo[a] / d[a], v = hi[a] / d[a];
+        t0 = std::max(t0, std::min(u, v));
+        t1 = std::min(t1, std::max(u, v));
+      }
+      if (t0 <= t1 && t0 > 0) {
+        const glm::dvec4 c = vpm * glm::dvec4(t0 * d, 1.0);
+        best = std::max(best, c.z / c.w);
+      }
+    }
+    return best;
+  }
+};
+
+}  // namespace
+
+bool DepthPyramid::occludes_refined(const PyramidProbe& p, const Aabb& box, const Camera& cam, double relative_pad,
+                                    int max_texels) const {
+  if (p.kind != PyramidProbe::Kind::probe || p.level >= levels_.size() || box.empty()) return false;
+  if (occludes(p)) return true;
+  const glm::dvec3 lo = box.min - cam.eye, hi = box.max - cam.eye;
+  const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
+  const double pad = relative_pad * std::max({far.x, far.y, far.z});
+  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
+  const SubFrustumDepth sub(lo - pad, hi + pad, vpm);
+  double wmin = std::numeric_limits<double>::infinity();
+  for (const glm::dvec4& c : sub.corner) wmin = std::min(wmin, c.w);
+  if (!(wmin >= cam.near_dist * (1.0 + 1e-3))) return false;  // clipped at the near plane
+  const glm::dmat4 proj = cam.projection();
+  const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / wmin;
+  const int w = width(), h = height();
+  int budget = max_texels;
+  // Texel (x, y) of `level`: proven, or followed into its children.
+  auto proven = [&](auto&& self, uint32_t level, int x, int y) -> bool {
+    if (--budget < 0) return false;
+    const Level& l = levels_[level];
+    const double xa = double((x << level) - 1) / w * 2.0 - 1.0, xb = double(std::min((x + 1) << level, w) + 1) / w * 2.0 - 1.0;
+    const double ya = double((y << level) - 1) / h * 2.0 - 1.0, yb = double(std::min((y + 1) << level, h) + 1) / h * 2.0 - 1.0;
+    const double z = sub.nearest(xa, xb, ya, yb);
+    if (z == -std::numeric_limits<double>::infinity()) return true;  // no part of the box there
+    const float bound = std::nextafter(float(z + 1e-3 * std::abs(z) + 1e-5 * terms), 2.0f);
+    if (bound < l.d[size_t(y) * l.w + x]) return true;
+    if (level == 0) return false;
+    const Level& below = levels_[level - 1];
+    for (int cy = 2 * y; cy <= std::min(2 * y + 1, below.h - 1); ++cy)
+      for (int cx = 2 * x; cx <= std::min(2 * x + 1, below.w - 1); ++cx)
+        if (!self(self, level - 1, cx, cy)) return false;
+    return true;
+  };
+  for (int y = p.y0; y <= p.y1; ++y)
+    for (int x = p.x0; x <= p.x1; ++x)
+      if (!proven(proven, p.level, x, y)) return false;
+  return true;
+}
+
+bool DepthPyramid::hides(const Aabb& box, const Camera& cam, double relative_pad, int max_texels) const {
+  const PyramidProbe p = pyramid_probe(box, cam, {width(), height()}, relative_pad);
+  return p.kind == PyramidProbe::Kind::no_samples || occludes_refined(p, box, cam, relative_pad, max_texels);
 }
 
 uint32_t pyramid_level_count(const Viewport& vp) {

@@ -76,6 +76,22 @@ class DepthPyramid {
   // The CPU twin of the GPU pyramid test (common/gl/hzb_query.*): true when every texel of the
   // probe's rectangle at its level lies strictly in front of probe.depth. Only for Kind::probe.
   bool occludes(const PyramidProbe& p) const;
+  // A finer proof of the same claim (no fragment of the box's occlusion query could pass): true
+  // where occludes(p) is, and also when every texel of the probe's rectangle, followed down the
+  // pyramid, ends in texels where the part of the padded box inside the texel's pixels (widened
+  // by a pixel each side) is strictly behind the texel's farthest depth (with the probe's depth
+  // margin) or absent. A box's nearest depth over one texel is often much farther than its
+  // nearest corner: thin, slanted and large boxes are proven where the probe is not (a plant
+  // walk: 97 % of the boxes whose queries count 0 samples, against 74 %). Gives up (false) at a
+  // pixel it cannot prove, after max_texels texels, and for boxes within 1e-3 of the near plane
+  // that the probe does not prove. Only for Kind::probe.
+  bool occludes_refined(const PyramidProbe& p, const Aabb& box, const Camera& cam, double relative_pad,
+                        int max_texels = 256) const;
+  // Whether geometry inside `box` drawn with depth test GL_GREATER (reverse-Z) would leave no
+  // fragment on this depth buffer: an empty box, or its occlusion query's probe
+  // (pyramid_probe with `relative_pad`) proven by occludes_refined. False proves nothing (boxes
+  // at the near plane, off screen or in view).
+  bool hides(const Aabb& box, const Camera& cam, double relative_pad, int max_texels = 64) const;
   // The converse, from level 0 alone: true when an occlusion query of `box` against this very
   // depth buffer would count a sample (common/gl/box_query.hpp: the box padded, front faces,
   // GL_GREATER). Up to samples_per_axis^2 pixel centres spread over the box's screen rectangle

@@ -18,7 +18,8 @@ bool OcclusionGate::occlusion(uint32_t camera) const {
 }
 
 bool OcclusionGate::wants_frustum_triangles() const {
-  return o_.policy == Policy::automatic && state_ == State::on && n_ >= next_trial_ && on_.size() >= o_.window;
+  return o_.policy == Policy::automatic && state_ == State::on && n_ >= next_trial_ &&
+         on_.size() >= std::min(o_.trial_after, o_.window);
 }
 
 double OcclusionGate::median(const std::deque<double>& v) {

@@ -28,6 +28,7 @@
 #include "protocol/visible_set.hpp"
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
+#include "common/gl/two_pass.hpp"
 #include "render_client/viewer.hpp"
 
 namespace occ {
@@ -81,7 +82,8 @@ struct NodeLink {
 
 class Client {
  public:
-  explicit Client(const ClientOptions& o) : o_(o), gate_({.policy = o.occlusion_gate}) {}
+  explicit Client(const ClientOptions& o)
+      : o_(o), gate_({.policy = o.occlusion_gate}), two_pass_gate_({.policy = o.two_pass}) {}
 
   int run() {
     if (o_.window) viewer_ = std::make_unique<Viewer>(o_);  // no display: fail before loading the scene
@@ -98,6 +100,7 @@ class Client {
     leaf_count_ = 0;
     for (const HNode& n : g_.hierarchy().nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
     total_triangles_ = g_.scene().triangle_count();
+    two_pass_ = std::make_unique<TwoPassDrawer>(*g_.ctx, *g_.renderer, g_.hierarchy(), *g_.renderables);
     connect();
     if (!switch_) gate_ = OcclusionGate({.policy = OcclusionGate::Policy::on});  // an occlusion_server always culls
     int code = 0;
@@ -385,7 +388,7 @@ class Client {
                     {"frame", "camera", "hc_node", "visible", "added", "removed", "queries", "triangles",
                      "bytes_received", "hc_ms", "or_ms", "rvg_ms", "latency_ms", "frame_interval_ms",
                      "hc_cpu_ms", "or_cpu_ms", "or_tail_cpu_ms", "rvg_cpu_ms", "rvg_frame_cpu_ms", "or_tail_ms",
-                     "camera_gap", "occlusion", "mode"});
+                     "camera_gap", "occlusion", "two_pass", "hidden_here", "mode"});
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes, or one of them alone after a failure): a
     // single occlusion_server sends plain diffs.
@@ -432,9 +435,24 @@ class Client {
         ids.assign(visible.ids().begin(), visible.ids().end());
       else
         ids = frustum_cull(g_.hierarchy(), cam);  // leaves at full detail: renderable id = node id
-      g_.renderer->begin_frame(cam, true);
-      DrawStats st = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::Shaded);
-      g_.ctx->gl().Finish();
+      // A frustum set (the switch culled without occlusion, or no node serves) is culled here,
+      // in two passes against the frame's own depth, where that pays (two_pass.hpp).
+      const bool frustum_set = !served || !served->wcam.occlusion;
+      const bool two_pass = frustum_set && two_pass_gate_.occlusion(two_pass_frames_);
+      DrawStats st;
+      TwoPassDrawer::Frame tp;
+      if (two_pass) {
+        if (!two_pass_last_) two_pass_->forget();
+        tp = two_pass_->draw(cam, ids);
+        st = tp.drawn;
+        two_pass_redrawn_ += tp.redrawn;
+        ++two_pass_used_;
+      } else {
+        g_.renderer->begin_frame(cam, true);
+        st = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::Shaded);
+        g_.ctx->gl().Finish();
+      }
+      two_pass_last_ = two_pass;
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       const uint64_t cpu_shown = process_cpu_us();
       const double latency_ms = ms_between(sent_at_[cam_number], shown);
@@ -445,8 +463,9 @@ class Client {
         HudStats hud{latency_ms, ids.size(), leaf_count_, st.triangles, o_.config.pixel_error, -1,
                      mode == Mode::single    ? "degraded: one switch node"
                      : mode == Mode::frustum ? "degraded: frustum culling"
-                     : served && !served->wcam.occlusion ? "switch, no occlusion (does not pay here)"
-                                                         : mode_name(mode)};
+                     : served && !served->wcam.occlusion
+                         ? (two_pass ? "switch, no occlusion (culled here)" : "switch, no occlusion (does not pay here)")
+                         : mode_name(mode)};
         if (viewer_->overlay()) {
           hud.occluded = long(draw_overlay(cam, ids));
           image = g_.ctx->read_rgba();
@@ -462,9 +481,15 @@ class Client {
                      interval_ms, eof.hc_cpu_us / 1000.0,
                      eof.or_cpu_us / 1000.0, eof.or_tail_cpu_us / 1000.0, (cpu_shown - cpu_r0) / 1000.0,
                      (cpu_shown - (frame_done_.empty() ? cpu_start_ : cpu_prev_shown_)) / 1000.0,
-                     eof.or_tail_us / 1000.0, double(camera_gap), double(served ? served->wcam.occlusion : 0)},
+                     eof.or_tail_us / 1000.0, double(camera_gap), double(served ? served->wcam.occlusion : 0),
+                     double(two_pass ? 1 + tp.redrawn : 0), double(tp.hidden)},
                     {mode_name(mode)});
       ++mode_frames_[int(mode)];
+      if (frustum_set) {
+        const uint64_t set_triangles = two_pass ? tp.set_triangles : st.triangles;
+        two_pass_gate_.frame(two_pass, ms_between(r0, shown), st.triangles, set_triangles);
+        ++two_pass_frames_;
+      }
       if (mode == Mode::switch_) {
         std::optional<uint64_t> frustum;
         if (gate_.wants_frustum_triangles()) frustum = frustum_triangles(cam);
@@ -539,6 +564,10 @@ class Client {
         std::accumulate(lat.begin(), lat.end(), 0.0) / wall_ms, camera_gap_max_, gate_.frames_off());
     if (switch_ && o_.occlusion_gate == OcclusionGate::Policy::automatic)
       std::cerr << "render_client: occlusion gate: " << gate_.describe() << "\n";
+    if (two_pass_frames_ > 0)
+      std::cerr << "render_client: " << two_pass_frames_ << " frames of frustum sets, " << two_pass_used_
+                << " of them culled here in two passes (" << two_pass_redrawn_
+                << " drawn again for a depth tie); two-pass gate: " << two_pass_gate_.describe() << "\n";
     if (frames != mode_frames_[int(Mode::switch_)])
       std::printf("modes: switch=%zu resync=%zu single=%zu frustum=%zu resyncs=%u\n", mode_frames_[0],
                   mode_frames_[1], mode_frames_[2], mode_frames_[3], resyncs_);
@@ -576,6 +605,11 @@ class Client {
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
   uint32_t camera_gap_max_ = 0;
   OcclusionGate gate_;                // occlusion only where it pays (--occlusion-gate)
+  // Frustum sets culled here (--two-pass): on = two passes, off = one; measured by render time.
+  OcclusionGate two_pass_gate_;
+  std::unique_ptr<TwoPassDrawer> two_pass_;
+  bool two_pass_last_ = false;
+  uint32_t two_pass_frames_ = 0, two_pass_used_ = 0, two_pass_redrawn_ = 0;
   std::vector<uint8_t> cam_occlusion_;  // per camera sent: Camera.occlusion (0 frustum set, 1, 2 selected occluders)
 };
 

@@ -51,6 +51,16 @@ int main(int argc, char** argv) {
         "occluder fusion drawing only objects that cover at least " +
             std::to_string(int(occ::wire::kSelectedOccluderPixelsPerTriangle)) +
             " px per triangle (cheaper OR, larger visible sets)");
+    cli.choice<occ::OcclusionGate::Policy>(
+        "two-pass", &o.two_pass,
+        {{"auto", occ::OcclusionGate::Policy::automatic},
+         {"on", occ::OcclusionGate::Policy::on},
+         {"off", occ::OcclusionGate::Policy::off},
+         {"alternate", occ::OcclusionGate::Policy::alternate}},
+        "frames of frustum sets (the switch culled without occlusion, or no node serves) culled here: drawn in two "
+        "passes, first what showed last time, then what that depth does not prove hidden (one depth read-back; "
+        "exact). auto = where measured faster than one pass, tried where it hides little; on; off; alternate = 4 "
+        "frames each way (tests)");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "

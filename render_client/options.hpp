@@ -32,6 +32,7 @@ struct ClientOptions {
   int timeout_ms = 30000;
   bool degrade = true;  // --on-node-failure degrade|exit (client.cpp)
   OcclusionGate::Policy occlusion_gate = OcclusionGate::Policy::automatic;  // --occlusion-gate
+  OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;        // --two-pass (on/off/automatic)
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   // --window (viewer.hpp)
   bool window = false;

@@ -53,7 +53,7 @@ while [ $# -gt 0 ]; do
     --no-images) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --lookahead|--on-node-failure|--occlusion-gate) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
+    --lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
     --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;

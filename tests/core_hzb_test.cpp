@@ -215,6 +215,62 @@ TEST(HzbProbe, OccludesNeverWhereBruteForceSeesAPixelAndFinerSpansProveMore) {
   EXPECT_GT(proven2, brute_hidden / 4);
 }
 
+// The refined occlusion proof (DepthPyramid::occludes_refined) on random rectangles against brute
+// force over every pixel centre (the ray through it enters the box, padded, at a depth not behind
+// the pixel's): never "occluded" where a centre sees the box; everything the probe proves; and
+// most of what brute force finds hidden, far more than the probe.
+TEST(HzbRefined, ProvesOnlyWhatNoPixelCentreSeesAndMoreThanTheProbe) {
+  const int w = 160, h = 120;
+  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
+  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
+  const glm::dmat4 inv = glm::inverse(vpm);
+  int probed = 0, brute_hidden = 0, probe_proven = 0, refined_proven = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    auto d = random_depth(w, h, 20);
+    DepthPyramid p;
+    p.build(d, w, h);
+    for (int i = 0; i < 200; ++i) {
+      Aabb box = random_box();
+      if (i % 3 == 0) {  // thin slanted slabs: the probe's rectangle covers far more than the box does
+        const int a = i % 2;
+        box.max[a] = box.min[a] + 0.01;
+        box.min[2] -= 10;
+      }
+      const PyramidProbe pr = pyramid_probe(box, cam, {w, h}, 1e-5);
+      if (pr.kind != PyramidProbe::Kind::probe) continue;
+      ++probed;
+      const glm::dvec3 lo = box.min - 1e-4, hi = box.max + 1e-4;  // a little more than the pad
+      bool brute = false;
+      for (int y = 0; y < h && !brute; ++y)
+        for (int x = 0; x < w && !brute; ++x) {
+          const glm::dvec4 r = inv * glm::dvec4((x + 0.5) / w * 2 - 1, (y + 0.5) / h * 2 - 1, 0.5, 1.0);
+          const glm::dvec3 dir = glm::dvec3(r) / r.w;
+          double t0 = 0, t1 = 1e300;
+          for (int a = 0; a < 3; ++a) {
+            double ta = lo[a] / dir[a], tb = hi[a] / dir[a];
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+          }
+          if (!(t0 < t1)) continue;
+          const glm::dvec4 clip = vpm * glm::dvec4(t0 * dir, 1.0);
+          brute = !(clip.z / clip.w < d[size_t(y) * w + x]);
+        }
+      const bool probe = p.occludes(pr), refined = p.occludes_refined(pr, box, cam, 1e-5, 1 << 20);
+      ASSERT_TRUE(!brute || !refined) << "proves occluded a box a pixel centre sees, trial " << trial << " box " << i;
+      ASSERT_TRUE(!probe || refined) << "the refined test proves what the probe proves, trial " << trial << " box " << i;
+      brute_hidden += !brute;
+      probe_proven += probe;
+      refined_proven += refined;
+    }
+  }
+  std::printf("%d boxes probed, %d hidden (brute force), %d proven by the probe, %d by the refined test\n", probed,
+              brute_hidden, probe_proven, refined_proven);
+  EXPECT_GT(brute_hidden, probed / 5);
+  EXPECT_GT(refined_proven, brute_hidden * 3 / 4);
+  EXPECT_GT(refined_proven, probe_proven + probe_proven / 4);
+}
+
 // DepthPyramid::shows (the CPU proof that a box's query counts a sample) on synthetic buffers: a
 // cleared buffer shows nearly every box wholly in front of the near plane that is on screen; a buffer at
 // the near plane shows none; on random rectangles it claims a box only where brute force over the

@@ -11,6 +11,9 @@
 #include "common/gl/context.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
+#include "common/gl/two_pass.hpp"
+#include "common/culling.hpp"
+#include "common/lod_select.hpp"
 #include "common/hierarchy.hpp"
 #include "common/hzb.hpp"
 #include "common/scene_io.hpp"
@@ -127,7 +130,7 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
     Plant p(vp.width, vp.height, spec, 6);
     GpuDepthPyramid gpu(*p.ctx);
     BoxQuerier q(*p.ctx);
-    size_t query_zero = 0, proven = 0, probes = 0, total = 0, near_proven = 0;
+    size_t query_zero = 0, proven = 0, probes = 0, total = 0, near_proven = 0, refined_proven = 0;
     for (const Camera& cam : p.path) {
       p.draw_occluders(cam);
       gpu.build();
@@ -151,6 +154,11 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
         ASSERT_TRUE(occluded[j] == 0 || samples == 0)
             << "box " << index[j] << " proven occluded but its query saw " << samples << " samples (level "
             << batch[j].level << ", depth " << batch[j].depth << ")";
+        const bool refined = cpu.occludes_refined(batch[j], boxes[index[j]], cam, BoxQuerier::kRelativePad);
+        ASSERT_TRUE(!refined || samples == 0)
+            << "box " << index[j] << " proven occluded by the refined test but its query saw " << samples << " samples";
+        ASSERT_TRUE(refined || occluded[j] == 0) << "the refined test proves what the probe proves, box " << index[j];
+        refined_proven += refined;
         query_zero += samples == 0;
         proven += occluded[j] != 0;
         near_proven += occluded[j] != 0 && box_footprint(boxes[index[j]], cam, vp).kind == BoxFootprint::Kind::NearPlane;
@@ -166,9 +174,10 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
     if (std::string(spec).starts_with("city")) {
       EXPECT_GT(near_proven, 0u) << "boxes crossing the near plane are proven too";
     }
+    EXPECT_GT(refined_proven, proven) << "the refined test proves more than the probe";
     std::printf("viewport %dx%d, span %d: %zu boxes, %zu probed, %zu with 0 samples, %zu proven occluded by the pyramid "
-                "(%zu of them crossing the near plane)\n", vp.width, vp.height, span, total, probes, query_zero, proven,
-                near_proven);
+                "(%zu of them crossing the near plane), %zu by the refined test\n", vp.width, vp.height, span, total,
+                probes, query_zero, proven, near_proven, refined_proven);
   }
 }
 
@@ -440,4 +449,90 @@ TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   std::printf("1024x1024: pyramid build %.2f ms; test of %zu probes %.2f ms; %zu queries %.2f ms\n", build_ms,
               batch.size(), test_ms, boxes.size(), query_ms);
   EXPECT_EQ(occluded.size(), batch.size());
+}
+
+namespace {
+size_t differing_pixels(const Image& a, const Image& b) {
+  if (a.rgba.size() != b.rgba.size()) return ~size_t(0);
+  size_t n = 0;
+  for (size_t i = 0; i < a.rgba.size(); i += 4) n += !std::equal(&a.rgba[i], &a.rgba[i] + 4, &b.rgba[i]);
+  return n;
+}
+}  // namespace
+
+// Frames drawn in two passes against their own depth (common/gl/two_pass.hpp) equal the one-pass
+// frames of the same sets, pixel for pixel, on a walk where the second pass has work; and they
+// hide a good share of the frustum set.
+TEST(TwoPassDrawer, FramesEqualOnePassFramesAndHideWhatTheDepthHides) {
+  Plant p(200, 150, "city:8x8:3:10:1", 16);
+  p.renderer->set_occluder_offset(false);
+  const Renderables r(p.h, nullptr);
+  TwoPassDrawer two(*p.ctx, *p.renderer, p.h, r);
+  uint64_t set = 0, drawn = 0, second = 0, hidden = 0;
+  for (size_t f = 0; f < p.path.size(); ++f) {
+    const Camera& cam = p.path[f];
+    const std::vector<uint32_t> ids = frustum_cull(p.h, cam);
+    const TwoPassDrawer::Frame tf = two.draw(cam, ids);
+    const Image image = p.ctx->read_rgba();
+    p.renderer->begin_frame(cam, true);
+    const DrawStats one = p.renderer->draw_renderables(r, ids, SceneRenderer::Mode::Shaded);
+    ASSERT_EQ(differing_pixels(image, p.ctx->read_rgba()), 0u) << "frame " << f;
+    EXPECT_EQ(tf.first + tf.second + tf.hidden, ids.size());
+    EXPECT_EQ(tf.set_triangles, one.triangles);
+    set += tf.set_triangles;
+    drawn += tf.drawn.triangles;
+    second += tf.second;
+    hidden += tf.hidden;
+  }
+  std::printf("%zu frames: %llu of %llu triangles drawn, %llu renderables in second passes, %llu hidden\n",
+              p.path.size(), (unsigned long long)drawn, (unsigned long long)set, (unsigned long long)second,
+              (unsigned long long)hidden);
+  EXPECT_GT(second, 0u) << "the walk reveals renderables the first pass did not draw";
+  EXPECT_LT(drawn, set * 3 / 4) << "the depth hides a good share of the frustum set";
+}
+
+// Two coplanar quads overlap; the first in draw order (the nearer box centre, then the lower id)
+// wins the overlap in one pass. A wall hides it in the first frame; in the second the wall is
+// behind the eye, the first quad returns in pass 2 after the second quad in pass 1: the tie is
+// found and its rectangle drawn again, so the overlap shows the first quad as in one pass.
+TEST(TwoPassDrawer, DepthTiesBetweenThePassesAreDrawnAgainInOnePass) {
+  constexpr int kW = 160, kH = 120;
+  auto ctx = GlContext::create(GlBackend::Auto, kW, kH);
+  Scene scene;
+  Mesh quad;  // unit quad in the xy plane facing +z
+  quad.positions = {{-0.5f, -0.5f, 0}, {0.5f, -0.5f, 0}, {0.5f, 0.5f, 0}, {-0.5f, 0.5f, 0}};
+  quad.indices = {0, 1, 2, 0, 2, 3};
+  compute_normals(quad);
+  scene.meshes.push_back(quad);
+  auto place = [](glm::dvec3 at, glm::dvec3 size) {
+    return glm::scale(glm::translate(glm::dmat4(1.0), at), size);
+  };
+  scene.objects.push_back({0, place({-0.75, 0, 0}, {2.5, 2, 1}), "first"});   // x in [-2, 0.5]
+  scene.objects.push_back({0, place({0.75, 0, 0}, {2.5, 2, 1}), "second"});   // x in [-0.5, 2]
+  scene.objects.push_back({0, place({-1.6, 0, 5}, {4.8, 6, 1}), "wall"});     // x in [-4, 0.8] at z = 5
+  const Hierarchy h = Hierarchy::build(scene, {});
+  SceneRenderer renderer(*ctx, scene, h);
+  const Renderables r(h, nullptr);
+  TwoPassDrawer two(*ctx, renderer, h, r);
+  const Camera far_cam = Camera::look_at({0, 0, 10}, {0, 0, 0}, {0, 1, 0}, 60, double(kW) / kH, 0.1, 100);
+  const Camera near_cam = Camera::look_at({0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 60, double(kW) / kH, 0.1, 100);
+  for (int frame = 0; frame < 2; ++frame) {
+    const Camera& cam = frame == 0 ? far_cam : near_cam;
+    const std::vector<uint32_t> ids = frustum_cull(h, cam);
+    const TwoPassDrawer::Frame f = two.draw(cam, ids);
+    const Image image = ctx->read_rgba();
+    renderer.begin_frame(cam, true);
+    renderer.draw_renderables(r, ids, SceneRenderer::Mode::Shaded);
+    const Image one = ctx->read_rgba();
+    ASSERT_EQ(differing_pixels(image, one), 0u) << "frame " << frame;
+    if (frame == 0) {
+      EXPECT_EQ(f.hidden, 0u) << "nothing is known hidden before the first frame: all in pass 1";
+      EXPECT_FALSE(f.redrawn);
+    } else {
+      EXPECT_EQ(f.second, 1u) << "the first quad, hidden by the wall in the frame before";
+      EXPECT_TRUE(f.redrawn) << "its overlap with the second quad ties in depth";
+      EXPECT_GT(f.redrawn_pixels, 0u);
+      EXPECT_LT(f.redrawn_pixels, uint64_t(kW) * kH) << "only the quad's rectangle";
+    }
+  }
 }

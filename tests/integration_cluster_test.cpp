@@ -138,26 +138,34 @@ TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
 // switch with occlusion and frustum sets (no OR, no queries on the HC node). --occlusion-gate
 // alternate switches every 4 cameras, so both changes of mode happen many times: the frames stay
 // the reference's; frames without occlusion issued no queries and drew at least the frustum set's
-// leaves; both nodes served some of them.
+// leaves; both nodes served some of them. The render client culls those frustum sets itself in
+// two passes (--two-pass alternate: 4 of them each way), hiding leaves behind the aisle's walls.
 TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
   ClusterOptions o = cluster("plant:0.3", "walk:40");
+  o.client = {"--two-pass", "alternate"};
   std::map<std::string, std::vector<double>> stats;
   const std::optional<ClusterRun> r = plant_walk_with_gate(fresh_dir("plant_gate"), "alternate", o, stats);
   if (!r) return;
-  size_t with = 0, without = 0, visible_with = 0, visible_without = 0;
+  size_t with = 0, without = 0, visible_with = 0, visible_without = 0, two_pass = 0, hidden = 0;
   for (size_t f = 0; f < 40; ++f) {
     EXPECT_EQ(stats["occlusion"][f], (uint32_t(stats["camera"][f]) / 4) % 2 == 0 ? 1.0 : 0.0) << "frame " << f;
     if (stats["occlusion"][f] != 0) {
       ++with;
       visible_with += size_t(stats["visible"][f]);
+      EXPECT_EQ(stats["two_pass"][f], 0.0) << "frame " << f << ": the switch culled it";
       continue;
     }
+    EXPECT_EQ(stats["two_pass"][f] != 0, (without / 4) % 2 == 0) << "frame " << f << " (frustum set " << without << ")";
+    two_pass += stats["two_pass"][f] != 0;
+    hidden += size_t(stats["hidden_here"][f]);
     ++without;
     visible_without += size_t(stats["visible"][f]);
     EXPECT_EQ(stats["queries"][f], 0.0) << "frame " << f;
   }
   EXPECT_EQ(with, 20u);
   EXPECT_EQ(without, 20u);
+  EXPECT_EQ(two_pass, 12u);
+  EXPECT_GT(hidden, 0u) << "the render client's own culling hid leaves of the frustum sets";
   EXPECT_GT(visible_without, visible_with);  // the aisle's walls hide most of the plant
   for (const std::string* log : {&r->node0_log, &r->node1_log})
     EXPECT_NE(log->find("; 10 frames without occlusion"), std::string::npos) << *log;

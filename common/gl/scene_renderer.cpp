@@ -681,7 +681,7 @@ bool SceneRenderer::holds_blended(const Renderables& r, uint32_t id) const {
 }
 
 void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint32_t> ids,
-                                      std::span<const GLuint> queries) {
+                                      std::span<const GLuint> queries, GLenum depth_func) {
   if (queries.size() != ids.size())
     throw std::invalid_argument("SceneRenderer::query_renderables: " + std::to_string(ids.size()) + " renderables but " +
                                 std::to_string(queries.size()) + " queries");
@@ -701,9 +701,9 @@ void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint
                      [](const Pending& a, const Pending& b) { return a.key < b.key; });
     query_ends_.push_back(pending_.size());
   }
-  // The occluders' state without their offset, depth writes off and ties passing: where this
-  // geometry lies on the depth it (or anything at the same depth) wrote, it still shows.
-  query_pending(queries, GL_GEQUAL);
+  // The occluders' state without their offset, depth writes off and (GL_GEQUAL) ties passing:
+  // where this geometry lies on the depth it (or anything at the same depth) wrote, it still shows.
+  query_pending(queries, depth_func);
 }
 
 void SceneRenderer::query_pending(std::span<const GLuint> queries, GLenum depth_func) {

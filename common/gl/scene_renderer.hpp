@@ -177,8 +177,11 @@ class SceneRenderer {
   // bit-identical to the occluder pass's — with colour and depth writes off, depth test
   // GL_GEQUAL (reverse-Z: ties pass) and no occluder offset. BLEND items are left out, as in
   // DepthOnly (holds_blended() tells which renderables have them). All records and commands are
-  // uploaded once. Leaves depth writes on and the depth test GL_GREATER.
-  void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries);
+  // uploaded once. Leaves depth writes on and the depth test GL_GREATER. With depth_func
+  // GL_EQUAL the queries count the samples that tie with the depth buffer exactly (every mode
+  // computes the same depth: a Shaded draw of the renderable would tie there too).
+  void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries,
+                         GLenum depth_func = GL_GEQUAL);
   // The BLEND items' share of an exact visibility count: for each BLEND item items[k] (others
   // are an error), a GL_SAMPLES_PASSED query queries[k] around a depth-tested draw of it against
   // the depth buffer as it is (GL_GREATER, no colour or depth writes: what the Shaded pass does to

@@ -1,0 +1,99 @@
+#include "common/gl/two_pass.hpp"
+
+#include <algorithm>
+
+#include "common/gl/box_query.hpp"
+
+namespace occ {
+
+TwoPassDrawer::TwoPassDrawer(GlContext& ctx, SceneRenderer& renderer, const Hierarchy& h, const Renderables& r)
+    : ctx_(ctx), renderer_(renderer), h_(h), r_(r), shown_(r.count(), 1) {}
+
+TwoPassDrawer::~TwoPassDrawer() {
+  if (!tie_queries_.empty()) ctx_.gl().DeleteQueries(GLsizei(tie_queries_.size()), tie_queries_.data());
+}
+
+void TwoPassDrawer::forget() { std::fill(shown_.begin(), shown_.end(), 1); }
+
+TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint32_t> ids) {
+  const GlApi& gl = ctx_.gl();
+  Frame f;
+  first_.clear();
+  second_.clear();
+  std::vector<uint32_t>& rest = second_;  // candidates for pass 2 until they are tested
+  for (uint32_t id : ids) {
+    if (id >= r_.count()) throw std::out_of_range("TwoPassDrawer: renderable " + std::to_string(id) + " out of range");
+    f.set_triangles += r_.triangles(id);
+    (shown_[id] ? first_ : rest).push_back(id);
+  }
+  // Pass 1. BLEND draws wait for the end of the frame, as one draw call's would.
+  renderer_.begin_frame(cam, true, true);
+  f.drawn += renderer_.draw_renderables(r_, first_, SceneRenderer::Mode::Shaded);
+  ctx_.read_depth(pyramid_.level0(ctx_.width(), ctx_.height()));  // waits for pass 1
+  pyramid_.build_levels();
+  auto hidden = [&](uint32_t id) {
+    return pyramid_.hides(h_.node(r_.node_of(id)).box, cam, BoxQuerier::kRelativePad, kProofTexels);
+  };
+  // Pass 2: what pass 1's depth does not hide.
+  size_t kept = 0;
+  for (uint32_t id : rest) {
+    const bool h = hidden(id);
+    shown_[id] = !h;
+    if (h)
+      ++f.hidden;
+    else
+      rest[kept++] = id;
+  }
+  second_.resize(kept);
+  if (!second_.empty()) {
+    if (tie_queries_.size() < second_.size()) {
+      const size_t have = tie_queries_.size();
+      tie_queries_.resize(second_.size());
+      gl.CreateQueries(GL_SAMPLES_PASSED, GLsizei(second_.size() - have), tie_queries_.data() + have);
+    }
+    renderer_.query_renderables(r_, second_, std::span<const GLuint>(tie_queries_.data(), second_.size()), GL_EQUAL);
+    f.drawn += renderer_.draw_renderables(r_, second_, SceneRenderer::Mode::Shaded);
+  }
+  f.drawn += renderer_.end_frame();
+  gl.Flush();  // the rasteriser takes the rest while pass 1's renderables are tested
+  for (uint32_t id : first_) shown_[id] = !hidden(id);  // their own depth never hides them
+  gl.Finish();
+  // Pass-2 renderables whose draws tie with pass 1's depth somewhere: the passes' order may have
+  // decided those pixels, so the union of their screen rectangles is drawn again in one pass.
+  int x0 = ctx_.width(), y0 = ctx_.height(), x1 = -1, y1 = -1;
+  for (size_t k = 0; k < second_.size(); ++k) {
+    GLuint64 n = 0;
+    gl.GetQueryObjectui64v(tie_queries_[k], GL_QUERY_RESULT, &n);
+    if (n == 0) continue;
+    const BoxFootprint fp = box_footprint(h_.node(r_.node_of(second_[k])).box, cam, {ctx_.width(), ctx_.height()});
+    const bool whole = fp.kind != BoxFootprint::Kind::OnScreen;  // at the near plane (it has samples)
+    x0 = std::min(x0, whole ? 0 : fp.x0);
+    y0 = std::min(y0, whole ? 0 : fp.y0);
+    x1 = std::max(x1, whole ? ctx_.width() - 1 : fp.x1);
+    y1 = std::max(y1, whole ? ctx_.height() - 1 : fp.y1);
+  }
+  f.first = uint32_t(first_.size());
+  f.second = uint32_t(second_.size());
+  if (x0 <= x1) {
+    // Within the rectangle, the one-pass frame of everything that may reach it (the set's
+    // order restricted to them is the set's order; the rest draws nothing there).
+    redraw_.clear();
+    for (uint32_t id : ids) {
+      const BoxFootprint fp = box_footprint(h_.node(r_.node_of(id)).box, cam, {ctx_.width(), ctx_.height()});
+      if (fp.kind == BoxFootprint::Kind::NearPlane ||
+          (fp.kind == BoxFootprint::Kind::OnScreen && fp.x0 <= x1 && fp.x1 >= x0 && fp.y0 <= y1 && fp.y1 >= y0))
+        redraw_.push_back(id);
+    }
+    gl.Enable(GL_SCISSOR_TEST);
+    gl.Scissor(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+    renderer_.begin_frame(cam, true);  // clears the rectangle only
+    f.drawn += renderer_.draw_renderables(r_, redraw_, SceneRenderer::Mode::Shaded);
+    gl.Finish();
+    gl.Disable(GL_SCISSOR_TEST);
+    f.redrawn = true;
+    f.redrawn_pixels = uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1);
+  }
+  return f;
+}
+
+}  // namespace occ

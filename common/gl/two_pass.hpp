@@ -1,0 +1,69 @@
+// Frames the render client culls for itself (issue 14, occlusion only where it pays; used by
+// render_client/client.cpp). When the switch sends a frustum set (its gate found that occlusion
+// does not pay there: the OR would draw the visible set a second time, on the same two cores) or
+// no switch node serves, the render client draws the frame in two passes against the frame's own
+// depth, for one depth read-back:
+//   1. the renderables that showed the last time (all of them the first time), in one draw call;
+//   2. the depth read back into a DepthPyramid; each other renderable is drawn unless the pyramid
+//      proves its box hidden (DepthPyramid::hides: no fragment of it could pass the depth test).
+// The depth only comes nearer after pass 1, so whatever pass 1's depth hides is hidden in the
+// frame: the frame is the one-pass frame of the whole set (CHC-like coherence, without waiting
+// on any query). Except at exact depth ties between a pass-2 and a pass-1 draw (coplanar faces):
+// one draw call orders those by its sort (scene_renderer.hpp), two calls by pass. GL_EQUAL
+// occlusion queries of the pass-2 renderables against pass 1's depth find any such tie; the
+// screen rectangles of the renderables with one are then drawn again in one pass (scissored:
+// everything whose box reaches them, in the set's order), so frames stay pixel-exact.
+// What showed is learned from the same pyramid: pass 1's renderables are tested after pass 2 is
+// submitted (while llvmpipe rasterises it; their own depth never hides them), pass 2's showed.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "common/camera.hpp"
+#include "common/gl/context.hpp"
+#include "common/gl/scene_renderer.hpp"
+#include "common/hierarchy.hpp"
+#include "common/hzb.hpp"
+#include "common/lod_select.hpp"
+
+namespace occ {
+
+class TwoPassDrawer {
+ public:
+  // Texels a box's proof may visit (DepthPyramid::occludes_refined) before it counts as shown.
+  static constexpr int kProofTexels = 64;
+
+  // The context, renderer, hierarchy and renderables outlive the drawer.
+  TwoPassDrawer(GlContext& ctx, SceneRenderer& renderer, const Hierarchy& h, const Renderables& r);
+  ~TwoPassDrawer();
+  TwoPassDrawer(const TwoPassDrawer&) = delete;
+  TwoPassDrawer& operator=(const TwoPassDrawer&) = delete;
+
+  struct Frame {
+    DrawStats drawn;          // everything drawn (twice over for a frame drawn again)
+    uint64_t set_triangles = 0;  // the triangles of the whole set: what one pass would draw
+    uint32_t first = 0;       // renderables drawn in pass 1
+    uint32_t second = 0;      // drawn in pass 2
+    uint32_t hidden = 0;      // proven hidden: not drawn
+    bool redrawn = false;     // a depth tie between the passes: its rectangle drawn again
+    uint64_t redrawn_pixels = 0;  // the rectangle's pixels
+  };
+  // Draws the Shaded frame of renderables `ids` for `cam`, complete (glFinish), as
+  // begin_frame(cam, true) + draw_renderables(ids) would.
+  Frame draw(const Camera& cam, std::span<const uint32_t> ids);
+  // Frames were drawn otherwise meanwhile: the next draw() starts with everything shown.
+  void forget();
+
+ private:
+  GlContext& ctx_;
+  SceneRenderer& renderer_;
+  const Hierarchy& h_;
+  const Renderables& r_;
+  DepthPyramid pyramid_;
+  std::vector<uint8_t> shown_;  // per renderable: showed when it was last in a set
+  std::vector<uint32_t> first_, second_, redraw_;
+  std::vector<GLuint> tie_queries_;
+};
+
+}  // namespace occ
