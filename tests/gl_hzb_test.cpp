@@ -515,6 +515,12 @@ TEST(TwoPassDrawer, DepthTiesBetweenThePassesAreDrawnAgainInOnePass) {
   const Renderables r(h, nullptr);
   TwoPassDrawer two(*ctx, renderer, h, r);
   const Camera far_cam = Camera::look_at({0, 0, 10}, {0, 0, 0}, {0, 1, 0}, 60, double(kW) / kH, 0.1, 100);
+  // The quads' boxes are as far from the eye on the axis: the first (lower item) comes first.
+  renderer.begin_frame(far_cam, true);
+  const auto first_places = renderer.draw_places(r, 1), second_places = renderer.draw_places(r, 2);
+  ASSERT_EQ(h.node(1).first_item, 0u);
+  EXPECT_LT(first_places.second, second_places.first);
+  EXPECT_LE(first_places.first, first_places.second);
   const Camera near_cam = Camera::look_at({0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 60, double(kW) / kH, 0.1, 100);
   for (int frame = 0; frame < 2; ++frame) {
     const Camera& cam = frame == 0 ? far_cam : near_cam;

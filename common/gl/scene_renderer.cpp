@@ -635,6 +635,29 @@ void SceneRenderer::add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode,
   stats.triangles += d.index_count / 3;
 }
 
+std::pair<SceneRenderer::DrawPlace, SceneRenderer::DrawPlace> SceneRenderer::draw_places(const Renderables& r,
+                                                                                         uint32_t id) {
+  if (id >= r.count())
+    throw std::out_of_range("SceneRenderer: renderable " + std::to_string(id) + " out of range (" +
+                            std::to_string(r.count()) + ")");
+  // Collected as draw_renderables collects it, then taken back out.
+  const size_t pending = pending_.size(), blended = blended_.size();
+  DrawStats unused;
+  add_renderable(r, id, Mode::Shaded, unused);
+  const uint64_t rank = (uint64_t(hierarchy_.node(r.node_of(id)).first_item) << 8 | r.level_of(id)) << 20;
+  DrawPlace first{~uint64_t(0), ~0u, 1e300, ~uint64_t(0)}, last{0, 0, -1e300, 0};
+  for (size_t i = pending; i < pending_.size(); ++i) {
+    const Pending& p = pending_[i];
+    const glm::dvec3 d = centers_[p.draw.object] - eye_;
+    const DrawPlace place{p.key, p.draw.segment, glm::dot(d, d), rank + (i - pending)};
+    first = std::min(first, place);
+    last = std::max(last, place);
+  }
+  pending_.resize(pending);
+  blended_.resize(blended);
+  return {first, last};
+}
+
 DrawStats SceneRenderer::draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode) {
   std::vector<std::pair<uint64_t, uint32_t>> order;  // (first item << 8 | level, id)
   order.reserve(ids.size());
@@ -682,7 +705,7 @@ bool SceneRenderer::holds_blended(const Renderables& r, uint32_t id) const {
 
 void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint32_t> ids,
                                       std::span<const GLuint> queries, GLenum depth_func) {
-  if (queries.size() != ids.size())
+  if (queries.size() != ids.size() && queries.size() != 1)
     throw std::invalid_argument("SceneRenderer::query_renderables: " + std::to_string(ids.size()) + " renderables but " +
                                 std::to_string(queries.size()) + " queries");
   if (ids.empty()) return;
@@ -700,6 +723,10 @@ void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint
     std::stable_sort(pending_.begin() + ptrdiff_t(begin), pending_.end(),
                      [](const Pending& a, const Pending& b) { return a.key < b.key; });
     query_ends_.push_back(pending_.size());
+  }
+  if (queries.size() == 1) {  // one query around all of them
+    std::stable_sort(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) { return a.key < b.key; });
+    query_ends_.assign(1, pending_.size());
   }
   // The occluders' state without their offset, depth writes off and (GL_GEQUAL) ties passing:
   // where this geometry lies on the depth it (or anything at the same depth) wrote, it still shows.

@@ -147,6 +147,9 @@ class SceneRenderer {
     return uint32_t(std::clamp<uint64_t>(call_triangles / kFlushParts, kMinFlushTriangles, kFlushTriangles));
   }
   void set_flush_triangles(uint32_t n) { flush_triangles_ = n; }
+  // The part size (nullopt: automatic) and whether OCC_FLUSH_TRIANGLES fixed it.
+  std::optional<uint32_t> flush_triangles() const { return flush_triangles_; }
+  bool flush_fixed() const { return flush_from_environment_; }
   void set_flush_automatic() {
     if (!flush_from_environment_) flush_triangles_.reset();
   }
@@ -179,7 +182,8 @@ class SceneRenderer {
   // DepthOnly (holds_blended() tells which renderables have them). All records and commands are
   // uploaded once. Leaves depth writes on and the depth test GL_GREATER. With depth_func
   // GL_EQUAL the queries count the samples that tie with the depth buffer exactly (every mode
-  // computes the same depth: a Shaded draw of the renderable would tie there too).
+  // computes the same depth: a Shaded draw of the renderable would tie there too). One query
+  // (queries.size() 1) counts the samples of all the renderables together.
   void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries,
                          GLenum depth_func = GL_GEQUAL);
   // The BLEND items' share of an exact visibility count: for each BLEND item items[k] (others
@@ -188,6 +192,18 @@ class SceneRenderer {
   // glass after the opaque draws). A non-zero count means the item shows in the frame; the item
   // buffer (ItemIds) leaves BLEND items out. Leaves depth writes on.
   void query_blended_items(std::span<const uint32_t> items, std::span<const GLuint> queries);
+  // Where renderable `id`'s opaque and MASK Shaded draws fall in the order of one
+  // draw_renderables call of this frame (begin_frame's eye): its first and its last place.
+  // Places of different renderables compare as their draws would be ordered; a renderable with
+  // no such draws gets {max, min}, before and after nothing. Draws nothing.
+  struct DrawPlace {
+    uint64_t key = 0;
+    uint32_t segment = 0;
+    double distance2 = 0;
+    uint64_t collected = 0;  // the renderable's collection rank (first item << 8 | level), then draw
+    auto operator<=>(const DrawPlace&) const = default;
+  };
+  std::pair<DrawPlace, DrawPlace> draw_places(const Renderables& r, uint32_t id);
   // True when item `item` has a BLEND material.
   bool item_blended(uint32_t item) const;
   // True when renderable `id` draws BLEND items (HLODs never do).

@@ -10,7 +10,7 @@ TwoPassDrawer::TwoPassDrawer(GlContext& ctx, SceneRenderer& renderer, const Hier
     : ctx_(ctx), renderer_(renderer), h_(h), r_(r), shown_(r.count(), 1) {}
 
 TwoPassDrawer::~TwoPassDrawer() {
-  if (!tie_queries_.empty()) ctx_.gl().DeleteQueries(GLsizei(tie_queries_.size()), tie_queries_.data());
+  if (tie_query_) ctx_.gl().DeleteQueries(1, &tie_query_);
 }
 
 void TwoPassDrawer::forget() { std::fill(shown_.begin(), shown_.end(), 1); }
@@ -26,6 +26,8 @@ TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint
     f.set_triangles += r_.triangles(id);
     (shown_[id] ? first_ : rest).push_back(id);
   }
+  const std::optional<uint32_t> parts = renderer_.flush_triangles();
+  if (!renderer_.flush_fixed()) renderer_.set_flush_triangles(kFlushTriangles);
   // Pass 1. BLEND draws wait for the end of the frame, as one draw call's would.
   renderer_.begin_frame(cam, true, true);
   f.drawn += renderer_.draw_renderables(r_, first_, SceneRenderer::Mode::Shaded);
@@ -45,28 +47,47 @@ TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint
       rest[kept++] = id;
   }
   second_.resize(kept);
-  if (!second_.empty()) {
-    if (tie_queries_.size() < second_.size()) {
-      const size_t have = tie_queries_.size();
-      tie_queries_.resize(second_.size());
-      gl.CreateQueries(GL_SAMPLES_PASSED, GLsizei(second_.size() - have), tie_queries_.data() + have);
+  // A pass-2 draw that ties in depth with a pass-1 draw (they share a point: their boxes meet)
+  // shows there in one pass only when it comes first in one draw call's order: those pass-2
+  // renderables are checked, with one GL_EQUAL query against pass 1's depth.
+  checked_.clear();
+  first_last_.clear();
+  for (uint32_t n : second_) {
+    const Aabb& a = h_.node(r_.node_of(n)).box;
+    const SceneRenderer::DrawPlace n_first = renderer_.draw_places(r_, n).first;
+    for (size_t k = 0; k < first_.size(); ++k) {
+      const Aabb& b = h_.node(r_.node_of(first_[k])).box;
+      if (!(a.min.x <= b.max.x && b.min.x <= a.max.x && a.min.y <= b.max.y && b.min.y <= a.max.y &&
+            a.min.z <= b.max.z && b.min.z <= a.max.z))
+        continue;
+      if (first_last_.empty()) {
+        first_last_.reserve(first_.size());
+        for (uint32_t v : first_) first_last_.push_back(renderer_.draw_places(r_, v).second);
+      }
+      if (n_first < first_last_[k]) {
+        checked_.push_back(n);
+        break;
+      }
     }
-    renderer_.query_renderables(r_, second_, std::span<const GLuint>(tie_queries_.data(), second_.size()), GL_EQUAL);
-    f.drawn += renderer_.draw_renderables(r_, second_, SceneRenderer::Mode::Shaded);
   }
+  if (!checked_.empty()) {
+    if (tie_query_ == 0) gl.CreateQueries(GL_SAMPLES_PASSED, 1, &tie_query_);
+    renderer_.query_renderables(r_, checked_, std::span<const GLuint>(&tie_query_, 1), GL_EQUAL);
+  }
+  if (!second_.empty()) f.drawn += renderer_.draw_renderables(r_, second_, SceneRenderer::Mode::Shaded);
   f.drawn += renderer_.end_frame();
   gl.Flush();  // the rasteriser takes the rest while pass 1's renderables are tested
   for (uint32_t id : first_) shown_[id] = !hidden(id);  // their own depth never hides them
   gl.Finish();
-  // Pass-2 renderables whose draws tie with pass 1's depth somewhere: the passes' order may have
-  // decided those pixels, so the union of their screen rectangles is drawn again in one pass.
+  // A tie: the passes' order may have decided those pixels. The checked renderables' screen
+  // rectangles are drawn again in one pass.
+  GLuint64 ties = 0;
+  if (!checked_.empty()) gl.GetQueryObjectui64v(tie_query_, GL_QUERY_RESULT, &ties);
   int x0 = ctx_.width(), y0 = ctx_.height(), x1 = -1, y1 = -1;
-  for (size_t k = 0; k < second_.size(); ++k) {
-    GLuint64 n = 0;
-    gl.GetQueryObjectui64v(tie_queries_[k], GL_QUERY_RESULT, &n);
-    if (n == 0) continue;
-    const BoxFootprint fp = box_footprint(h_.node(r_.node_of(second_[k])).box, cam, {ctx_.width(), ctx_.height()});
-    const bool whole = fp.kind != BoxFootprint::Kind::OnScreen;  // at the near plane (it has samples)
+  for (uint32_t n : ties ? std::span<const uint32_t>(checked_) : std::span<const uint32_t>()) {
+    const BoxFootprint fp = box_footprint(h_.node(r_.node_of(n)).box, cam, {ctx_.width(), ctx_.height()});
+    if (fp.kind == BoxFootprint::Kind::Offscreen) continue;
+    const bool whole = fp.kind == BoxFootprint::Kind::NearPlane;
     x0 = std::min(x0, whole ? 0 : fp.x0);
     y0 = std::min(y0, whole ? 0 : fp.y0);
     x1 = std::max(x1, whole ? ctx_.width() - 1 : fp.x1);
@@ -74,6 +95,7 @@ TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint
   }
   f.first = uint32_t(first_.size());
   f.second = uint32_t(second_.size());
+  if (!renderer_.flush_fixed()) parts ? renderer_.set_flush_triangles(*parts) : renderer_.set_flush_automatic();
   if (x0 <= x1) {
     // Within the rectangle, the one-pass frame of everything that may reach it (the set's
     // order restricted to them is the set's order; the rest draws nothing there).
