@@ -88,7 +88,10 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
     slow_ = interval_ms > o_.give_up * reference_ms ? slow_ + 1 : 0;
     return slow_ >= std::max(o_.give_up_frames, 1u);
   };
-  if (state_ == State::trial_off && !occlusion) {
+  if (state_ == State::trial_off && !occlusion && on_.size() < o_.window) {
+    // A trial that came early (trial_after): occlusion is measured next, then compared.
+    if (fresh_ >= o_.window) enter(State::trial_on);
+  } else if (state_ == State::trial_off && !occlusion) {
     // Much slower than with occlusion stops the trial at once; otherwise a full window decides.
     if (gave_up(med_on) || (fresh_ >= o_.window && !(med_off < o_.margin * med_on)))
       back_off();

@@ -6,8 +6,9 @@
 // of the three processes (one machine with two cores, three machines) without a model of it:
 //   - frames start with occlusion;
 //   - while occlusion culls little (the frustum set's triangles are fewer than try_below x the
-//     visible set's; checked once trial_after frames with it are measured), a trial runs frames
-//     without it; after `settle` frames (the pipeline's change
+//     visible set's; checked from the first frame on), a trial runs frames without it (the render
+//     client then culls the frustum sets itself where that pays: TwoPassDrawer, common/gl/
+//     two_pass.hpp); after `settle` frames (the pipeline's change
 //     of mode) `window` frames are measured and the mode with the lower median interval, by
 //     `margin`, is kept; a failed trial doubles the wait before the next (first_hold .. max_hold);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
@@ -38,9 +39,11 @@ class OcclusionGate {
     Policy policy = Policy::automatic;
     uint32_t period = 4;            // Policy::alternate
     uint32_t window = 8, settle = 3;
-    // A trial needs this many settled frames with occlusion measured (the first one comes
-    // early: a short run, e.g. compare.sh's 30 frames, would otherwise spend half of it waiting).
-    uint32_t trial_after = 3;
+    // A trial needs this many settled frames with occlusion measured (at most `window`). With
+    // fewer than `window` of them it ends by measuring occlusion again (a trial with it) before
+    // deciding; 0: the first frame may start one (a short run, e.g. compare.sh's 30 frames, would
+    // otherwise spend a third of it waiting).
+    uint32_t trial_after = 0;
     double try_below = 1.6;
     double margin = 0.95;
     uint32_t first_hold = 32, max_hold = 1024;

@@ -83,7 +83,7 @@ struct NodeLink {
 class Client {
  public:
   explicit Client(const ClientOptions& o)
-      : o_(o), gate_({.policy = o.occlusion_gate}), two_pass_gate_({.policy = o.two_pass}) {}
+      : o_(o), gate_({.policy = o.occlusion_gate}), two_pass_gate_({.policy = o.two_pass, .trial_after = 3}) {}
 
   int run() {
     if (o_.window) viewer_ = std::make_unique<Viewer>(o_);  // no display: fail before loading the scene
@@ -606,6 +606,7 @@ class Client {
   uint32_t camera_gap_max_ = 0;
   OcclusionGate gate_;                // occlusion only where it pays (--occlusion-gate)
   // Frustum sets culled here (--two-pass): on = two passes, off = one; measured by render time.
+  // Its first frame draws everything in pass 1 (nothing showed before): the trial waits for 3.
   OcclusionGate two_pass_gate_;
   std::unique_ptr<TwoPassDrawer> two_pass_;
   bool two_pass_last_ = false;

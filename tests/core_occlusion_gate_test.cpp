@@ -64,6 +64,25 @@ TEST(OcclusionGate, KeepsOcclusionWhereFramesWithoutItAreSlower) {
   EXPECT_EQ(g.state(), OcclusionGate::State::on);
 }
 
+// The first trial starts at the first frame that shows occlusion culling little, then measures
+// occlusion again before it decides: a short run (compare.sh's 30-frame orbit) reaches the faster
+// mode early, either way round.
+TEST(OcclusionGate, TheFirstTrialComesAtOnceAndMeasuresBothModesBeforeDeciding) {
+  for (bool off_faster : {true, false}) {
+    OcclusionGate g{{}};
+    Sim s{[off_faster](uint32_t, bool occ) { return occ == off_faster ? 18.0 : 13.0; }};
+    s.run(g, 40);
+    size_t first_off = 0;
+    while (first_off < s.shown.size() && s.shown[first_off]) ++first_off;
+    EXPECT_LE(first_off, 3u) << "the first frame starts the trial; the cameras in flight show it 2 frames later";
+    uint32_t on_in_trial = 0;
+    for (size_t f = first_off; f < 30; ++f) on_in_trial += s.shown[f];
+    EXPECT_GT(on_in_trial, 3u) << "occlusion measured again before the decision";
+    EXPECT_EQ(g.state(), off_faster ? OcclusionGate::State::off : OcclusionGate::State::on) << off_faster;
+    EXPECT_EQ(g.trials(), 1u);
+  }
+}
+
 TEST(OcclusionGate, NeverTriesWhereOcclusionCullsMostTriangles) {
   OcclusionGate g{{}};
   // Without occlusion frames would be faster (say, a machine with spare cores), but the frustum
