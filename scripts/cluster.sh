@@ -12,7 +12,7 @@
 # default 2): cameras sent ahead, docs/latency.md.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P
-# --occlusion-gate G) and node-only ones
+# --occlusion-gate G --two-pass T) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --query-budget,
 # --occluder-pixels-per-triangle, --visibility-hold, --leaf-test, --leaf-test-below, --hc-test), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
