@@ -7,15 +7,18 @@
 //   - frames start with occlusion;
 //   - while occlusion culls little (the frustum set's triangles are fewer than try_below x the
 //     visible set's; checked from the first frame on), a trial runs frames without it (the render
-//     client then culls the frustum sets itself where that pays: TwoPassDrawer, common/gl/
-//     two_pass.hpp); after `settle` frames (the pipeline's change
-//     of mode) `window` frames are measured and the mode with the lower median interval, by
-//     `margin`, is kept; a failed trial doubles the wait before the next (first_hold .. max_hold);
+//     client then culls the frustum sets itself where that pays: TwoPassDrawer,
+//     common/gl/two_pass.hpp); after `settle` frames (the pipeline's change of mode) `window`
+//     frames are measured, and the mode with the lower median interval, by `margin`, is kept (a
+//     first trial with fewer than `window` frames with occlusion measured measures them next); a
+//     failed trial doubles the wait before the next (first_hold .. max_hold);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
 //     occlusion is tried again the same way; give_up_frames frames in a row without it that take
 //     give_up x the median (the view changed: culling may pay now) end them at once. One slow frame
 //     does not: on two cores a scheduling hiccup doubles a frame now and then (compare.sh, saw
 //     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
+// The render client's choice between two passes and one for those frustum sets (--two-pass) is a
+// second gate of this kind, fed the render time: "occlusion" there means two passes.
 // Either way is conservative: the frustum set holds the visible set, so frames never change.
 // Policy::selected (the user's choice, not automatic) culls every frame with selected occluders
 // (wire.hpp Camera.occlusion 2): docs/results.md has what they did on the saw, and why auto does
@@ -71,7 +74,8 @@ class OcclusionGate {
   State state() const { return state_; }
   uint32_t trials() const { return trials_; }           // trials of frames without occlusion
   uint32_t frames_off() const { return frames_off_; }   // displayed frames without occlusion
-  std::string describe() const;
+  // `mode`: what "on" means to the caller ("occlusion", "two passes").
+  std::string describe(const std::string& mode = "occlusion") const;
 
  private:
   static double median(const std::deque<double>& v);

@@ -563,11 +563,11 @@ class Client {
         hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, peak_rss_mb(),
         std::accumulate(lat.begin(), lat.end(), 0.0) / wall_ms, camera_gap_max_, gate_.frames_off());
     if (switch_ && o_.occlusion_gate == OcclusionGate::Policy::automatic)
-      std::cerr << "render_client: occlusion gate: " << gate_.describe() << "\n";
+      std::cerr << "render_client: occlusion gate: " << gate_.describe() << " (frame interval)\n";
     if (two_pass_frames_ > 0)
       std::cerr << "render_client: " << two_pass_frames_ << " frames of frustum sets, " << two_pass_used_
                 << " of them culled here in two passes (" << two_pass_redrawn_
-                << " drawn again for a depth tie); two-pass gate: " << two_pass_gate_.describe() << "\n";
+                << " drawn again for a depth tie); two-pass gate: " << two_pass_gate_.describe("two passes") << "\n";
     if (frames != mode_frames_[int(Mode::switch_)])
       std::printf("modes: switch=%zu resync=%zu single=%zu frustum=%zu resyncs=%u\n", mode_frames_[0],
                   mode_frames_[1], mode_frames_[2], mode_frames_[3], resyncs_);
