@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include "common/hzb.hpp"
 
 using namespace occ;
@@ -38,6 +40,25 @@ bool brute_visible(const std::vector<float>& d, int w, const BoxFootprint& fp) {
     for (int x = fp.x0; x <= fp.x1; ++x)
       if (!(fp.nearest_depth < d[size_t(y) * w + x])) return true;
   return false;
+}
+
+// The reverse-Z depth at which the ray through the centre of pixel (x, y) of a w x h viewport
+// enters the camera-relative box [lo, hi] (inv: the inverse of projection x view rotation);
+// nullopt when it misses the box.
+std::optional<double> entry_depth(const glm::dmat4& vpm, const glm::dmat4& inv, int w, int h, int x, int y, const glm::dvec3& lo,
+                   const glm::dvec3& hi) {
+  const glm::dvec4 r = inv * glm::dvec4((x + 0.5) / w * 2 - 1, (y + 0.5) / h * 2 - 1, 0.5, 1.0);
+  const glm::dvec3 dir = glm::dvec3(r) / r.w;
+  double t0 = 0, t1 = 1e300;
+  for (int a = 0; a < 3; ++a) {
+    double ta = lo[a] / dir[a], tb = hi[a] / dir[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (!(t0 < t1)) return std::nullopt;
+  const glm::dvec4 clip = vpm * glm::dvec4(t0 * dir, 1.0);
+  return clip.z / clip.w;
 }
 }  // namespace
 
@@ -243,18 +264,8 @@ TEST(HzbRefined, ProvesOnlyWhatNoPixelCentreSeesAndMoreThanTheProbe) {
       bool brute = false;
       for (int y = 0; y < h && !brute; ++y)
         for (int x = 0; x < w && !brute; ++x) {
-          const glm::dvec4 r = inv * glm::dvec4((x + 0.5) / w * 2 - 1, (y + 0.5) / h * 2 - 1, 0.5, 1.0);
-          const glm::dvec3 dir = glm::dvec3(r) / r.w;
-          double t0 = 0, t1 = 1e300;
-          for (int a = 0; a < 3; ++a) {
-            double ta = lo[a] / dir[a], tb = hi[a] / dir[a];
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-          }
-          if (!(t0 < t1)) continue;
-          const glm::dvec4 clip = vpm * glm::dvec4(t0 * dir, 1.0);
-          brute = !(clip.z / clip.w < d[size_t(y) * w + x]);
+          const std::optional<double> z = entry_depth(vpm, inv, w, h, x, y, lo, hi);
+          brute = z && !(*z < d[size_t(y) * w + x]);
         }
       const bool probe = p.occludes(pr), refined = p.occludes_refined(pr, box, cam, 1e-5, 1 << 20);
       ASSERT_TRUE(!brute || !refined) << "proves occluded a box a pixel centre sees, trial " << trial << " box " << i;
@@ -299,18 +310,8 @@ TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
       bool brute = false;
       for (int y = 0; y < h && !brute; ++y)
         for (int x = 0; x < w && !brute; ++x) {
-          const glm::dvec4 r = inv * glm::dvec4((x + 0.5) / w * 2 - 1, (y + 0.5) / h * 2 - 1, 0.5, 1.0);
-          const glm::dvec3 dir = glm::dvec3(r) / r.w;
-          double t0 = 0, t1 = 1e300;
-          for (int a = 0; a < 3; ++a) {
-            double ta = (box.min[a] - cam.eye[a]) / dir[a], tb = (box.max[a] - cam.eye[a]) / dir[a];
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-          }
-          if (!(t0 < t1)) continue;
-          const glm::dvec4 clip = vpm * glm::dvec4(t0 * dir, 1.0);
-          brute = clip.z / clip.w > d[size_t(y) * w + x];
+          const std::optional<double> z = entry_depth(vpm, inv, w, h, x, y, box.min - cam.eye, box.max - cam.eye);
+          brute = z && *z > d[size_t(y) * w + x];
         }
       const bool s = p.shows(box, cam);
       ASSERT_TRUE(brute || !s) << "shows a box no pixel centre sees, trial " << trial << " box " << i;
