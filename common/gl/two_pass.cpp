@@ -7,13 +7,23 @@
 namespace occ {
 
 TwoPassDrawer::TwoPassDrawer(GlContext& ctx, SceneRenderer& renderer, const Hierarchy& h, const Renderables& r)
-    : ctx_(ctx), renderer_(renderer), h_(h), r_(r), shown_(r.count(), 1) {}
+    : ctx_(ctx), renderer_(renderer), h_(h), r_(r), shown_(r.count(), 1), memo_(h.size(), 0) {}
 
 TwoPassDrawer::~TwoPassDrawer() {
   if (tie_query_) ctx_.gl().DeleteQueries(1, &tie_query_);
 }
 
 void TwoPassDrawer::forget() { std::fill(shown_.begin(), shown_.end(), 1); }
+
+bool TwoPassDrawer::node_hidden(uint32_t node, const Camera& cam) {
+  if (memo_[node]) return memo_[node] == kHidden;
+  const uint32_t parent = h_.node(node).parent;
+  const bool hidden = (parent != kNoNode && node_hidden(parent, cam)) ||
+                      pyramid_.hides(h_.node(node).box, cam, BoxQuerier::kRelativePad, kProofTexels);
+  memo_[node] = hidden ? kHidden : kShown;
+  touched_.push_back(node);
+  return hidden;
+}
 
 TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint32_t> ids) {
   const GlApi& gl = ctx_.gl();
@@ -33,9 +43,9 @@ TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint
   f.drawn += renderer_.draw_renderables(r_, first_, SceneRenderer::Mode::Shaded);
   ctx_.read_depth(pyramid_.level0(ctx_.width(), ctx_.height()));  // waits for pass 1
   pyramid_.build_levels();
-  auto hidden = [&](uint32_t id) {
-    return pyramid_.hides(h_.node(r_.node_of(id)).box, cam, BoxQuerier::kRelativePad, kProofTexels);
-  };
+  for (uint32_t n : touched_) memo_[n] = 0;
+  touched_.clear();
+  auto hidden = [&](uint32_t id) { return node_hidden(r_.node_of(id), cam); };
   // Pass 2: what pass 1's depth does not hide.
   size_t kept = 0;
   for (uint32_t id : rest) {

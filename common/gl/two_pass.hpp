@@ -5,7 +5,9 @@
 // depth, for one depth read-back:
 //   1. the renderables that showed the last time (all of them the first time), in one draw call;
 //   2. the depth read back into a DepthPyramid; each other renderable is drawn unless the pyramid
-//      proves its box hidden (DepthPyramid::hides: no fragment of it could pass the depth test).
+//      proves its box hidden (DepthPyramid::hides: no fragment of it could pass the depth test),
+//      or its node's parent's (tried first, once a frame: a street of hidden blocks costs a few
+//      proofs, not one per leaf).
 // The depth only comes nearer after pass 1, so whatever pass 1's depth hides is hidden in the
 // frame: the frame is the one-pass frame of the whole set (CHC-like coherence, without waiting
 // on any query). Except at exact depth ties between a pass-2 and a pass-1 draw (coplanar faces):
@@ -67,6 +69,12 @@ class TwoPassDrawer {
   const Renderables& r_;
   DepthPyramid pyramid_;
   std::vector<uint8_t> shown_;  // per renderable: showed when it was last in a set
+  // This frame's proofs per hierarchy node (0: not tried): a node inside a hidden one is hidden,
+  // so a renderable's ancestors are tried first, each once a frame (node_hidden).
+  enum : uint8_t { kHidden = 1, kShown = 2 };
+  std::vector<uint8_t> memo_;
+  std::vector<uint32_t> touched_;
+  bool node_hidden(uint32_t node, const Camera& cam);
   std::vector<uint32_t> first_, second_, checked_, redraw_;
   std::vector<SceneRenderer::DrawPlace> first_last_;  // per pass-1 renderable: its last draw's place
   GLuint tie_query_ = 0;
