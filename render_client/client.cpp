@@ -442,7 +442,9 @@ class Client {
       DrawStats st;
       TwoPassDrawer::Frame tp;
       if (two_pass) {
-        if (!two_pass_last_) two_pass_->forget();
+        // After frames the switch culled, pass 1 starts from its last visible set; after frames
+        // drawn in one pass, from everything.
+        if (!two_pass_last_) switch_culled_last_ ? two_pass_->seed(last_visible_) : two_pass_->forget();
         tp = two_pass_->draw(cam, ids);
         st = tp.drawn;
         two_pass_redrawn_ += tp.redrawn;
@@ -453,6 +455,8 @@ class Client {
         g_.ctx->gl().Finish();
       }
       two_pass_last_ = two_pass;
+      switch_culled_last_ = !frustum_set;
+      if (!frustum_set) last_visible_ = ids;
       const Clock::time_point shown = Clock::now();  // displayed; writing the PNG is not display
       const uint64_t cpu_shown = process_cpu_us();
       const double latency_ms = ms_between(sent_at_[cam_number], shown);
@@ -609,7 +613,8 @@ class Client {
   // Its first frame draws everything in pass 1 (nothing showed before): the trial waits for 3.
   OcclusionGate two_pass_gate_;
   std::unique_ptr<TwoPassDrawer> two_pass_;
-  bool two_pass_last_ = false;
+  bool two_pass_last_ = false, switch_culled_last_ = false;
+  std::vector<uint32_t> last_visible_;  // the last visible set the switch culled with occlusion
   uint32_t two_pass_frames_ = 0, two_pass_used_ = 0, two_pass_redrawn_ = 0;
   std::vector<uint8_t> cam_occlusion_;  // per camera sent: Camera.occlusion (0 frustum set, 1, 2 selected occluders)
 };

@@ -15,6 +15,14 @@ TwoPassDrawer::~TwoPassDrawer() {
 
 void TwoPassDrawer::forget() { std::fill(shown_.begin(), shown_.end(), 1); }
 
+void TwoPassDrawer::seed(std::span<const uint32_t> shown_ids) {
+  std::fill(shown_.begin(), shown_.end(), 0);
+  for (uint32_t id : shown_ids) {
+    if (id >= r_.count()) throw std::out_of_range("TwoPassDrawer: renderable " + std::to_string(id) + " out of range");
+    shown_[id] = 1;
+  }
+}
+
 bool TwoPassDrawer::node_hidden(uint32_t node, const Camera& cam) {
   if (memo_[node]) return memo_[node] == kHidden;
   const uint32_t parent = h_.node(node).parent;

@@ -59,8 +59,10 @@ class TwoPassDrawer {
   // Draws the Shaded frame of renderables `ids` for `cam`, complete (glFinish), as
   // begin_frame(cam, true) + draw_renderables(ids) would.
   Frame draw(const Camera& cam, std::span<const uint32_t> ids);
-  // Frames were drawn otherwise meanwhile: the next draw() starts with everything shown.
+  // Frames were drawn otherwise meanwhile: the next draw() starts with everything shown
+  // (forget), or with what showed in the last of them (seed: e.g. the switch's visible set).
   void forget();
+  void seed(std::span<const uint32_t> shown_ids);
 
  private:
   GlContext& ctx_;
