@@ -3,7 +3,8 @@
 // does not pay there: the OR would draw the visible set a second time, on the same two cores) or
 // no switch node serves, the render client draws the frame in two passes against the frame's own
 // depth, for one depth read-back:
-//   1. the renderables that showed the last time (all of them the first time), in one draw call;
+//   1. the renderables that showed the last time (all of them the first time; seed(): e.g. the
+//      switch's last visible set), in one draw call;
 //   2. the depth read back into a DepthPyramid; each other renderable is drawn unless the pyramid
 //      proves its box hidden (DepthPyramid::hides: no fragment of it could pass the depth test),
 //      or its node's parent's (tried first, once a frame: a street of hidden blocks costs a few
