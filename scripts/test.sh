@@ -55,4 +55,6 @@ case "$MODE" in
     ;;
 esac
 BUILD_DIR=${OCC_BUILD_DIR:-build}
+# The scripts the tests run (cluster.sh, netlab.sh, ...) take the binaries of this build.
+export OCC_BIN=${OCC_BIN:-$PWD/$BUILD_DIR/bin}
 ctest --test-dir "$BUILD_DIR" --output-on-failure --timeout 900 "$@"
