@@ -464,14 +464,18 @@ class Client {
       if (out.writes_images() || viewer_) image = g_.ctx->read_rgba();
       if (out.writes_images()) out.write_frame(frame, image);  // the frame itself, never the overlay
       if (viewer_) {
-        HudStats hud{latency_ms, ids.size(), leaf_count_, st.triangles, o_.config.pixel_error, -1,
+        // What was drawn: the set, less what the two passes proved hidden (also for the overlay).
+        std::vector<uint32_t> drawn_ids;
+        if (two_pass) two_pass_->drawn_ids(drawn_ids);
+        const std::vector<uint32_t>& shown_ids = two_pass ? drawn_ids : ids;
+        HudStats hud{latency_ms, shown_ids.size(), leaf_count_, st.triangles, o_.config.pixel_error, -1,
                      mode == Mode::single    ? "degraded: one switch node"
                      : mode == Mode::frustum ? "degraded: frustum culling"
                      : served && !served->wcam.occlusion
                          ? (two_pass ? "switch, no occlusion (culled here)" : "switch, no occlusion (does not pay here)")
                          : mode_name(mode)};
         if (viewer_->overlay()) {
-          hud.occluded = long(draw_overlay(cam, ids));
+          hud.occluded = long(draw_overlay(cam, shown_ids));
           image = g_.ctx->read_rgba();
         }
         viewer_->show(cam, std::move(image), hud);

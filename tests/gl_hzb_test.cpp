@@ -486,6 +486,9 @@ TEST(TwoPassDrawer, FramesEqualOnePassFramesAndHideWhatTheDepthHides) {
     const DrawStats one = p.renderer->draw_renderables(r, ids, SceneRenderer::Mode::Shaded);
     ASSERT_EQ(differing_pixels(image, p.ctx->read_rgba()), 0u) << "frame " << f;
     EXPECT_EQ(tf.first + tf.second + tf.hidden, ids.size());
+    std::vector<uint32_t> drawn_ids;
+    two.drawn_ids(drawn_ids);
+    EXPECT_EQ(drawn_ids.size(), tf.first + tf.second);
     EXPECT_EQ(tf.set_triangles, one.triangles);
     set += tf.set_triangles;
     drawn += tf.drawn.triangles;

@@ -64,6 +64,11 @@ class TwoPassDrawer {
   // (forget), or with what showed in the last of them (seed: e.g. the switch's visible set).
   void forget();
   void seed(std::span<const uint32_t> shown_ids);
+  // The renderables the last draw() drew in its two passes (the set less those proven hidden).
+  void drawn_ids(std::vector<uint32_t>& out) const {
+    out.assign(first_.begin(), first_.end());
+    out.insert(out.end(), second_.begin(), second_.end());
+  }
 
  private:
   GlContext& ctx_;
