@@ -11,14 +11,20 @@
 
 namespace occ {
 
+namespace {
+// Corner i of the box [lo, hi]: bit 0 picks x, bit 1 y, bit 2 z from hi.
+glm::dvec3 corner(const glm::dvec3& lo, const glm::dvec3& hi, int i) {
+  return {(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z};
+}
+}  // namespace
+
 BoxFootprint box_footprint(const Aabb& box, const Camera& cam, const Viewport& vp) {
   BoxFootprint fp;
   if (box.empty()) return fp;
   const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
   double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300, zmax = -1e300;
   for (int i = 0; i < 8; ++i) {
-    glm::dvec3 c{(i & 1) ? box.max.x : box.min.x, (i & 2) ? box.max.y : box.min.y, (i & 4) ? box.max.z : box.min.z};
-    glm::dvec4 clip = vpm * glm::dvec4(c - cam.eye, 1.0);
+    glm::dvec4 clip = vpm * glm::dvec4(corner(box.min, box.max, i) - cam.eye, 1.0);
     // clip.w is the distance along the view direction; in front of the near plane means w >= near.
     if (!(clip.w >= cam.near_dist)) {
       fp.kind = BoxFootprint::Kind::NearPlane;
@@ -156,7 +162,7 @@ ClipBounds clip_bounds(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dm
                        const glm::dvec3& clo, const glm::dvec3& chi, double near) {
   ClipBounds b;
   for (int i = 0; i < 8; ++i) {
-    const glm::dvec4 clip = vpm * glm::dvec4((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z, 1.0);
+    const glm::dvec4 clip = vpm * glm::dvec4(corner(lo, hi, i), 1.0);
     if (!(clip.w >= front)) {
       b = {};
       for (const glm::dvec4& v : box_in_view_vertices(clo, chi, vpm, near)) b.add(v);
@@ -278,11 +284,10 @@ namespace {
 struct SubFrustumDepth {
   glm::dvec3 lo, hi;
   glm::dmat4 vpm, inv;
-  glm::dvec4 corner[8];  // clip coordinates of the box's corners
+  glm::dvec4 corners[8];  // clip coordinates of the box's corners
   explicit SubFrustumDepth(const glm::dvec3& l, const glm::dvec3& h, const glm::dmat4& m) : lo(l), hi(h), vpm(m) {
     inv = glm::inverse(m);
-    for (int i = 0; i < 8; ++i)
-      corner[i] = vpm * glm::dvec4((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z, 1.0);
+    for (int i = 0; i < 8; ++i) corners[i] = vpm * glm::dvec4(corner(lo, hi, i), 1.0);
   }
   double nearest(double xa, double xb, double ya, double yb) const {
     double best = -std::numeric_limits<double>::infinity();
@@ -290,13 +295,13 @@ struct SubFrustumDepth {
       const double e = 1e-12 * c.w;
       return c.x >= xa * c.w - e && c.x <= xb * c.w + e && c.y >= ya * c.w - e && c.y <= yb * c.w + e;
     };
-    for (const glm::dvec4& c : corner)
+    for (const glm::dvec4& c : corners)
       if (inside(c)) best = std::max(best, c.z / c.w);
     // Box edges against the side planes x = a w, y = a w (clip coordinates are linear along an edge).
     static constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
                                           {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
     for (const auto& e : kEdges) {
-      const glm::dvec4 &c0 = corner[e[0]], &c1 = corner[e[1]];
+      const glm::dvec4 &c0 = corners[e[0]], &c1 = corners[e[1]];
       for (int plane = 0; plane < 4; ++plane) {
         const int axis = plane >> 1;
         const double a = plane == 0 ? xa : plane == 1 ? xb : plane == 2 ? ya : yb;
@@ -339,12 +344,11 @@ bool DepthPyramid::occludes_refined(const PyramidProbe& p, const Aabb& box, cons
   const glm::dvec3 lo = box.min - cam.eye, hi = box.max - cam.eye;
   const glm::dvec3 far = glm::max(glm::abs(lo), glm::abs(hi));
   const double pad = relative_pad * std::max({far.x, far.y, far.z});
-  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
-  const SubFrustumDepth sub(lo - pad, hi + pad, vpm);
-  double wmin = std::numeric_limits<double>::infinity();
-  for (const glm::dvec4& c : sub.corner) wmin = std::min(wmin, c.w);
-  if (!(wmin >= cam.near_dist * (1.0 + 1e-3))) return false;  // clipped at the near plane
   const glm::dmat4 proj = cam.projection();
+  const SubFrustumDepth sub(lo - pad, hi + pad, proj * cam.view_rotation());
+  double wmin = std::numeric_limits<double>::infinity();
+  for (const glm::dvec4& c : sub.corners) wmin = std::min(wmin, c.w);
+  if (!(wmin >= cam.near_dist * (1.0 + 1e-3))) return false;  // clipped at the near plane
   const double terms = std::abs(proj[2][2]) + std::abs(proj[3][2]) / wmin;
   const int w = width(), h = height();
   int budget = max_texels;

@@ -113,11 +113,11 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
 
 std::string OcclusionGate::describe(const std::string& mode) const {
   std::ostringstream s;
-  const std::string kState[] = {"on", "trial without " + mode, "off", "trial with " + mode};
+  const std::string state[] = {"on", "trial without " + mode, "off", "trial with " + mode};
   const auto ms = [](const std::deque<double>& ring) {
     return ring.empty() ? std::string("not measured") : std::to_string(median(ring)) + " ms";
   };
-  s << kState[int(state_)] << ", " << trials_ << " trials without " << mode << ", " << frames_off_
+  s << state[int(state_)] << ", " << trials_ << " trials without " << mode << ", " << frames_off_
     << " frames without; median with " << mode << " " << ms(on_) << ", without " << ms(off_);
   return s.str();
 }

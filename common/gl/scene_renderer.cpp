@@ -709,24 +709,26 @@ void SceneRenderer::query_renderables(const Renderables& r, std::span<const uint
     throw std::invalid_argument("SceneRenderer::query_renderables: " + std::to_string(ids.size()) + " renderables but " +
                                 std::to_string(queries.size()) + " queries");
   if (ids.empty()) return;
-  // Each renderable's depth-only draws (BLEND items left out, as DepthOnly does), in batch-key
-  // order within the renderable; query_ends_[k] ends renderable k's draws.
+  // Each query's depth-only draws (BLEND items left out, as DepthOnly does), in batch-key order:
+  // one renderable's, or (one query) all of them; query_ends_[k] ends query k's draws.
   pending_.clear();
   query_ends_.clear();
+  const bool one_query = queries.size() == 1;
+  const auto by_key = [](const Pending& a, const Pending& b) { return a.key < b.key; };
   DrawStats unused;
   for (uint32_t id : ids) {
     if (id >= r.count())
       throw std::out_of_range("SceneRenderer: renderable " + std::to_string(id) + " out of range (" +
                               std::to_string(r.count()) + ")");
-    const size_t begin = pending_.size();
+    const size_t begin = one_query ? 0 : pending_.size();
     add_renderable(r, id, Mode::DepthOnly, unused);
-    std::stable_sort(pending_.begin() + ptrdiff_t(begin), pending_.end(),
-                     [](const Pending& a, const Pending& b) { return a.key < b.key; });
+    if (one_query) continue;
+    std::stable_sort(pending_.begin() + ptrdiff_t(begin), pending_.end(), by_key);
     query_ends_.push_back(pending_.size());
   }
-  if (queries.size() == 1) {  // one query around all of them
-    std::stable_sort(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) { return a.key < b.key; });
-    query_ends_.assign(1, pending_.size());
+  if (one_query) {
+    std::stable_sort(pending_.begin(), pending_.end(), by_key);
+    query_ends_.push_back(pending_.size());
   }
   // The occluders' state without their offset, depth writes off and (GL_GEQUAL) ties passing:
   // where this geometry lies on the depth it (or anything at the same depth) wrote, it still shows.

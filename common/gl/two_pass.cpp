@@ -1,6 +1,7 @@
 #include "common/gl/two_pass.hpp"
 
 #include <algorithm>
+#include <optional>
 
 #include "common/gl/box_query.hpp"
 
@@ -72,17 +73,16 @@ TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint
   first_last_.clear();
   for (uint32_t n : second_) {
     const Aabb& a = h_.node(r_.node_of(n)).box;
-    const SceneRenderer::DrawPlace n_first = renderer_.draw_places(r_, n).first;
+    std::optional<SceneRenderer::DrawPlace> n_first;  // computed once a box meets
     for (size_t k = 0; k < first_.size(); ++k) {
       const Aabb& b = h_.node(r_.node_of(first_[k])).box;
       if (!(a.min.x <= b.max.x && b.min.x <= a.max.x && a.min.y <= b.max.y && b.min.y <= a.max.y &&
             a.min.z <= b.max.z && b.min.z <= a.max.z))
         continue;
-      if (first_last_.empty()) {
-        first_last_.reserve(first_.size());
+      if (first_last_.empty())
         for (uint32_t v : first_) first_last_.push_back(renderer_.draw_places(r_, v).second);
-      }
-      if (n_first < first_last_[k]) {
+      if (!n_first) n_first = renderer_.draw_places(r_, n).first;
+      if (*n_first < first_last_[k]) {
         checked_.push_back(n);
         break;
       }
