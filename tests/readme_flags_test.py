@@ -57,17 +57,25 @@ def readme_flag_rows(readme):
 
 
 def binary_options(help_text):
-    """flag -> (values or None, default or None) from a binary's --help (one line per option)."""
+    """flag -> (values or None, default or None) from a binary's --help: one option a line, starting
+    `  --flag`, its text possibly going on in lines indented further."""
     options = {}
+    current = None
     for line in help_text.splitlines():
         m = BINARY_OPTION.match(line)
-        if not m:
-            continue
-        arg = m.group(2)
-        values = arg.split("|") if arg and "|" in arg else None
-        d = HELP_DEFAULT.search(line)
-        options[m.group(1)] = (values, d.group(1) if d else None)
-    return options
+        if m:
+            arg = m.group(2)
+            current = [m.group(1), arg.split("|") if arg and "|" in arg else None, line.strip()]
+            options[current[0]] = current
+        elif current is not None and line.startswith("    ") and line.strip():
+            current[2] += " " + line.strip()
+        else:
+            current = None
+    result = {}
+    for flag, values, text in options.values():
+        d = HELP_DEFAULT.search(text)
+        result[flag] = (values, d.group(1) if d else None)
+    return result
 
 
 def script_option(help_text, flag):
@@ -131,6 +139,7 @@ def self_check():
         "| `--unreadable N` | x (default 4) |",
         "| `--link D` | (cluster.sh) x (default `1`) |",
         "| `--gone` | (cluster.sh) x |",
+        "| `--wrapped N` | x (default `7`) |",
         "",
         "| key | action |",
         "|---|---|",
@@ -142,6 +151,8 @@ def self_check():
         "  --wrong-default N           (default 2)",
         "  --bad-value a|b             (default a)",
         "  --unreadable N              (default 4)",
+        "  --wrapped N                 a long text",
+        "                              going on (default 7)",
     ])}
     script = "--link D (relay, default 0): a link."
     got = check(readme, helps, script)
