@@ -10,3 +10,12 @@ set_tests_properties(BenchReport.Arithmetic PROPERTIES LABELS unit)
 # The README is a user guide (<= 200 lines, no paths outside the repository, links resolve).
 add_test(NAME Docs.ReadmeIsAGuideAndLinksResolve COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/docs_test.py ${PROJECT_SOURCE_DIR})
 set_tests_properties(Docs.ReadmeIsAGuideAndLinksResolve PROPERTIES LABELS unit)
+# No file names a round of work ("session" followed by a number): facts come with command, date, commit.
+add_test(NAME Docs.NoFileNamesASessionNumber COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/docs_test.py ${PROJECT_SOURCE_DIR} --no-session-numbers)
+set_tests_properties(Docs.NoFileNamesASessionNumber PROPERTIES LABELS unit)
+# README's flag tables agree with the --help of render_client, switch_node and scripts/cluster.sh:
+# every flag exists, every value README lists is offered, every default README states is the one printed.
+add_test(NAME Docs.ReadmeFlagTablesMatchHelp
+         COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/readme_flags_test.py ${PROJECT_SOURCE_DIR}
+                 $<TARGET_FILE:render_client> $<TARGET_FILE:switch_node>)
+set_tests_properties(Docs.ReadmeFlagTablesMatchHelp PROPERTIES LABELS unit)
