@@ -1,4 +1,4 @@
-# Sourced by the scripts (bench.sh, cluster.sh, netlab.sh, accuracy_sweep.sh): what their
+# Sourced by the scripts (bench.sh, cluster.sh, netlab.sh, accuracy_sweep.sh, ...): what their
 # argument handling and start-up share. Defines `here` (the checkout) and `BIN` (the binaries'
 # folder, OCC_BIN overrides it); usage errors exit 2 with one line naming the flag.
 #
@@ -20,6 +20,13 @@ fi
 
 # The script's header comment (line 2 up to the first line that is not a comment), as help.
 occ_usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
+
+# occ_help_first "$@": -h or --help as the first argument prints the help and exits 0 (--version
+# is answered above, when lib.sh is sourced): for scripts that take no flags of their own before
+# they install or build anything.
+occ_help_first() {
+  case "${1:-}" in -h|--help) occ_usage; exit 0 ;; esac
+}
 
 occ_die() {
   echo "error: $*" >&2

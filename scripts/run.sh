@@ -5,10 +5,8 @@
 # to out/run/ (or $OUT). Extra arguments go to scripts/cluster.sh (e.g. --scene, --frames,
 # --width/--height, --camera-mode latest).
 set -euo pipefail
-case "${1:-}" in  # before anything is installed or built
-  -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
-  --version) echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0 ;;
-esac
+source "$(dirname "$0")/lib.sh"  # --version
+occ_help_first "$@"  # before anything is installed or built
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh

@@ -2,10 +2,8 @@
 # Installs everything occswitch needs from Debian packages. Idempotent: only missing
 # packages are installed, so a second run costs one dpkg query.
 set -euo pipefail
-case "${1:-}" in  # before anything is installed or built
-  -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
-  --version) echo "$(basename "$0") (occswitch) $(cat "$(dirname "$0")/../VERSION")"; exit 0 ;;
-esac
+source "$(dirname "$0")/lib.sh"  # --version
+occ_help_first "$@"  # before anything is installed or built
 
 PKGS=(
   build-essential cmake pkg-config

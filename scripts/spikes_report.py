@@ -20,21 +20,14 @@ oracle_cpu_ms), the scene's own variation from frame to frame.
 "model": the per-frame three-machine frame time of scripts/bench_report.py (one machine per
 process, 0 ms links, 1 Gbit/s, lookahead 3) from the CPU times the processes measured: it depends
 much less than the wall-clock interval on what else runs on this shared 2-core machine."""
-import argparse, csv, math, os, statistics
+import argparse, math, os, statistics
 
-
-def number(v):
-    try:
-        return float(v)
-    except ValueError:
-        return None
+from bench_report import read_rows  # beside this script
 
 
 def rows(d):
-    """stats.csv as numbers; text columns (the render client's `mode`) are left out."""
-    with open(f"{d}/stats.csv") as f:
-        return [{k: x for k, v in r.items() if v not in ("", None) and (x := number(v)) is not None}
-                for r in csv.DictReader(f)]
+    """d/stats.csv as numbers; text columns (the render client's `mode`) are left out."""
+    return read_rows(f"{d}/stats.csv")
 
 
 def pct(sorted_v, q):

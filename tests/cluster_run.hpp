@@ -6,6 +6,10 @@
 // that acts while it runs (kills a node, cuts the link, sends strangers to a port) uses Cluster
 // step by step.
 #pragma once
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
 #include <optional>
 
 #include "integration_util.hpp"
@@ -68,7 +72,7 @@ class Cluster {
   Proc& restarted(int k) { return k == 0 ? *n0_again_ : *n1_again_; }
 
   // link_relay in front of node 1 (relay_node1), or of node 0 for node 1 (relay_node_link);
-  // control_port() takes "stall", "cut", ... (see relay_test).
+  // control() sends its control port "stall", "cut", ... (see relay_test).
   int start_relay() {
     const int target = o_.relay_node_link ? p0_ : p1_;
     relay_.emplace(std::vector<std::string>{bin("link_relay"), "--target", local(target), "--port-file", file("relay.port"),
@@ -93,6 +97,32 @@ class Cluster {
     if (!p0_ || !p1_ || (o_.relay_node1 && !start_relay())) return false;
     start_client();
     return true;
+  }
+  // start(), then a wait until the client has shown `frames` frames (60 s at most, and no longer
+  // than it runs): whether it got that far.
+  bool start_and_show(size_t frames) { return start() && show(frames); }
+  // A wait until the started client has shown `frames` frames in all (as start_and_show), or
+  // `more` frames more than now: whether it got that far.
+  bool show(size_t frames) { return wait_frames(stats(), frames, std::chrono::seconds(60), &*client_) >= frames; }
+  bool show_more(size_t more) { return show(read_csv(stats())["frame"].size() + more); }
+
+  // One command on the relay's control port ("stall", "resume", "cut", ...): its one-line answer
+  // ("ok ..." when done; "" when the port did not answer).
+  std::string control(const std::string& command) const {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(uint16_t(pc_));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    std::string reply;
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
+      const std::string line = command + "\n";
+      (void)!::write(fd, line.data(), line.size());
+      char c;
+      while (::read(fd, &c, 1) == 1 && c != '\n') reply += c;
+    }
+    ::close(fd);
+    return reply;
   }
   // Waits for the client (client_wait), then for each node (node_wait): exit codes and logs.
   ClusterRun finish() {
@@ -128,7 +158,6 @@ class Cluster {
   Proc& node1() { return *n1_; }
   Proc& client() { return *client_; }
   Proc& relay() { return *relay_; }
-  int control_port() const { return pc_; }
   const fs::path& out() const { return out_; }
   fs::path stats() const { return out_ / "stats.csv"; }
 

@@ -3,15 +3,12 @@
 #include <optional>
 
 #include "common/hzb.hpp"
+#include "random_util.hpp"
 
 using namespace occ;
 
 namespace {
-uint64_t rng_state = 99;
-double rnd() {
-  rng_state = rng_state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return double(rng_state >> 11) / double(1ULL << 53);
-}
+occtest::Lcg rnd{99};
 
 // A depth buffer of random axis-aligned rectangles at random depths over a cleared (0) buffer.
 std::vector<float> random_depth(int w, int h, int rects) {
@@ -25,6 +22,16 @@ std::vector<float> random_depth(int w, int h, int rects) {
   }
   return d;
 }
+
+// random_depth and its pyramid.
+std::pair<std::vector<float>, DepthPyramid> random_pyramid(int w, int h, int rects) {
+  std::pair<std::vector<float>, DepthPyramid> r{random_depth(w, h, rects), DepthPyramid()};
+  r.second.build(r.first, w, h);
+  return r;
+}
+
+// The camera of the random boxes: at the origin looking down -z, 60 degrees, a w x h view.
+Camera down_z(int w, int h) { return Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100); }
 
 // A box of half-extents up to 3 somewhere in front of a camera at the origin looking down -z.
 Aabb random_box() {
@@ -60,13 +67,29 @@ std::optional<double> entry_depth(const glm::dmat4& vpm, const glm::dmat4& inv, 
   const glm::dvec4 clip = vpm * glm::dvec4(t0 * dir, 1.0);
   return clip.z / clip.w;
 }
+
+// Brute force over the pixel centres of a w x h view of a camera: whether the ray through some
+// centre enters the camera-relative box [lo, hi] at a depth z that `sees(z, pixel's depth in d)`.
+struct PixelCentres {
+  int w, h;
+  glm::dmat4 vpm, inv;
+  PixelCentres(const Camera& cam, int w_, int h_)
+      : w(w_), h(h_), vpm(cam.projection() * cam.view_rotation()), inv(glm::inverse(vpm)) {}
+  template <class Sees>
+  bool any(const std::vector<float>& d, const glm::dvec3& lo, const glm::dvec3& hi, Sees sees) const {
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::optional<double> z = entry_depth(vpm, inv, w, h, x, y, lo, hi);
+        if (z && sees(*z, d[size_t(y) * w + x])) return true;
+      }
+    return false;
+  }
+};
 }  // namespace
 
 TEST(Hzb, PyramidLevelsHoldTheFarthestDepthBelow) {
   const int w = 37, h = 21;
-  auto d = random_depth(w, h, 12);
-  DepthPyramid p;
-  p.build(d, w, h);
+  const auto [d, p] = random_pyramid(w, h, 12);
   ASSERT_EQ(p.texel(0, 5, 7), d[7 * w + 5]);
   for (size_t l = 1; l < p.level_count(); ++l) {
     const int lw = (w + (1 << l) - 1) >> l, lh = (h + (1 << l) - 1) >> l;
@@ -82,12 +105,10 @@ TEST(Hzb, PyramidLevelsHoldTheFarthestDepthBelow) {
 
 TEST(Hzb, NeverCullsABoxThatBruteForceSeesAndCullsMost) {
   const int w = 160, h = 120;
-  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
+  const Camera cam = down_z(w, h);
   int brute_hidden = 0, hzb_hidden = 0;
   for (int trial = 0; trial < 40; ++trial) {
-    auto d = random_depth(w, h, 20);
-    DepthPyramid p;
-    p.build(d, w, h);
+    const auto [d, p] = random_pyramid(w, h, 20);
     for (int i = 0; i < 250; ++i) {
       const Aabb box = random_box();
       BoxFootprint fp = box_footprint(box, cam, {w, h});
@@ -212,12 +233,10 @@ TEST(HzbProbe, EmptyBoxesHaveNoSamplesAndBoxesAtTheEyeOrOffScreenAreQueried) {
 // prove at least as much as coarser ones.
 TEST(HzbProbe, OccludesNeverWhereBruteForceSeesAPixelAndFinerSpansProveMore) {
   const int w = 160, h = 120;
-  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
+  const Camera cam = down_z(w, h);
   int brute_hidden = 0, proven2 = 0, proven16 = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    auto d = random_depth(w, h, 20);
-    DepthPyramid p;
-    p.build(d, w, h);
+    const auto [d, p] = random_pyramid(w, h, 20);
     for (int i = 0; i < 250; ++i) {
       const Aabb box = random_box();
       const BoxFootprint fp = box_footprint(box, cam, {w, h});
@@ -242,14 +261,11 @@ TEST(HzbProbe, OccludesNeverWhereBruteForceSeesAPixelAndFinerSpansProveMore) {
 // most of what brute force finds hidden, far more than the probe.
 TEST(HzbRefined, ProvesOnlyWhatNoPixelCentreSeesAndMoreThanTheProbe) {
   const int w = 160, h = 120;
-  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
-  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
-  const glm::dmat4 inv = glm::inverse(vpm);
+  const Camera cam = down_z(w, h);
+  const PixelCentres centres(cam, w, h);
   int probed = 0, brute_hidden = 0, probe_proven = 0, refined_proven = 0;
   for (int trial = 0; trial < 20; ++trial) {
-    auto d = random_depth(w, h, 20);
-    DepthPyramid p;
-    p.build(d, w, h);
+    const auto [d, p] = random_pyramid(w, h, 20);
     for (int i = 0; i < 200; ++i) {
       Aabb box = random_box();
       if (i % 3 == 0) {  // thin slanted slabs: the probe's rectangle covers far more than the box does
@@ -261,12 +277,7 @@ TEST(HzbRefined, ProvesOnlyWhatNoPixelCentreSeesAndMoreThanTheProbe) {
       if (pr.kind != PyramidProbe::Kind::probe) continue;
       ++probed;
       const glm::dvec3 lo = box.min - 1e-4, hi = box.max + 1e-4;  // a little more than the pad
-      bool brute = false;
-      for (int y = 0; y < h && !brute; ++y)
-        for (int x = 0; x < w && !brute; ++x) {
-          const std::optional<double> z = entry_depth(vpm, inv, w, h, x, y, lo, hi);
-          brute = z && !(*z < d[size_t(y) * w + x]);
-        }
+      const bool brute = centres.any(d, lo, hi, [](double z, float depth) { return !(z < depth); });
       const bool probe = p.occludes(pr), refined = p.occludes_refined(pr, box, cam, 1e-5, 1 << 20);
       ASSERT_TRUE(!brute || !refined) << "proves occluded a box a pixel centre sees, trial " << trial << " box " << i;
       ASSERT_TRUE(!probe || refined) << "the refined test proves what the probe proves, trial " << trial << " box " << i;
@@ -288,17 +299,14 @@ TEST(HzbRefined, ProvesOnlyWhatNoPixelCentreSeesAndMoreThanTheProbe) {
 // pixel centres (ray through the centre enters the box at a depth nearer than the pixel's) agrees.
 TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
   const int w = 160, h = 120;
-  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60, double(w) / h, 0.1, 100);
-  const glm::dmat4 vpm = cam.projection() * cam.view_rotation();
-  const glm::dmat4 inv = glm::inverse(vpm);
+  const Camera cam = down_z(w, h);
+  const PixelCentres centres(cam, w, h);
   DepthPyramid cleared, nearest;
   cleared.build(std::vector<float>(size_t(w) * h, 0.0f), w, h);
   nearest.build(std::vector<float>(size_t(w) * h, 1.0f), w, h);
   int probed = 0, brute_shows = 0, shown = 0, shown_cleared = 0;
   for (int trial = 0; trial < 20; ++trial) {
-    auto d = random_depth(w, h, 20);
-    DepthPyramid p;
-    p.build(d, w, h);
+    const auto [d, p] = random_pyramid(w, h, 20);
     for (int i = 0; i < 200; ++i) {
       const Aabb box = random_box();
       const bool in_front = pyramid_probe(box, cam, {w, h}, 1e-5).kind == PyramidProbe::Kind::probe;
@@ -307,12 +315,8 @@ TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
         ++probed;
         shown_cleared += cleared.shows(box, cam);
       }
-      bool brute = false;
-      for (int y = 0; y < h && !brute; ++y)
-        for (int x = 0; x < w && !brute; ++x) {
-          const std::optional<double> z = entry_depth(vpm, inv, w, h, x, y, box.min - cam.eye, box.max - cam.eye);
-          brute = z && *z > d[size_t(y) * w + x];
-        }
+      const bool brute =
+          centres.any(d, box.min - cam.eye, box.max - cam.eye, [](double z, float depth) { return z > depth; });
       const bool s = p.shows(box, cam);
       ASSERT_TRUE(brute || !s) << "shows a box no pixel centre sees, trial " << trial << " box " << i;
       brute_shows += brute;
@@ -329,9 +333,7 @@ TEST(HzbShows, ProvesOnlyWhatBruteForceOverPixelCentresSees) {
 // a full build of the new buffer gives (cpu-pyramid's refresh after occluder fusion).
 TEST(Hzb, RebuildingTheLevelsAboveAChangedRectangleEqualsAFullBuild) {
   for (auto [w, h] : {std::pair{37, 21}, {64, 64}, {203, 117}}) {
-    auto d = random_depth(w, h, 12);
-    DepthPyramid part;
-    part.build(d, w, h);
+    auto [d, part] = random_pyramid(w, h, 12);
     for (int round = 0; round < 20; ++round) {
       const int x0 = int(rnd() * w), y0 = int(rnd() * h);
       const int x1 = std::min(w - 1, x0 + int(rnd() * w / 3)), y1 = std::min(h - 1, y0 + int(rnd() * h / 3));

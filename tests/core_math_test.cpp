@@ -5,6 +5,7 @@
 
 #include "common/camera.hpp"
 #include "common/math.hpp"
+#include "random_util.hpp"
 
 using namespace occ;
 
@@ -100,8 +101,7 @@ TEST(Camera, FrustumAgreesWithProjectionOnRandomPoints) {
   Camera c = Camera::look_at({2, 1, 3}, {0, 0, 0}, {0, 1, 0}, 70, 1.7, 0.5, 50);
   Frustum f = c.frustum();
   glm::dmat4 vp = c.projection() * c.view_rotation();
-  uint64_t s = 12345;
-  auto rnd = [&] { s = s * 6364136223846793005ULL + 1442695040888963407ULL; return double(s >> 11) / double(1ULL << 53); };
+  occtest::Lcg rnd{12345};
   for (int i = 0; i < 20000; ++i) {
     glm::dvec3 p(rnd() * 80 - 40, rnd() * 80 - 40, rnd() * 80 - 40);
     glm::dvec4 clip = vp * glm::dvec4(p - c.eye, 1.0);

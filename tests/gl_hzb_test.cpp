@@ -18,16 +18,13 @@
 #include "common/hzb.hpp"
 #include "common/scene_io.hpp"
 #include "protocol/cluster/switch_step.hpp"
+#include "random_util.hpp"
 
 using namespace occ;
 
 namespace {
 
-uint64_t rng_state = 12345;
-double rnd() {
-  rng_state = rng_state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return double(rng_state >> 11) / double(1ULL << 53);
-}
+occtest::Lcg rnd{12345};
 
 // A generated plant, its hierarchy and a walk through it, rendered at w x h.
 struct Plant {

@@ -13,6 +13,7 @@
 #include "common/hierarchy.hpp"
 #include "common/scene_io.hpp"
 #include "material_util.hpp"
+#include "scratch_util.hpp"
 
 using namespace occ;
 using namespace mattest;
@@ -50,15 +51,12 @@ std::vector<uint32_t> all_items(const Hierarchy& h) {
 }
 
 // Writes .glb files into a per-test folder; loads and renders them.
-class Materials : public ::testing::Test {
+class Materials : public occtest::ScratchDirTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("occ_mat_" + std::to_string(getpid()) + "_" + info->name());
-    fs::create_directories(dir_);
+    ScratchDirTest::SetUp();
     ctx_ = GlContext::create(GlBackend::Auto, kSize, kSize);
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   GltfBuilder builder() const { return GltfBuilder(dir_); }
   Scene load(GltfBuilder& b, const std::string& name = "scene.glb") { return load_gltf(b.write_glb(dir_ / name)); }
@@ -75,7 +73,6 @@ class Materials : public ::testing::Test {
     return ctx_->read_rgba();
   }
 
-  fs::path dir_;
   std::unique_ptr<GlContext> ctx_;
 };
 

@@ -268,9 +268,8 @@ TEST(ClusterFaults, KilledSwitchNodeIsReportedWithNodeAndFrameAndNoPartialImage)
   ClusterOptions o = cluster(kCity, "walk:100000");
   o.client = {"--on-node-failure", "exit"};
   Cluster c(fresh_dir("kill") / "cluster", o);
-  ASSERT_TRUE(c.start()) << c.logs();
   // Kill node 1 once frames are flowing.
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();  // 3 process starts: slow under load
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();  // 3 process starts: slow under load
   c.node1().kill_now();
   expect_client_stops_naming_node1(c.client(), false);  // ended by the disconnect, not the 20 s timeout
   // Node 0 ends too, not hanging: with an error if it noticed node 1's death first, cleanly if

@@ -2,10 +2,7 @@
 // frame; with --on-node-failure exit, a link that stalls or is cut makes the render client stop
 // with an error that names the node and the frame, within its timeout, and nothing partial is
 // written (what the default, degrade, does: integration_recovery_test.cpp).
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 
 #include "cluster_run.hpp"
 
@@ -17,24 +14,6 @@ namespace {
 const std::string kScene = "city:6x6:3:10:1";
 const std::vector<std::string> kView = {"--width", "160", "--height", "120"};
 
-// One command on link_relay's control port; returns the answer line.
-std::string control(int port, const std::string& command) {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(uint16_t(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  std::string reply;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
-    std::string line = command + "\n";
-    (void)!::write(fd, line.data(), line.size());
-    char c;
-    while (::read(fd, &c, 1) == 1 && c != '\n') reply += c;
-  }
-  ::close(fd);
-  return reply;
-}
-
 // Node 0 and node 1 direct, the render client reaching node 1 through a relay with a control port;
 // `command` on the control port once frames flow.
 void stop_link_mid_run(const std::string& name, const std::string& command) {
@@ -45,16 +24,15 @@ void stop_link_mid_run(const std::string& name, const std::string& command) {
   // them, which takes seconds on a loaded machine (3000 ms there once left node 0 without a peer).
   o.client = {"--on-node-failure", "exit", "--timeout-ms", "3000"};
   Cluster c(fresh_dir(name), o);
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 10, 60s, &c.client()), 10u) << c.logs();
-  EXPECT_EQ(control(c.control_port(), command).rfind("ok", 0), 0u);
+  ASSERT_TRUE(c.start_and_show(10)) << c.logs();
+  EXPECT_EQ(c.control(command).rfind("ok", 0), 0u);
   // The 3 s receive timeout (the stall) or the disconnect (the cut) ended it, as its error says.
   const std::string log = expect_client_stops_naming_node1(c.client(), command == "stall");
   // A clean goodbye is never the cause of an error: node 0 ends with node 1's failure, not "done".
   EXPECT_EQ(log.find("said bye: done"), std::string::npos) << log;
   expect_no_partial_frames(c.out());
   // Node 1 may still wait behind the stalled relay for the client: the cut ends that wait.
-  if (command != "cut") control(c.control_port(), "cut");
+  if (command != "cut") c.control("cut");
   c.finish();
 }
 

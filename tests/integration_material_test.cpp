@@ -7,7 +7,7 @@
 #include <cstdio>
 
 #include "common/image.hpp"
-#include "integration_util.hpp"
+#include "cluster_run.hpp"
 #include "material_util.hpp"
 
 using namespace occtest;
@@ -18,58 +18,11 @@ namespace {
 
 const std::vector<std::string> kView = {"--width", "192", "--height", "144"};
 
-struct ClusterResult {
-  int rvg = -1, node0 = -1, node1 = -1;
-  std::string logs;
-};
-
-// node 0, node 1 and the render client (with `client` flags besides), as scripts/cluster.sh starts them.
-ClusterResult run_cluster(const fs::path& out, const std::string& scene, const std::string& path,
-                          const std::vector<std::string>& client = {}) {
-  fs::create_directories(out);
-  std::vector<std::string> common = {"--scene", scene, "--timeout-ms", "20000"};
-  common.insert(common.end(), kView.begin(), kView.end());
-  auto args = [&](std::vector<std::string> a) {
-    a.insert(a.end(), common.begin(), common.end());
-    return a;
-  };
-  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (out / "n0.port").string()}), out / "node0.log");
-  const int p0 = wait_port(out / "n0.port", n0);
-  Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (out / "n1.port").string()}),
-          out / "node1.log");
-  const int p1 = wait_port(out / "n1.port", n1);
-  ClusterResult r;
-  if (p0 && p1) {
-    std::vector<std::string> a = {bin("render_client"), "--path", path, "--out", out.string(), "--connect",
-                                  "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)};
-    a.insert(a.end(), client.begin(), client.end());
-    Proc rvg(args(a), out / "render_client.log");
-    r.rvg = rvg.wait(300s);
-    r.logs += "--- render_client\n" + rvg.log();
-  }
-  r.node0 = n0.wait(30s);
-  r.node1 = n1.wait(30s);
-  r.logs += "--- node 0\n" + n0.log() + "--- node 1\n" + n1.log();
-  return r;
-}
-
-int run_reference(const fs::path& out, const std::string& scene, const std::string& path) {
-  fs::create_directories(out);
-  std::vector<std::string> a = {bin("render_client"), "--reference", "--scene", scene, "--path", path, "--out", out.string()};
-  a.insert(a.end(), kView.begin(), kView.end());
-  Proc p(a, out / "reference.log");
-  return p.wait(300s);
-}
-
 // frame_diff with no tolerance at all; its summary line in *summary.
 int exact_diff(const fs::path& a, const fs::path& b, std::string* summary) {
-  Proc p({bin("frame_diff"), a.string(), b.string(), "--max-fraction", "0"}, a / "diff.log");
-  const int code = p.wait(120s);
-  const std::string log = p.log();
-  const size_t last = log.rfind("frames=");
-  *summary = last == std::string::npos ? log : log.substr(last);
-  return code;
+  const Outcome diff = frame_diff(a, b, {"--max-fraction", "0"});
+  *summary = diff_summary(diff.log);
+  return diff.code;
 }
 
 size_t count(const std::string& s, const std::string& what) {
@@ -140,24 +93,27 @@ std::string write_path(const fs::path& file, int frames) {
 TEST(ClusterMaterials, GlassFenceAndBackFacingWallsEqualTheReferenceExactly) {
   const fs::path dir = fresh_dir("materials");
   const std::string scene = write_scene(dir), path = write_path(dir / "path.csv", 24);
-  ASSERT_EQ(run_reference(dir / "reference", scene, path), 0) << read_file(dir / "reference" / "reference.log");
+  const Outcome ref = run_reference(dir / "reference", scene, path, kView);
+  ASSERT_EQ(ref.code, 0) << ref.log;
   for (const bool two_pass : {false, true}) {
     const std::string run = two_pass ? "two_pass" : "cluster";
-    const ClusterResult r = run_cluster(dir / run, scene, path,
-                                        two_pass ? std::vector<std::string>{"--occlusion-gate", "off", "--two-pass", "on"}
-                                                 : std::vector<std::string>{"--occlusion-gate", "on"});
-    ASSERT_EQ(r.rvg, 0) << r.logs;
-    EXPECT_EQ(r.node0, 0) << r.logs;
-    EXPECT_EQ(r.node1, 0) << r.logs;
+    ClusterOptions o(scene, path, kView);
+    o.occlusion_gate = two_pass ? "off" : "on";
+    if (two_pass) o.client = {"--two-pass", "on"};
+    const ClusterRun r = run_cluster(dir / run, o);
+    const std::string logs = r.logs();
+    ASSERT_EQ(r.rvg_code, 0) << logs;
+    EXPECT_EQ(r.node0_code, 0) << logs;
+    EXPECT_EQ(r.node1_code, 0) << logs;
     std::string summary;
     EXPECT_EQ(exact_diff(dir / "reference", dir / run, &summary), 0) << run << ": " << summary;
     EXPECT_NE(summary.find("frames=24 differing_pixels=0 "), std::string::npos) << run << ": " << summary;
 
     // Each process says once which shader variants the scene uses.
-    EXPECT_EQ(count(r.logs, "shader variants: shaded: "), 3u) << r.logs;
-    EXPECT_NE(r.logs.find("BLEND 1"), std::string::npos) << r.logs;
-    EXPECT_NE(r.logs.find("blended+unlit"), std::string::npos) << r.logs;
-    EXPECT_NE(r.logs.find("textured+masked"), std::string::npos) << r.logs;
+    EXPECT_EQ(count(logs, "shader variants: shaded: "), 3u) << logs;
+    EXPECT_NE(logs.find("BLEND 1"), std::string::npos) << logs;
+    EXPECT_NE(logs.find("blended+unlit"), std::string::npos) << logs;
+    EXPECT_NE(logs.find("textured+masked"), std::string::npos) << logs;
 
     for (int f : {2, 12, 23}) {
       const occ::Image img = frame(dir / run, f);
@@ -193,12 +149,15 @@ TEST(ClusterMaterials, DuplexWithSingleSidedMaterialsAndGlassEqualsTheReferenceE
   if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
   const fs::path dir = fresh_dir("duplex_exact");
   const std::string scene = shared("scenes/duplex/Duplex_A_20110505.gltf");
-  const ClusterResult r = run_cluster(dir / "cluster", scene, "walk:60");
-  ASSERT_EQ(r.rvg, 0) << r.logs;
-  EXPECT_EQ(r.node0, 0) << r.logs;
-  EXPECT_EQ(r.node1, 0) << r.logs;
-  EXPECT_NE(r.logs.find("BLEND 3; textured 0, single-sided 19"), std::string::npos) << r.logs;
-  ASSERT_EQ(run_reference(dir / "reference", scene, "walk:60"), 0);
+  ClusterOptions o(scene, "walk:60", kView);
+  o.occlusion_gate = "auto";  // the render client's default
+  const ClusterRun r = run_cluster(dir / "cluster", o);
+  const std::string logs = r.logs();
+  ASSERT_EQ(r.rvg_code, 0) << logs;
+  EXPECT_EQ(r.node0_code, 0) << logs;
+  EXPECT_EQ(r.node1_code, 0) << logs;
+  EXPECT_NE(logs.find("BLEND 3; textured 0, single-sided 19"), std::string::npos) << logs;
+  ASSERT_EQ(run_reference(dir / "reference", scene, "walk:60", kView).code, 0);
   std::string summary;
   EXPECT_EQ(exact_diff(dir / "reference", dir / "cluster", &summary), 0) << summary;
   EXPECT_NE(summary.find("frames=60 differing_pixels=0 "), std::string::npos) << summary;

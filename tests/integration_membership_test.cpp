@@ -3,9 +3,6 @@
 // switch_node --serve the node pair outlives its clients, one at a time: a second client while one
 // is served is told the cluster is busy (at once, not after a timeout), a client that dies does
 // not take the nodes with it, and the next client is served with frames equal to the reference.
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -52,24 +49,6 @@ void expect_equals_reference(const fs::path& reference, const fs::path& out, siz
   EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
 }
 
-// One command to link_relay's control port ("stall", "resume"); its one-line reply.
-std::string control(int port, const std::string& command) {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(uint16_t(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  std::string reply;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
-    std::string line = command + "\n";
-    (void)!::write(fd, line.data(), line.size());
-    char c;
-    while (::read(fd, &c, 1) == 1 && c != '\n') reply += c;
-  }
-  ::close(fd);
-  return reply;
-}
-
 // The cluster's first client reaches node 1 through a link_relay, so a test can hold that client
 // mid-run (stall) while another process visits the nodes: the session cannot end meanwhile.
 struct HeldCluster {
@@ -90,8 +69,8 @@ struct HeldCluster {
     c.start_client();
     return true;
   }
-  bool hold() { return control(c.control_port(), "stall").rfind("ok", 0) == 0; }
-  bool release() { return control(c.control_port(), "resume").rfind("ok", 0) == 0; }
+  bool hold() { return c.control("stall").rfind("ok", 0) == 0; }
+  bool release() { return c.control("resume").rfind("ok", 0) == 0; }
 };
 
 // Waits (at most `timeout`) until `p`'s log contains `text`.
@@ -136,7 +115,7 @@ TEST(Membership, ProcessesWithoutTheKeyAreRefusedWhileTheRealClientIsServed) {
 
   // The real client, and while it is served (held mid-run) another one without the key.
   c.start_client();
-  ASSERT_GE(wait_frames(c.stats(), 5, 60s, &c.client()), 5u) << c.logs();
+  ASSERT_TRUE(c.show(5)) << c.logs();
   ASSERT_TRUE(h.hold());
   const Outcome late = run_to_end(client_argv(o, p0, p1, dir / "late", {}), dir / "late.log", 60s);
   ASSERT_TRUE(h.release());
@@ -212,7 +191,7 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   // Client 1 is served; a second client meanwhile (client 1 held mid-run) is told the cluster is
   // busy, at once: node 0's reason is its error, which a timeout could not give (how long the
   // refusal took depends on the machine and is not asserted).
-  ASSERT_GE(wait_frames(c.stats(), 5, 60s, &c.client()), 5u) << c.logs();
+  ASSERT_TRUE(c.show(5)) << c.logs();
   ASSERT_TRUE(h.hold());
   const Outcome busy = run_to_end(client_argv(o, p0, p1, dir / "busy", {"--cluster-key-file", key}),
                                   dir / "busy.log", 60s);

@@ -5,12 +5,9 @@
 // (frame_diff) and the client exits 0. stats.csv's `mode` column says how each frame was culled.
 // With a cluster key (docs/security.md) the restarted node must prove it like any process: node
 // 0's busy door lets in only a node 1 that does, and only while its link to node 1 is down.
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
 
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -51,24 +48,6 @@ void expect_equals_reference(const fs::path& dir, const std::string& path, size_
   EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << diff.log;
 }
 
-// One command on link_relay's control port; returns the answer line.
-std::string control(int port, const std::string& command) {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(uint16_t(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  std::string reply;
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) {
-    std::string line = command + "\n";
-    (void)!::write(fd, line.data(), line.size());
-    char c;
-    while (::read(fd, &c, 1) == 1 && c != '\n') reply += c;
-  }
-  ::close(fd);
-  return reply;
-}
-
 std::string write_key(const fs::path& file, char fill) {
   {
     std::ofstream out(file);
@@ -85,8 +64,7 @@ void killed_node_leaves_the_other_serving(int k) {
   const std::string path = "walk:160";
   const fs::path dir = fresh_dir("recovery_kill" + std::to_string(k)) / "cluster";
   Cluster c(dir, ClusterOptions(kCity, path, kView));
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
   (k == 0 ? c.node0() : c.node1()).kill_now();
   const ClusterRun r = c.finish();
   ASSERT_EQ(r.rvg_code, 0) << r.logs();
@@ -132,13 +110,12 @@ TEST(Recovery, NodeKilledWhileTheOtherWaitsForItsStreamIsDroppedAtOnce) {
   ClusterOptions o(kCity, path, kView);
   o.relay_node_link = true;  // --timeout-ms stays 20 s: waiting it out fails the test below
   Cluster c(dir, o);
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
   // The client is held (SIGSTOP) while the link stalls: it sends a camera per frame it receives,
   // so meanwhile the nodes get no further than a few frames past its last row, wherever the test's
   // own scheduling put that (unheld, the 160 frames could all have passed before the stall).
   c.client().signal(SIGSTOP);
-  ASSERT_EQ(control(c.control_port(), "stall").rfind("ok", 0), 0u);
+  ASSERT_EQ(c.control("stall").rfind("ok", 0), 0u);
   c.client().signal(SIGCONT);
   // The switch stops within a frame or two: each node waits for the other's stream. Stopped:
   // no new frame for 3 s (a frame of this size takes milliseconds, also on a loaded machine).
@@ -153,7 +130,7 @@ TEST(Recovery, NodeKilledWhileTheOtherWaitsForItsStreamIsDroppedAtOnce) {
   const int k = int(read_csv(c.stats())["hc_node"].back());  // HC of the last frame shown: the client waits for the other
   ASSERT_TRUE(k == 0 || k == 1) << c.logs();
   (k == 0 ? c.node0() : c.node1()).kill_now();
-  EXPECT_EQ(control(c.control_port(), "cut").rfind("ok", 0), 0u);
+  EXPECT_EQ(c.control("cut").rfind("ok", 0), 0u);
   const ClusterRun r = c.finish();
   ASSERT_EQ(r.rvg_code, 0) << r.logs();
   EXPECT_EQ(k == 0 ? r.node1_code : r.node0_code, 0) << r.logs();
@@ -179,8 +156,7 @@ TEST(Recovery, BothNodesKilledLeaveFrustumCullingInTheClient) {
   const std::string path = "walk:120";
   const fs::path dir = fresh_dir("recovery_both") / "cluster";
   Cluster c(dir, ClusterOptions(kCity, path, kView));
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
   c.node1().kill_now();
   c.node0().kill_now();
   const ClusterRun r = c.finish();
@@ -226,12 +202,10 @@ void restarted_node_rejoins(int k, bool keyed = false) {
     wrong = write_key(dir.parent_path() / "wrong.key", 'w');
   }
   Cluster c(dir, o);
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
   (k == 0 ? c.node0() : c.node1()).kill_now();
   // The other node serves alone for a while.
-  const size_t killed_at = read_csv(c.stats())["frame"].size();
-  ASSERT_GE(wait_frames(c.stats(), killed_at + 30, 60s, &c.client()), killed_at + 30) << c.logs();
+  ASSERT_TRUE(c.show_more(30)) << c.logs();
   c.client().signal(SIGSTOP);  // held until the restarted node listens (kHoldTimeoutMs)
   if (keyed && k == 1) {
     const int p0 = std::stoi(read_file(dir / "n0.port"));
@@ -317,11 +291,9 @@ TEST(Recovery, LatestCameraModeRestartedNode1RejoinsWithVerifiedFrames) {
   o.all = {"--camera-mode", "latest"};
   o.timeout_ms = kHoldTimeoutMs;
   Cluster c(dir, o);
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
   c.node1().kill_now();
-  const size_t killed_at = read_csv(c.stats())["frame"].size();
-  ASSERT_GE(wait_frames(c.stats(), killed_at + 30, 60s, &c.client()), killed_at + 30) << c.logs();
+  ASSERT_TRUE(c.show_more(30)) << c.logs();
   c.client().signal(SIGSTOP);  // held until the restarted node listens (kHoldTimeoutMs)
   ASSERT_NE(c.restart_node(1), 0) << c.logs();
   c.client().signal(SIGCONT);
@@ -373,13 +345,12 @@ TEST(Recovery, StalledLinkDegradesAfterTheTimeoutAndFramesEqualTheReference) {
   o.client = {"--timeout-ms", "3000"};
   o.relay_node1 = true;
   Cluster c(dir, o);
-  ASSERT_TRUE(c.start()) << c.logs();
-  ASSERT_GE(wait_frames(c.stats(), 20, 60s, &c.client()), 20u) << c.logs();
-  EXPECT_EQ(control(c.control_port(), "stall").rfind("ok", 0), 0u);
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
+  EXPECT_EQ(c.control("stall").rfind("ok", 0), 0u);
   ASSERT_EQ(c.client().wait(300s), 0) << c.logs();
   // Node 1 still waits behind the stalled relay for the client that dropped it: the cut ends that
   // wait (its own timeout, long: see above, would end it later).
-  control(c.control_port(), "cut");
+  c.control("cut");
   const ClusterRun r = c.finish();
   ASSERT_EQ(r.rvg_code, 0) << r.logs();
   EXPECT_EQ(r.node0_code, 0) << r.logs();

@@ -137,12 +137,13 @@ inline int wait_port(const fs::path& file, Proc& owner, std::chrono::millisecond
   return 0;
 }
 
-// stats.csv as column name -> values.
-inline std::map<std::string, std::vector<double>> read_csv(const fs::path& file) {
+// Every cell of a CSV file with a header line, row by row: cell(column name, text). Cells past
+// the header's columns are passed over.
+template <class Cell>
+void for_each_csv_cell(const fs::path& file, Cell cell) {
   std::ifstream in(file);
   std::string line;
   std::vector<std::string> cols;
-  std::map<std::string, std::vector<double>> out;
   if (std::getline(in, line)) {
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) cols.push_back(c);
@@ -150,30 +151,25 @@ inline std::map<std::string, std::vector<double>> read_csv(const fs::path& file)
   while (std::getline(in, line)) {
     std::stringstream ss(line);
     size_t i = 0;
-    for (std::string c; std::getline(ss, c, ',') && i < cols.size(); ++i) {
-      char* end = nullptr;
-      const double v = std::strtod(c.c_str(), &end);
-      if (end != c.c_str() && *end == '\0') out[cols[i]].push_back(v);  // text columns (mode): read_csv_text
-    }
+    for (std::string c; std::getline(ss, c, ',') && i < cols.size(); ++i) cell(cols[i], c);
   }
+}
+
+// stats.csv as column name -> values.
+inline std::map<std::string, std::vector<double>> read_csv(const fs::path& file) {
+  std::map<std::string, std::vector<double>> out;
+  for_each_csv_cell(file, [&](const std::string& col, const std::string& c) {
+    char* end = nullptr;
+    const double v = std::strtod(c.c_str(), &end);
+    if (end != c.c_str() && *end == '\0') out[col].push_back(v);  // text columns (mode): read_csv_text
+  });
   return out;
 }
 
 // The text columns of stats.csv (e.g. the cluster's mode) as column name -> values.
 inline std::map<std::string, std::vector<std::string>> read_csv_text(const fs::path& file) {
-  std::ifstream in(file);
-  std::string line;
-  std::vector<std::string> cols;
   std::map<std::string, std::vector<std::string>> out;
-  if (std::getline(in, line)) {
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) cols.push_back(c);
-  }
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    size_t i = 0;
-    for (std::string c; std::getline(ss, c, ',') && i < cols.size(); ++i) out[cols[i]].push_back(c);
-  }
+  for_each_csv_cell(file, [&](const std::string& col, const std::string& c) { out[col].push_back(c); });
   return out;
 }
 

@@ -94,6 +94,17 @@ std::vector<glm::dvec3> random_points(std::mt19937& rng, const Aabb& b, int n) {
   return pts;
 }
 
+// `views` random views of the world from `seed`, view k with 1 + k % most_points visible points:
+// check(k, its camera, its occlusion oracle) for each.
+template <class Check>
+void for_random_views(unsigned seed, int views, int most_points, Check check) {
+  std::mt19937 rng(seed);
+  for (int k = 0; k < views; ++k) {
+    RandomView view(rng, world().h.node(0).box, 1 + k % most_points);
+    check(k, view.cam, view.q);
+  }
+}
+
 }  // namespace
 
 TEST(Front, UpdatedCutEqualsFreshCutOnRandomCameras) {
@@ -189,16 +200,12 @@ TEST(Front, DerivedOccludedFrontCompletesTheCut) {
 TEST(FrontCull, TauZeroLodTraversalEqualsHardwareCull) {
   const World& w = world();
   Renderables r(w.h, &w.lod);
-  std::mt19937 rng(5);
-  for (int k = 0; k < 50; ++k) {
-    RandomView view(rng, w.h.node(0).box, 1 + k % 20);
-    PointQueries& q = view.q;
-    const Camera& cam = view.cam;
+  for_random_views(5, 50, 20, [&](int, const Camera& cam, PointQueries& q) {
     LodSelector sel(r, cam, 480, 0.0);
     auto plain = hardware_cull(w.h, cam, q, nullptr);
     auto lod = hardware_cull_lod(w.h, cam, q, sel, {.visible_pixel_lod = true});
     EXPECT_EQ(lod, plain);
-  }
+  });
 }
 
 // The switch step itself (SwitchStep, what the nodes and the render client run), frame after
@@ -258,11 +265,7 @@ TEST(FrontCull, FrontTrackedTraversalEqualsFreshTraversal) {
 TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
   const World& w = world();
   Renderables r(w.h, &w.lod);
-  std::mt19937 rng(12);
-  for (int k = 0; k < 30; ++k) {
-    RandomView view(rng, w.h.node(0).box, 1 + k % 25);
-    PointQueries& q = view.q;
-    const Camera& cam = view.cam;
+  for_random_views(12, 30, 25, [&](int k, const Camera& cam, PointQueries& q) {
     const LodSelector sel(r, cam, 480, k % 3 == 0 ? 2.0 : 0.0);
     CullStats lv, nf;
     const auto by_level = hardware_cull_lod(w.h, cam, q, sel, {.stats = &lv});
@@ -281,7 +284,7 @@ TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
     EXPECT_EQ(offered, near_first) << "camera " << k;
     EXPECT_EQ(nf.queries, lv.queries) << "the same nodes are tested, in another order";
     if (near_first.size() > 4) { EXPECT_GT(hook_calls, 1u) << "shells, not one batch"; }
-  }
+  });
 }
 
 TEST(FrontCull, VisiblePixelLodStopsWhereFewPixelsShow) {

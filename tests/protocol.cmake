@@ -1,9 +1,6 @@
 # protocol tests: decoders and visible-set algebra (unit), loopback transport (integration)
 occ_test(protocol_test unit LIBS occ_protocol SOURCES
-  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_samples.cpp
-  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_wire_test.cpp
-  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_fuzz_test.cpp
-  ${CMAKE_CURRENT_SOURCE_DIR}/protocol_visible_set_test.cpp)
+  protocol_samples.cpp protocol_wire_test.cpp protocol_fuzz_test.cpp protocol_visible_set_test.cpp)
 # the cluster key: key files and the HMAC proofs (unit); over loopback in net_transport_test
 occ_test(net_auth_test unit LIBS occ_net SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/net_auth_test.cpp)
 occ_test(net_transport_test integration LIBS occ_net Boost::system SOURCES

@@ -25,6 +25,12 @@ void put_u16(std::vector<uint8_t>& b, size_t at, uint16_t v) {
 void put_u32(std::vector<uint8_t>& b, size_t at, uint32_t v) {
   for (int i = 0; i < 4; ++i) b[at + i] = static_cast<uint8_t>(v >> (8 * i));
 }
+// The little-endian unsigned field of `bytes` bytes at `at`.
+uint64_t field(const std::vector<uint8_t>& b, size_t at, int bytes) {
+  uint64_t v = 0;
+  for (int i = bytes - 1; i >= 0; --i) v = v << 8 | b[at + size_t(i)];
+  return v;
+}
 
 }  // namespace
 
@@ -81,12 +87,11 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   keyed.nonce[31] = 0xa5;
   keyed.name = "n";
   const auto k = encode(keyed);
-  EXPECT_EQ(k[6 + 36], 0x08);  // config_hash
-  EXPECT_EQ(k[6 + 43], 0x01);
-  EXPECT_EQ(k[6 + 44], 1);     // auth
-  EXPECT_EQ(k[6 + 45], 0x5a);  // nonce
+  EXPECT_EQ(field(k, 6 + 36, 8), 0x0102030405060708ULL);  // config_hash
+  EXPECT_EQ(k[6 + 44], 1);                                // auth
+  EXPECT_EQ(k[6 + 45], 0x5a);                             // nonce
   EXPECT_EQ(k[6 + 76], 0xa5);
-  EXPECT_EQ(k[6 + 77], 1);     // name_bytes
+  EXPECT_EQ(field(k, 6 + 77, 2), 1u);  // name_bytes
   EXPECT_EQ(k[6 + 79], 'n');
   Proof proof;
   proof.mac[0] = 0x11;
@@ -101,16 +106,13 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   cam.frame = 0x01020304;
   cam.eye[0] = 1.0;  // 0x3ff0000000000000
   const auto c = encode(cam);
-  EXPECT_EQ(c[2], 101);  // payload length
-  EXPECT_EQ(c[6], 0x04);
-  EXPECT_EQ(c[9], 0x01);
-  EXPECT_EQ(c[6 + 4 + 7], 0x3f);
-  EXPECT_EQ(c[6 + 4 + 6], 0xf0);
+  EXPECT_EQ(field(c, 2, 4), 101u);  // payload length
+  EXPECT_EQ(field(c, 6, 4), 0x01020304u);
+  EXPECT_EQ(field(c, 6 + 4, 8), 0x3ff0000000000000ULL);
 
   const auto d = encode(NodeDiff{5, {0xaabbccdd}, {}});
-  EXPECT_EQ(d[6 + 4], 1);  // added_count
-  EXPECT_EQ(d[6 + 12], 0xdd);
-  EXPECT_EQ(d[6 + 15], 0xaa);
+  EXPECT_EQ(field(d, 6 + 4, 4), 1u);  // added_count
+  EXPECT_EQ(field(d, 6 + 12, 4), 0xaabbccddu);
 
   EndOfFrame eof;
   eof.triangles = 0x0102030405060708ULL;
@@ -119,16 +121,12 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   eof.or_tail_cpu_us = 0x31323334;
   eof.or_tail_us = 0x41424344;
   const auto e = encode(eof);
-  EXPECT_EQ(e[2], 68);  // payload length
-  EXPECT_EQ(e[6 + 44], 0x08);
-  EXPECT_EQ(e[6 + 51], 0x01);
-  EXPECT_EQ(e[6 + 52], 0x14);  // hc_cpu_us
-  EXPECT_EQ(e[6 + 55], 0x11);
-  EXPECT_EQ(e[6 + 56], 0x24);  // or_cpu_us
-  EXPECT_EQ(e[6 + 60], 0x34);  // or_tail_cpu_us
-  EXPECT_EQ(e[6 + 63], 0x31);
-  EXPECT_EQ(e[6 + 64], 0x44);  // or_tail_us
-  EXPECT_EQ(e[6 + 67], 0x41);
+  EXPECT_EQ(field(e, 2, 4), 68u);  // payload length
+  EXPECT_EQ(field(e, 6 + 44, 8), 0x0102030405060708ULL);  // triangles
+  EXPECT_EQ(field(e, 6 + 52, 4), 0x11121314u);            // hc_cpu_us
+  EXPECT_EQ(field(e, 6 + 56, 4), 0x21222324u);            // or_cpu_us
+  EXPECT_EQ(field(e, 6 + 60, 4), 0x31323334u);            // or_tail_cpu_us
+  EXPECT_EQ(field(e, 6 + 64, 4), 0x41424344u);            // or_tail_us
 }
 
 TEST(Wire, EveryTruncationOfEveryMessageIsRejected) {

@@ -17,6 +17,7 @@
 #include "common/error.hpp"
 #include "common/scene_io.hpp"
 #include "common/scene_setup.hpp"
+#include "scratch_util.hpp"
 
 using namespace occ;
 using nlohmann::json;
@@ -103,16 +104,9 @@ std::vector<unsigned char> glb_bytes(Gltf g) {
   return out;
 }
 
-// Per-test scratch directory (tests may run in parallel processes).
-class GltfFiles : public ::testing::Test {
+// Writes and loads files in a scratch folder per test (dir_).
+class GltfFiles : public occtest::ScratchDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("occ_scene_" + std::to_string(getpid()) + "_" + info->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // Writes g as name (.glb container, or .gltf + name.bin) and returns the path.
   std::string write(const std::string& name, Gltf g) const {
     const fs::path path = dir_ / name;
@@ -138,8 +132,6 @@ class GltfFiles : public ::testing::Test {
         EXPECT_NE(msg.find(w), std::string::npos) << "'" << w << "' not in: " << msg;
     }
   }
-
-  fs::path dir_;
 };
 
 void expect_unit_normals(const Mesh& m) {

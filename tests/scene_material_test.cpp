@@ -6,20 +6,15 @@
 #include "common/error.hpp"
 #include "common/scene_io.hpp"
 #include "material_util.hpp"
+#include "scratch_util.hpp"
 
 using namespace occ;
 using namespace mattest;
 
 namespace {
 
-class MaterialFiles : public ::testing::Test {
+class MaterialFiles : public occtest::ScratchDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("occ_matscene_" + std::to_string(getpid()) + "_" + info->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   GltfBuilder builder() const { return GltfBuilder(dir_); }
   std::string write(GltfBuilder& b, const std::string& name = "m.glb") const { return b.write_glb(dir_ / name); }
 
@@ -35,7 +30,6 @@ class MaterialFiles : public ::testing::Test {
       for (const char* w : words) EXPECT_NE(msg.find(w), std::string::npos) << "'" << w << "' not in: " << msg;
     }
   }
-  fs::path dir_;
 };
 
 }  // namespace

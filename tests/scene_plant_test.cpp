@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -128,14 +129,29 @@ void write_bytes(const std::string& path, const std::vector<char>& bytes) {
   out.write(bytes.data(), std::streamsize(bytes.size()));
 }
 
+// A plant scene, its hierarchy (default parameters) and its scene cache, saved as path =
+// dir/p.scene (dir = cache_dir(name)) under key; error: what save_scene_cache said went wrong.
+struct SavedPlant {
+  Scene s;
+  Hierarchy h;
+  std::string dir, path;
+  uint64_t key = 0;
+  std::optional<std::string> error;
+};
+
+SavedPlant saved_plant(const std::string& spec, const std::string& name) {
+  SavedPlant p{load_scene(spec), {}, cache_dir(name), "", scene_cache_key(spec, {}), std::nullopt};
+  p.h = Hierarchy::build(p.s, {});
+  p.path = p.dir + "/p.scene";
+  p.error = save_scene_cache(p.path, p.key, p.s, p.h);
+  return p;
+}
+
 }  // namespace
 
 TEST(SceneCache, RoundTripRestoresTheSceneAndHierarchyExactly) {
-  Scene s = load_scene("plant:0.05");
-  const Hierarchy h = Hierarchy::build(s, {});
-  const std::string dir = cache_dir("roundtrip"), path = dir + "/p.scene";
-  const uint64_t key = scene_cache_key("plant:0.05", {});
-  ASSERT_FALSE(save_scene_cache(path, key, s, h).has_value());
+  const auto [s, h, dir, path, key, error] = saved_plant("plant:0.05", "roundtrip");
+  ASSERT_FALSE(error.has_value()) << *error;
   std::string why;
   auto back = load_scene_cache(path, key, &why);
   ASSERT_TRUE(back.has_value()) << why;
@@ -169,11 +185,8 @@ TEST(SceneCache, RoundTripRestoresTheSceneAndHierarchyExactly) {
 }
 
 TEST(SceneCache, CorruptTruncatedOrWrongVersionFilesAreRejectedAndRebuiltByName) {
-  Scene s = load_scene("plant:0.02");
-  const Hierarchy h = Hierarchy::build(s, {});
-  const std::string dir = cache_dir("corrupt"), path = dir + "/p.scene";
-  const uint64_t key = scene_cache_key("plant:0.02", {});
-  ASSERT_FALSE(save_scene_cache(path, key, s, h).has_value());
+  const auto [s, h, dir, path, key, error] = saved_plant("plant:0.02", "corrupt");
+  ASSERT_FALSE(error.has_value()) << *error;
   const std::vector<char> good = file_bytes(path);
   std::string why;
   for (size_t len : {size_t(0), size_t(7), size_t(20), size_t(35), size_t(36), good.size() / 2, good.size() - 1}) {

@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <cstdlib>
+#include <optional>
 #include <regex>
 #include <set>
 
@@ -80,57 +81,74 @@ bool wait_for(const std::function<bool()>& ok, std::chrono::milliseconds timeout
   return true;
 }
 
-}  // namespace
+// Each test under its own Xvfb, whose display the processes it starts use (DISPLAY), with a
+// fresh folder dir_; skipped (with a message) without Xvfb or xdotool.
+class Window : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (which("Xvfb").empty() || which("xdotool").empty())
+      GTEST_SKIP() << "needs Xvfb and xdotool (Debian packages xvfb, xdotool): not installed";
+    dir_ = fresh_dir(std::string("window_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    x_.emplace(dir_);
+    ASSERT_TRUE(x_->ok()) << "Xvfb did not start: " << x_->log();
+    ::setenv("DISPLAY", x_->display().c_str(), 1);  // inherited by the processes the test starts
+  }
+  // The render client's window (xdotool search), under the pointer and focused: its id ("" if none).
+  std::string focused_window() const {
+    std::string id = xdotool(dir_, {"search", "--sync", "--name", "occswitch"});
+    id = id.substr(0, id.find('\n'));
+    if (!id.empty()) {
+      xdotool(dir_, {"mousemove", "--window", id, "64", "48"});
+      xdotool(dir_, {"windowfocus", id});
+    }
+    return id;
+  }
 
-TEST(Window, DriveRecordScreenshotQuitAndReplay) {
-  if (which("Xvfb").empty() || which("xdotool").empty())
-    GTEST_SKIP() << "needs Xvfb and xdotool (Debian packages xvfb, xdotool): not installed";
-  const fs::path dir = fresh_dir("window");
-  Xvfb x(dir);
-  ASSERT_TRUE(x.ok()) << "Xvfb did not start: " << x.log();
-  ::setenv("DISPLAY", x.display().c_str(), 1);  // inherited by the processes below
+  fs::path dir_;
+  std::optional<Xvfb> x_;
+};
 
-  const fs::path out = dir / "win", rec = dir / "rec.csv";
+// (The tests stay in this namespace: there the fixture's name hides X11's ::Window.)
+
+TEST_F(Window, DriveRecordScreenshotQuitAndReplay) {
+  const fs::path out = dir_ / "win", rec = dir_ / "rec.csv";
   std::vector<std::string> common = {"--scene", kScene, "--camera-mode", "latest", "--timeout-ms", "20000"};
   common.insert(common.end(), kView.begin(), kView.end());
   auto args = [&](std::vector<std::string> a) {
     a.insert(a.end(), common.begin(), common.end());
     return a;
   };
-  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (dir / "n0.port").string()}), dir / "node0.log");
-  const int p0 = wait_port(dir / "n0.port", n0);
+  Proc n0(args({bin("switch_node"), "--id", "0", "--port-file", (dir_ / "n0.port").string()}), dir_ / "node0.log");
+  const int p0 = wait_port(dir_ / "n0.port", n0);
   ASSERT_GT(p0, 0) << n0.log();
   Proc n1(args({bin("switch_node"), "--id", "1", "--peer", "127.0.0.1:" + std::to_string(p0), "--port-file",
-                (dir / "n1.port").string()}),
-          dir / "node1.log");
-  const int p1 = wait_port(dir / "n1.port", n1);
+                (dir_ / "n1.port").string()}),
+          dir_ / "node1.log");
+  const int p1 = wait_port(dir_ / "n1.port", n1);
   ASSERT_GT(p1, 0) << n1.log();
   Proc rvg(args({bin("render_client"), "--window", "--record", rec.string(), "--out", out.string(), "--no-images",
                  "--connect", "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}),
-           dir / "render_client.log");
+           dir_ / "render_client.log");
   ASSERT_TRUE(wait_for([&] { return rvg.log().find("connected to switch node") != std::string::npos || !rvg.running(); }, 60s))
       << rvg.log();
   ASSERT_TRUE(rvg.running()) << rvg.log();
 
   // The window, under the pointer and focused; then W held, a drag to the right, Right, P, Esc.
-  std::string id = xdotool(dir, {"search", "--sync", "--name", "occswitch"});
-  id = id.substr(0, id.find('\n'));
+  const std::string id = focused_window();
   ASSERT_FALSE(id.empty());
-  xdotool(dir, {"mousemove", "--window", id, "64", "48"});
-  xdotool(dir, {"windowfocus", id});
   std::this_thread::sleep_for(500ms);
-  xdotool(dir, {"keydown", "w", "sleep", "0.4", "keyup", "w"});
-  xdotool(dir, {"mousedown", "1", "mousemove_relative", "--", "15", "0", "mousemove_relative", "--", "15", "5",
+  xdotool(dir_, {"keydown", "w", "sleep", "0.4", "keyup", "w"});
+  xdotool(dir_, {"mousedown", "1", "mousemove_relative", "--", "15", "0", "mousemove_relative", "--", "15", "5",
                 "mouseup", "1"});
-  xdotool(dir, {"key", "Right"});
+  xdotool(dir_, {"key", "Right"});
   std::this_thread::sleep_for(1000ms);  // frames with the new camera arrive and are shown
-  xdotool(dir, {"key", "p"});
+  xdotool(dir_, {"key", "p"});
   ASSERT_TRUE(wait_for([&] { return rvg.log().find("screenshot ") != std::string::npos || !rvg.running(); }, 10s))
       << rvg.log();
   // O: the culling overlay, then a second screenshot (with it).
-  xdotool(dir, {"key", "o"});
+  xdotool(dir_, {"key", "o"});
   std::this_thread::sleep_for(1000ms);
-  xdotool(dir, {"key", "p"});
+  xdotool(dir_, {"key", "p"});
   ASSERT_TRUE(wait_for(
       [&] {
         const std::string l = rvg.log();
@@ -138,7 +156,7 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
       },
       10s))
       << rvg.log();
-  xdotool(dir, {"key", "Escape"});
+  xdotool(dir_, {"key", "Escape"});
 
   EXPECT_EQ(rvg.wait(30s), 0) << rvg.log();
   EXPECT_EQ(n0.wait(30s), 0) << n0.log();
@@ -168,12 +186,12 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
 
   // Replaying the recording gives the frame the screenshot shows.
   Proc ref({bin("render_client"), "--reference", "--scene", kScene, "--path", rec.string(), "--out",
-            (dir / "replay").string(), kView[0], kView[1], kView[2], kView[3]},
-           dir / "replay.log");
+            (dir_ / "replay").string(), kView[0], kView[1], kView[2], kView[3]},
+           dir_ / "replay.log");
   ASSERT_EQ(ref.wait(120s), 0) << ref.log();
   char name[32];
   std::snprintf(name, sizeof name, "frame_%05zu.png", index);
-  const occ::Image replay = occ::read_png((dir / "replay" / name).string());
+  const occ::Image replay = occ::read_png((dir_ / "replay" / name).string());
   ASSERT_EQ(replay.rgba.size(), shot.rgba.size());
   size_t differing = 0;
   for (size_t p = 0; p < shot.rgba.size(); p += 4)
@@ -194,7 +212,7 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
   const size_t index2 = std::stoul(m2[2].str());
   ASSERT_LT(index2, cams.size());
   std::snprintf(name, sizeof name, "frame_%05zu.png", index2);
-  const occ::Image plain = occ::read_png((dir / "replay" / name).string());
+  const occ::Image plain = occ::read_png((dir_ / "replay" / name).string());
   ASSERT_EQ(plain.rgba.size(), tinted.rgba.size());
   size_t tinted_px = 0, other = 0;
   for (size_t p = 0; p < tinted.rgba.size(); p += 4) {
@@ -209,33 +227,24 @@ TEST(Window, DriveRecordScreenshotQuitAndReplay) {
 
 // The window manager's close button (WM_DELETE_WINDOW) quits cleanly, and a movement key takes
 // over a playing path (reference renderer: same viewer as the cluster).
-TEST(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
-  if (which("Xvfb").empty() || which("xdotool").empty())
-    GTEST_SKIP() << "needs Xvfb and xdotool (Debian packages xvfb, xdotool): not installed";
-  const fs::path dir = fresh_dir("window_close");
-  Xvfb x(dir);
-  ASSERT_TRUE(x.ok()) << "Xvfb did not start: " << x.log();
-  ::setenv("DISPLAY", x.display().c_str(), 1);
-  const fs::path rec = dir / "rec.csv";
+TEST_F(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
+  const fs::path rec = dir_ / "rec.csv";
   Proc ref({bin("render_client"), "--reference", "--window", "--scene", kScene, "--path", "walk:20000", "--record",
             rec.string(), kView[0], kView[1], kView[2], kView[3]},
-           dir / "reference.log");
-  std::string id = xdotool(dir, {"search", "--sync", "--name", "occswitch"});
-  id = id.substr(0, id.find('\n'));
+           dir_ / "reference.log");
+  const std::string id = focused_window();
   ASSERT_FALSE(id.empty());
-  xdotool(dir, {"mousemove", "--window", id, "64", "48"});
-  xdotool(dir, {"windowfocus", id});
   // The window opens before the scene loads: let the path play a little first.
   ASSERT_TRUE(wait_for([&] { return ref.log().find("GL_RENDERER") != std::string::npos || !ref.running(); }, 60s))
       << ref.log();
   std::this_thread::sleep_for(500ms);
-  xdotool(dir, {"key", "a"});
+  xdotool(dir_, {"key", "a"});
   ASSERT_TRUE(wait_for([&] { return ref.log().find("you took over") != std::string::npos || !ref.running(); }, 10s))
       << ref.log();
   std::this_thread::sleep_for(300ms);
 
   // What a window manager sends when the close button is clicked.
-  Display* dpy = XOpenDisplay(x.display().c_str());
+  Display* dpy = XOpenDisplay(x_->display().c_str());
   ASSERT_NE(dpy, nullptr);
   XEvent ev{};
   ev.xclient.type = ClientMessage;
@@ -262,3 +271,5 @@ TEST(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
   EXPECT_LT(glm::dot(cams.back().eye - cams[k - 1].eye, cams[k - 1].right()), 0.0);
   EXPECT_GT(glm::length(cams.back().eye - cams[k - 1].eye), 1e-3);
 }
+
+}  // namespace
