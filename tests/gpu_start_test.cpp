@@ -1,9 +1,14 @@
 // Issue 34: the binaries start with only EGL present. No binary links OSMesa (and through it
 // libLLVM) or Xlib; with OSMesa made unloadable (OCC_OSMESA_LIBRARY naming a file that does not
 // exist) a render still goes through EGL with the same frames, and asking for OSMesa, or for a
-// window without Xlib (OCC_X11_LIBRARY), fails with one error line naming the library.
+// window without Xlib (OCC_X11_LIBRARY), fails with one error line naming the library. And the
+// prepared GPU run (scripts/gpu_bundle.sh, run_gpu.sh) end to end on llvmpipe.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+
+#include <iostream>
+#include <map>
+#include <sstream>
 
 #include "integration_util.hpp"
 
@@ -77,4 +82,71 @@ TEST(GpuStart, WindowWithoutXlibFailsWithOneErrorNamingIt) {
   // Any DISPLAY: the library is loaded before the display is opened.
   expect_one_error(reference_with_env(dir, {"OCC_X11_LIBRARY=" + kMissing, "DISPLAY=:99"}, {"--window"}),
                    {"--window: cannot load Xlib " + kMissing, "OCC_X11_LIBRARY", "libX11"}, {.code = 1});
+}
+
+// Issue 34 item 3: scripts/gpu_bundle.sh, then the bundle's run_gpu.sh end to end on llvmpipe in a
+// folder that holds nothing else, with a bare environment (PATH without the build, no
+// LD_LIBRARY_PATH, a fresh HOME), through the bundle's own libglvnd and glibc (--libs bundled):
+// refused without --allow-software; with it, one table whose culling methods and cluster have no
+// wrong pixels against brute force.
+TEST(GpuBundle, RunsEndToEndOnASoftwareRenderer) {
+  const fs::path dir = fresh_dir("gpu_bundle");
+  const fs::path bundle = dir / "bundle", home = dir / "home", work = dir / "work";
+  fs::create_directories(home);
+  fs::create_directories(work);
+  auto bare = [&](const std::vector<std::string>& env, const std::vector<std::string>& cmd) {
+    std::vector<std::string> a = {"/usr/bin/env", "-i", "PATH=/usr/bin:/bin", "HOME=" + home.string(), "LP_NUM_THREADS=0"};
+    a.insert(a.end(), env.begin(), env.end());
+    a.insert(a.end(), cmd.begin(), cmd.end());
+    return a;
+  };
+  const Outcome made = run_to_end(bare({std::string("OCC_BIN=") + OCC_BIN_DIR, std::string("OCC_SHARED_DIR=") + OCC_SHARED_DIR},
+                                       {"/bin/bash", std::string(OCC_SOURCE_DIR) + "/scripts/gpu_bundle.sh", bundle.string()}),
+                                  dir / "bundle.log", 120s);
+  ASSERT_EQ(made.code, 0) << made.log;
+  uintmax_t bytes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(bundle)) {
+    if (!e.is_regular_file()) continue;
+    bytes += e.file_size();
+    const std::string name = e.path().filename().string();
+    for (const char* lib : {"libOSMesa", "libLLVM", "libX11", "libEGL_nvidia", "libEGL_mesa"})
+      EXPECT_EQ(name.find(lib), std::string::npos) << e.path();
+  }
+  EXPECT_LT(bytes, 60u << 20);
+  for (const char* f : {"run_gpu.sh", "bin/render_client", "bin/switch_node", "bin/frame_diff", "scripts/cluster.sh",
+                        "lib/glvnd/libEGL.so.1", "lib/glibc/libc.so.6", "lib/libstdc++.so.6"})
+    EXPECT_TRUE(fs::exists(bundle / f)) << f;
+  const std::string run_gpu = (bundle / "run_gpu.sh").string();
+
+  const Outcome refused = run_to_end(bare({}, {run_gpu, "--quick", "--out", (work / "refused").string()}),
+                                     dir / "refused.log", 120s);
+  expect_one_error(refused, {"software renderer, not a GPU", "--allow-software"}, {.code = 1});
+
+  const Outcome ran = run_to_end(
+      bare({}, {run_gpu, "--allow-software", "--quick", "--libs", "bundled", "--out", (work / "run").string()}),
+      dir / "run.log", 600s);
+  ASSERT_EQ(ran.code, 0) << ran.log;
+  EXPECT_NE(ran.log.find("its libglvnd, its glibc"), std::string::npos) << ran.log;
+  const std::string table = read_file(work / "run" / "table.txt");
+  std::cout << table;
+  std::map<std::string, std::vector<std::string>> rows;  // method -> the row's last six columns
+  std::istringstream in(table);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("plant:1 ", 0) != 0) continue;
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) w.push_back(x);
+    ASSERT_GE(w.size(), 9u) << line;
+    std::string method;
+    for (size_t i = 2; i + 6 < w.size(); ++i) method += (method.empty() ? "" : " ") + w[i];
+    rows[method] = std::vector<std::string>(w.end() - 6, w.end());
+  }
+  ASSERT_EQ(rows.size(), 4u) << table;
+  EXPECT_EQ(rows["brute force"][3], "-") << table;
+  for (const char* m : {"frustum", "chc", "cluster (3 proc)"}) {
+    ASSERT_TRUE(rows.count(m)) << m << "\n" << table;
+    EXPECT_EQ(rows[m][3], "0") << m << ": wrong pixels\n" << table;
+    EXPECT_NE(rows[m][0], "n/a") << m << "\n" << table;
+    EXPECT_NE(rows[m][5], "n/a") << m << "\n" << table;
+  }
 }
