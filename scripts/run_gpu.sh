@@ -16,6 +16,8 @@
 #   run_gpu.sh [--allow-software] [--quick] [--scenes S,S] [--viewports WxH,WxH] [--frames N]
 #              [--image-frames K] [--out DIR] [--cache DIR] [--libs auto|bundled] [--hc-test T]
 #
+# --scenes: any --scene specs (default plant:13,plant:80), or a shared scene by its folder
+# (ReciprocatingSaw, bim/schependomlaan: the bundle's scenes/, or ../shared/scenes in a checkout).
 # --frames N: frames of the walk path that are timed (default 200); --image-frames K (default
 # 10): K of them, evenly spaced, drawn with images. --quick: plant:1 at 256x256, 12 frames, 3 with
 # images (a test on a software renderer). --out DIR (default ./gpu_run): every run's stats.csv and
@@ -152,21 +154,32 @@ run_one() {
   fi
 }
 
+# A shared scene by its folder's name (--scenes ReciprocatingSaw,bim/schependomlaan): its one glTF file.
+if [ $bundle = 1 ]; then scenes_dir=$root/scenes; else scenes_dir=${OCC_SHARED_DIR:-$root/../shared}/scenes; fi
+scene_file() {
+  local files=()
+  [ -d "$scenes_dir/$1" ] && files=("$scenes_dir/$1"/*.gltf "$scenes_dir/$1"/*.glb)
+  local f found=""
+  for f in "${files[@]}"; do [ -f "$f" ] && found=$f; done
+  echo "${found:-$1}"
+}
+
 rows=()
-for scene in "${scene_list[@]}"; do
+for name in "${scene_list[@]}"; do
+  scene=$(scene_file "$name")
   t0=$SECONDS
-  log "$scene: building (or loading from $cache)"
-  scene_dir=$out/${scene//[:\/]/_}
+  log "$name: building (or loading from $cache)"
+  scene_dir=$out/${name//[:\/]/_}
   mkdir -p "$scene_dir/build"
   "$BIN/render_client" --reference --scene "$scene" --path walk:1 --width 64 --height 64 --no-images \
     --lod-cache "$cache" --out "$scene_dir/build" >"$scene_dir/build/log.txt" 2>&1 ||
     fail "$scene: cannot build the scene (log: $scene_dir/build/log.txt): $(first_error "$scene_dir/build/log.txt")"
-  log "$scene: ready in $((SECONDS - t0)) s ($(grep -m 1 -o '[0-9.]* M triangles' "$scene_dir/build/log.txt"))"
+  log "$name: ready in $((SECONDS - t0)) s ($(grep -m 1 -o '[0-9.]* M triangles' "$scene_dir/build/log.txt"))"
   for vp in "${viewport_list[@]}"; do
     w=${vp%x*} h=${vp#*x}
     cdir=$scene_dir/$vp
     for kind in none frustum chc cluster; do
-      log "$scene $vp: $kind"
+      log "$name $vp: $kind"
       gpu_start "$cdir/$kind.gpu"
       run_one "$kind" "$cdir/$kind" "walk:$frames" 0
       gpu_mb=$(gpu_stop "$cdir/$kind.gpu")
@@ -193,8 +206,8 @@ for scene in "${scene_list[@]}"; do
         wrong=$(tail -n 1 "$cdir/$kind.wrong.txt" | grep -o 'differing_pixels=[0-9]*' | cut -d= -f2)
         rm -f "$cdir/${kind}_images"/frame_*.png
       fi
-      case $kind in none) name="brute force" ;; cluster) name="cluster (3 proc)" ;; *) name=$kind ;; esac
-      rows+=("$(printf '%-10s %-10s %-17s %9s %9s %8s %9s %8s %8s' "$scene" "$vp" "$name" "$med" "$p99" "$fps" "$wrong" "$gpu_mb" "${host:-n/a}")")
+      case $kind in none) label="brute force" ;; cluster) label="cluster (3 proc)" ;; *) label=$kind ;; esac
+      rows+=("$(printf '%-16s %-10s %-17s %9s %9s %8s %9s %8s %8s' "$name" "$vp" "$label" "$med" "$p99" "$fps" "$wrong" "$gpu_mb" "${host:-n/a}")")
     done
     rm -f "$cdir/none_images"/frame_*.png
   done
@@ -203,7 +216,7 @@ done
 {
   echo "occswitch GPU run $(date -u +%Y-%m-%dT%H:%M:%SZ): $gl_line"
   echo "$frames frames of walk:$frames per row (frame 0 left out of the times); wrong pixels: $image_frames of them against brute force"
-  printf '%-10s %-10s %-17s %9s %9s %8s %9s %8s %8s\n' scene viewport method median_ms p99_ms fps wrong_px gpu_mb host_mb
+  printf '%-16s %-10s %-17s %9s %9s %8s %9s %8s %8s\n' scene viewport method median_ms p99_ms fps wrong_px gpu_mb host_mb
   printf '%s\n' "${rows[@]}"
   echo "total $((SECONDS - start)) s"
 } | tee "$out/table.txt"
