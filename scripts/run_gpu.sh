@@ -19,11 +19,12 @@
 # --scenes: any --scene specs (default plant:13,plant:80), or a shared scene by its folder
 # (ReciprocatingSaw, bim/schependomlaan: the bundle's scenes/, or ../shared/scenes in a checkout).
 # --frames N: frames of the walk path that are timed (default 200); --image-frames K (default
-# 10): K of them, evenly spaced, drawn with images. --quick: plant:1 at 256x256, 12 frames, 3 with
-# images (a test on a software renderer). --out DIR (default ./gpu_run): every run's stats.csv and
-# logs, and table.txt. --cache DIR (default OUT/cache): the scene cache (plant:80: about 3 GB).
-# --hc-test T goes to the switch nodes (switch_node --help). --libs bundled: the bundle's libglvnd
-# and glibc as well (default auto: only where the machine has no libEGL.so.1, or an older glibc).
+# 10): K of them, evenly spaced, drawn with images. --quick (flags after it override it): plant:1
+# at 256x256, 12 frames, 3 with images (a test on a software renderer). --out DIR (default
+# ./gpu_run): every run's stats.csv and logs, and table.txt. --cache DIR (default OUT/cache): the
+# scene cache (plant:80: about 3 GB). --hc-test T goes to the switch nodes (switch_node --help).
+# --libs bundled: the bundle's libglvnd and glibc as well (default auto: only where the machine has
+# no libEGL.so.1, or an older glibc).
 # When NVIDIA's libEGL_nvidia.so.0 is installed but no EGL vendor file names it, one is written
 # into OUT. Exit 1 when a run fails (naming its log), 2 on usage errors.
 set -uo pipefail
