@@ -73,21 +73,26 @@ mkdir -p "$cache" || fail "cannot create $cache"
 start=$SECONDS
 
 # The bundle's libglvnd and glibc where this machine lacks them (the bin/ wrappers read these).
-ldconfig_list() { { ldconfig -p || /sbin/ldconfig -p; } 2>/dev/null; }
+ld_cache=$({ ldconfig -p || /sbin/ldconfig -p; } 2>/dev/null)  # the libraries the loader finds by name
 if [ $bundle = 1 ]; then
   have_glibc=$(getconf GNU_LIBC_VERSION 2>/dev/null | awk '{ print $2 }')
   want_glibc=$(cat "$root/lib/glibc/VERSION")
   older=$([ -n "$have_glibc" ] && printf '%s\n%s\n' "$have_glibc" "$want_glibc" | sort -V | head -n 1)
-  if [ "$libs" = bundled ] || ! ldconfig_list | grep -q 'libEGL\.so\.1 '; then export OCC_BUNDLE_GLVND=1; fi
+  used="the bundle's"
+  if [ "$libs" = bundled ] || ! grep -q 'libEGL\.so\.1 ' <<<"$ld_cache"; then
+    export OCC_BUNDLE_GLVND=1
+    used+=", its libglvnd"
+  fi
   if [ "$libs" = bundled ] || [ -z "$have_glibc" ] || { [ "$older" = "$have_glibc" ] && [ "$have_glibc" != "$want_glibc" ]; }; then
     export OCC_BUNDLE_GLIBC=1
+    used+=", its glibc $want_glibc (machine: ${have_glibc:-unknown})"
   fi
-  log "bundle $(head -n 1 "$root/BUILD_INFO"); libraries: bundle's$([ -n "${OCC_BUNDLE_GLVND:-}" ] && echo ", its libglvnd")$([ -n "${OCC_BUNDLE_GLIBC:-}" ] && echo ", its glibc $want_glibc (machine: ${have_glibc:-unknown})")"
+  log "bundle $(head -n 1 "$root/BUILD_INFO"); libraries: $used"
 fi
 
 # NVIDIA's EGL library without a vendor file naming it: libglvnd would not find it.
 vendor_dirs=${__EGL_VENDOR_LIBRARY_DIRS:-/etc/glvnd/egl_vendor.d:/usr/share/glvnd/egl_vendor.d}
-nvidia_lib=$(ldconfig_list | awk '/libEGL_nvidia\.so\.0 / { print $NF; exit }')
+nvidia_lib=$(awk '/libEGL_nvidia\.so\.0 / { print $NF; exit }' <<<"$ld_cache")
 if [ -n "$nvidia_lib" ]; then
   named=0
   IFS=: read -ra vdirs <<<"$vendor_dirs"
