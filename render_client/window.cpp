@@ -1,9 +1,5 @@
 #include "render_client/window.hpp"
 
-#include <X11/XKBlib.h>
-#include <X11/Xatom.h>
-#include <X11/Xlib.h>
-#include <X11/Xutil.h>
 #include <X11/keysym.h>
 #include <poll.h>
 #include <unistd.h>
@@ -15,6 +11,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "render_client/x11_lib.hpp"  // last: Xlib's macros
+
 namespace occ {
 
 namespace {
@@ -24,11 +22,12 @@ constexpr int kHudHeight = 16;
 // handler would exit(1); this one ends the run like the close button.
 std::atomic<bool> g_window_gone{false};
 int on_x_error(Display* dpy, XErrorEvent* e) {
+  const X11Lib& xl = x11();
   if (e->error_code == BadWindow || e->error_code == BadDrawable) {
     g_window_gone = true;
   } else {
     char text[256];
-    XGetErrorText(dpy, e->error_code, text, sizeof text);
+    xl.XGetErrorText(dpy, e->error_code, text, sizeof text);
     std::fprintf(stderr, "render_client: X error (ignored): %s (request %d)\n", text, int(e->request_code));
   }
   return 0;
@@ -60,6 +59,7 @@ WinKey key_of(KeySym k) {
 }  // namespace
 
 struct X11Window::Impl {
+  const X11Lib& xl = x11();
   Display* dpy = nullptr;
   ::Window win = 0;
   GC gc = nullptr;
@@ -76,19 +76,19 @@ struct X11Window::Impl {
       ximage->data = nullptr;
       XDestroyImage(ximage);
     }
-    if (gc) XFreeGC(dpy, gc);
-    if (win) XDestroyWindow(dpy, win);
-    if (dpy) XCloseDisplay(dpy);
+    if (gc) xl.XFreeGC(dpy, gc);
+    if (win) xl.XDestroyWindow(dpy, win);
+    if (dpy) xl.XCloseDisplay(dpy);
   }
 
   void paint() {
     if (g_window_gone) return;
-    if (have_frame) XPutImage(dpy, win, gc, ximage, 0, 0, 0, 0, unsigned(width), unsigned(height));
-    XSetForeground(dpy, gc, BlackPixel(dpy, DefaultScreen(dpy)));
-    XFillRectangle(dpy, win, gc, 0, height, unsigned(width), kHudHeight);
-    XSetForeground(dpy, gc, WhitePixel(dpy, DefaultScreen(dpy)));
-    XDrawString(dpy, win, gc, 3, height + kHudHeight - 4, hud.data(), int(hud.size()));
-    XFlush(dpy);
+    if (have_frame) xl.XPutImage(dpy, win, gc, ximage, 0, 0, 0, 0, unsigned(width), unsigned(height));
+    xl.XSetForeground(dpy, gc, BlackPixel(dpy, DefaultScreen(dpy)));
+    xl.XFillRectangle(dpy, win, gc, 0, height, unsigned(width), kHudHeight);
+    xl.XSetForeground(dpy, gc, WhitePixel(dpy, DefaultScreen(dpy)));
+    xl.XDrawString(dpy, win, gc, 3, height + kHudHeight - 4, hud.data(), int(hud.size()));
+    xl.XFlush(dpy);
   }
 };
 
@@ -96,17 +96,24 @@ X11Window::X11Window(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 X11Window::~X11Window() = default;
 
 std::unique_ptr<X11Window> X11Window::open(const std::string& title, int width, int height) {
+  const X11Lib& xl = []() -> const X11Lib& {  // one error naming libX11 when it is missing
+    try {
+      return x11();
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(std::string("--window: ") + e.what());
+    }
+  }();
   const char* name = std::getenv("DISPLAY");
   if (!name || !*name)
     throw std::runtime_error("--window: DISPLAY is not set: no X server to show the window on (run under X, ssh -X, "
                              "or Xvfb; or leave out --window and write frames with --out)");
   auto impl = std::make_unique<Impl>();
-  impl->dpy = XOpenDisplay(name);
+  impl->dpy = xl.XOpenDisplay(name);
   if (!impl->dpy)
     throw std::runtime_error(std::string("--window: cannot open X display '") + name +
                              "' (no X server there, or not allowed to connect)");
   Display* dpy = impl->dpy;
-  XSetErrorHandler(on_x_error);
+  xl.XSetErrorHandler(on_x_error);
   const int screen = DefaultScreen(dpy);
   impl->visual = DefaultVisual(dpy, screen);
   impl->depth = DefaultDepth(dpy, screen);
@@ -114,9 +121,9 @@ std::unique_ptr<X11Window> X11Window::open(const std::string& title, int width, 
   impl->height = height;
   if (impl->visual->c_class != TrueColor && impl->visual->c_class != DirectColor)
     throw std::runtime_error(std::string("--window: display '") + name + "' has no true-colour default visual");
-  impl->win = XCreateSimpleWindow(dpy, RootWindow(dpy, screen), 0, 0, unsigned(width), unsigned(height + kHudHeight), 0,
+  impl->win = xl.XCreateSimpleWindow(dpy, RootWindow(dpy, screen), 0, 0, unsigned(width), unsigned(height + kHudHeight), 0,
                                   BlackPixel(dpy, screen), BlackPixel(dpy, screen));
-  XSelectInput(dpy, impl->win,
+  xl.XSelectInput(dpy, impl->win,
                KeyPressMask | KeyReleaseMask | ButtonPressMask | ButtonReleaseMask | PointerMotionMask | ExposureMask |
                    FocusChangeMask | StructureNotifyMask);
   // Title: ASCII WM_NAME for old window managers, UTF-8 _NET_WM_NAME for the others.
@@ -124,28 +131,28 @@ std::unique_ptr<X11Window> X11Window::open(const std::string& title, int width, 
   for (unsigned char c : title)
     if (c < 0x80) ascii += char(c);
     else if (c >= 0xC0) ascii += '-';  // one '-' per non-ASCII character (the em dash)
-  XStoreName(dpy, impl->win, ascii.c_str());
-  XChangeProperty(dpy, impl->win, XInternAtom(dpy, "_NET_WM_NAME", False), XInternAtom(dpy, "UTF8_STRING", False), 8,
+  xl.XStoreName(dpy, impl->win, ascii.c_str());
+  xl.XChangeProperty(dpy, impl->win, xl.XInternAtom(dpy, "_NET_WM_NAME", False), xl.XInternAtom(dpy, "UTF8_STRING", False), 8,
                   PropModeReplace, reinterpret_cast<const unsigned char*>(title.data()), int(title.size()));
   XClassHint cls{const_cast<char*>("render_client"), const_cast<char*>("occswitch")};
-  XSetClassHint(dpy, impl->win, &cls);
-  XSizeHints* hints = XAllocSizeHints();
+  xl.XSetClassHint(dpy, impl->win, &cls);
+  XSizeHints* hints = xl.XAllocSizeHints();
   hints->flags = PMinSize | PMaxSize;
   hints->min_width = hints->max_width = width;
   hints->min_height = hints->max_height = height + kHudHeight;
-  XSetWMNormalHints(dpy, impl->win, hints);
-  XFree(hints);
-  impl->wm_delete = XInternAtom(dpy, "WM_DELETE_WINDOW", False);
-  XSetWMProtocols(dpy, impl->win, &impl->wm_delete, 1);
+  xl.XSetWMNormalHints(dpy, impl->win, hints);
+  xl.XFree(hints);
+  impl->wm_delete = xl.XInternAtom(dpy, "WM_DELETE_WINDOW", False);
+  xl.XSetWMProtocols(dpy, impl->win, &impl->wm_delete, 1);
   Bool supported = False;
-  XkbSetDetectableAutoRepeat(dpy, True, &supported);  // held keys: repeated presses, one release
-  impl->gc = XCreateGC(dpy, impl->win, 0, nullptr);
+  xl.XkbSetDetectableAutoRepeat(dpy, True, &supported);  // held keys: repeated presses, one release
+  impl->gc = xl.XCreateGC(dpy, impl->win, 0, nullptr);
   impl->pixels.assign(size_t(width) * height * 4, 0);
-  impl->ximage = XCreateImage(dpy, impl->visual, unsigned(impl->depth), ZPixmap, 0, impl->pixels.data(),
+  impl->ximage = xl.XCreateImage(dpy, impl->visual, unsigned(impl->depth), ZPixmap, 0, impl->pixels.data(),
                               unsigned(width), unsigned(height), 32, 0);
   if (!impl->ximage) throw std::runtime_error("--window: XCreateImage failed");
-  XMapWindow(dpy, impl->win);
-  XFlush(dpy);
+  xl.XMapWindow(dpy, impl->win);
+  xl.XFlush(dpy);
   return std::unique_ptr<X11Window>(new X11Window(std::move(impl)));
 }
 
@@ -181,7 +188,8 @@ void X11Window::redraw() { impl_->paint(); }
 
 std::vector<WindowEvent> X11Window::poll(int timeout_ms, int wake_fd) {
   Impl& m = *impl_;
-  if (!XPending(m.dpy)) {
+  const X11Lib& xl = m.xl;
+  if (!xl.XPending(m.dpy)) {
     pollfd fds[2] = {{ConnectionNumber(m.dpy), POLLIN, 0}, {wake_fd, POLLIN, 0}};
     ::poll(fds, wake_fd >= 0 ? 2 : 1, timeout_ms);
     if (wake_fd >= 0 && (fds[1].revents & POLLIN)) {
@@ -191,14 +199,14 @@ std::vector<WindowEvent> X11Window::poll(int timeout_ms, int wake_fd) {
     }
   }
   std::vector<WindowEvent> out;
-  while (XPending(m.dpy)) {
+  while (xl.XPending(m.dpy)) {
     XEvent ev;
-    XNextEvent(m.dpy, &ev);
+    xl.XNextEvent(m.dpy, &ev);
     using T = WindowEvent::Type;
     switch (ev.type) {
       case KeyPress:
       case KeyRelease:
-        out.push_back({ev.type == KeyPress ? T::key_down : T::key_up, key_of(XLookupKeysym(&ev.xkey, 0)), 0, 0, 0});
+        out.push_back({ev.type == KeyPress ? T::key_down : T::key_up, key_of(xl.XLookupKeysym(&ev.xkey, 0)), 0, 0, 0});
         break;
       case ButtonPress:
       case ButtonRelease:
@@ -224,7 +232,7 @@ std::vector<WindowEvent> X11Window::poll(int timeout_ms, int wake_fd) {
         break;
     }
   }
-  XSync(m.dpy, False);  // errors of what this poll and the last show() sent arrive now
+  xl.XSync(m.dpy, False);  // errors of what this poll and the last show() sent arrive now
   if (g_window_gone) out.push_back({WindowEvent::Type::close});
   return out;
 }

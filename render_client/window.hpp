@@ -2,6 +2,7 @@
 // strip under the image (XDrawString, the server's default font), and reports key, mouse and
 // close events. Rendering stays offscreen (GlContext); the window only displays pixels, so it
 // works on any X server (Xvfb, a remote display, a desktop) with no GL/window-system coupling.
+// Xlib is loaded when the first window opens (x11_lib.hpp): render_client starts without it.
 // Every call must come from one thread (the viewer's window thread, viewer.hpp).
 #pragma once
 #include <memory>
@@ -25,7 +26,8 @@ struct WindowEvent {
 class X11Window {
  public:
   // Opens $DISPLAY and maps a width x (height + HUD strip) window titled `title` (UTF-8).
-  // Throws std::runtime_error naming the display when there is none or it cannot be opened.
+  // Throws std::runtime_error naming the display when there is none or it cannot be opened, and
+  // "--window: cannot load Xlib libX11.so.6: ..." when Xlib is missing.
   static std::unique_ptr<X11Window> open(const std::string& title, int width, int height);
   ~X11Window();
   X11Window(const X11Window&) = delete;

@@ -74,3 +74,27 @@ TEST_P(GlContextBackend, CanBeMovedBetweenThreadsAndRecreated) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, GlContextBackend, testing::Values(GlBackend::Egl, GlBackend::OSMesa),
                          [](const auto& info) { return info.param == GlBackend::Egl ? "Egl" : "OSMesa"; });
+
+// The renderer class (issue 34): from GL_RENDERER and GL_VENDOR alone.
+TEST(RendererClass, SoftwareRasterisersAndGpus) {
+  EXPECT_EQ(classify_renderer("llvmpipe (LLVM 15.0.6, 256 bits)", "Mesa/X.org"), RendererClass::software);
+  EXPECT_EQ(classify_renderer("softpipe", "Mesa"), RendererClass::software);
+  EXPECT_EQ(classify_renderer("Software Rasterizer", "Mesa Project"), RendererClass::software);
+  EXPECT_EQ(classify_renderer("SwiftShader Device (Subzero)", "Google Inc."), RendererClass::software);
+  EXPECT_EQ(classify_renderer("NVIDIA H200/PCIe/SSE2", "NVIDIA Corporation"), RendererClass::hardware);
+  EXPECT_EQ(classify_renderer("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.6, DRM 3.54)", "AMD"),
+            RendererClass::hardware);
+  EXPECT_EQ(classify_renderer("Mesa Intel(R) UHD Graphics 630 (CFL GT2)", "Intel"), RendererClass::hardware);
+  EXPECT_STREQ(renderer_class_name(RendererClass::software), "software");
+  EXPECT_STREQ(renderer_class_name(RendererClass::hardware), "hardware");
+}
+
+TEST_P(GlContextBackend, KnowsItsRendererClass) {
+  auto ctx = GlContext::create(GetParam(), 8, 8);
+  EXPECT_FALSE(ctx->vendor().empty());
+  EXPECT_EQ(ctx->renderer_class(), classify_renderer(ctx->renderer(), ctx->vendor()));
+  // This machine has no GPU: llvmpipe on every back end.
+  if (ctx->renderer().find("llvmpipe") != std::string::npos) {
+    EXPECT_EQ(ctx->renderer_class(), RendererClass::software);
+  }
+}

@@ -14,7 +14,7 @@
 #include "common/image.hpp"
 #include "integration_util.hpp"
 
-#include <X11/Xlib.h>  // last: its macros (None, Bool, ...) would break the headers above
+#include "render_client/x11_lib.hpp"  // last: Xlib's macros (None, Bool, ...) would break the headers above
 
 using namespace occtest;
 using namespace std::chrono_literals;
@@ -244,18 +244,19 @@ TEST_F(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
   std::this_thread::sleep_for(300ms);
 
   // What a window manager sends when the close button is clicked.
-  Display* dpy = XOpenDisplay(x_->display().c_str());
+  const occ::X11Lib& xl = occ::x11();
+  Display* dpy = xl.XOpenDisplay(x_->display().c_str());
   ASSERT_NE(dpy, nullptr);
   XEvent ev{};
   ev.xclient.type = ClientMessage;
   ev.xclient.window = ::Window(std::stoul(id));
-  ev.xclient.message_type = XInternAtom(dpy, "WM_PROTOCOLS", False);
+  ev.xclient.message_type = xl.XInternAtom(dpy, "WM_PROTOCOLS", False);
   ev.xclient.format = 32;
-  ev.xclient.data.l[0] = long(XInternAtom(dpy, "WM_DELETE_WINDOW", False));
+  ev.xclient.data.l[0] = long(xl.XInternAtom(dpy, "WM_DELETE_WINDOW", False));
   ev.xclient.data.l[1] = CurrentTime;
-  XSendEvent(dpy, ev.xclient.window, False, NoEventMask, &ev);
-  XFlush(dpy);
-  XCloseDisplay(dpy);
+  xl.XSendEvent(dpy, ev.xclient.window, False, NoEventMask, &ev);
+  xl.XFlush(dpy);
+  xl.XCloseDisplay(dpy);
 
   EXPECT_EQ(ref.wait(30s), 0) << ref.log();
   std::smatch m;

@@ -77,6 +77,8 @@ GlContext::GlContext(std::unique_ptr<gl_detail::Surface> surface, int width, int
     throw std::runtime_error(std::string(surface_->name()) + ": OpenGL 4.5 required, got " +
                              version() + " (" + renderer() + ")");
 
+  renderer_class_ = classify_renderer(renderer(), vendor());
+
   gl_.CreateRenderbuffers(1, &color_rb_);
   gl_.NamedRenderbufferStorage(color_rb_, GL_RGBA8, width, height);
   // Depth is a texture, not a renderbuffer, so that compute shaders can read it (the HC depth
@@ -118,6 +120,10 @@ std::string GlContext::renderer() const {
 
 std::string GlContext::version() const {
   return reinterpret_cast<const char*>(gl_.GetString(GL_VERSION));
+}
+
+std::string GlContext::vendor() const {
+  return reinterpret_cast<const char*>(gl_.GetString(GL_VENDOR));
 }
 
 const char* GlContext::backend_name() const { return surface_->name(); }

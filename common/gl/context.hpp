@@ -1,6 +1,7 @@
 // A headless OpenGL 4.5 core context with its own offscreen framebuffer (no window system).
-// Back ends: EGL (Mesa surfaceless platform, else the EGL device platform: a GPU driver or
-// llvmpipe) and OSMesa as a fallback. The framebuffer object is RGBA8 colour plus
+// Back ends: EGL (the EGL device platform on a hardware GPU, else Mesa's surfaceless platform,
+// else a software device: llvmpipe) and OSMesa as a fallback, loaded at run time (dlopen) so the
+// binaries start with only EGL present. The framebuffer object is RGBA8 colour plus
 // GL_DEPTH_COMPONENT32F depth (a texture) and stays bound; reverse-Z is set up once for occ::Camera's
 // projection: glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE), depth test GL_GREATER, depth cleared
 // to 0 (= far). Depth clamp stays off: clamping would rasterise geometry in front of the near
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "common/gl/gl_api.hpp"
+#include "common/gl/renderer_class.hpp"
 #include "common/image.hpp"
 
 namespace occ {
@@ -29,7 +31,7 @@ class Surface;  // the window-system side of a back end (context_egl.cpp, contex
 class GlContext {
  public:
   // Creates the context, makes it current on the calling thread and binds a width x height
-  // framebuffer. Auto tries EGL (surfaceless, then device platform), then OSMesa. Throws
+  // framebuffer. Auto tries EGL (a GPU's device, surfaceless, a software device), then OSMesa. Throws
   // std::runtime_error listing every attempt's reason when none works, InputError for a size
   // outside 1..kMaxViewportPx.
   static std::unique_ptr<GlContext> create(GlBackend backend, int width, int height);
@@ -40,6 +42,8 @@ class GlContext {
   const GlApi& gl() const { return gl_; }
   std::string renderer() const;  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   std::string version() const;   // GL_VERSION
+  std::string vendor() const;    // GL_VENDOR
+  RendererClass renderer_class() const { return renderer_class_; }  // from GL_RENDERER, GL_VENDOR
   const char* backend_name() const;  // "egl-surfaceless", "egl-device", "osmesa"
   int width() const { return width_; }
   int height() const { return height_; }
@@ -68,6 +72,7 @@ class GlContext {
   GlApi gl_;
   int width_, height_;
   GLuint fbo_ = 0, color_rb_ = 0, depth_tex_ = 0;
+  RendererClass renderer_class_ = RendererClass::hardware;
 };
 
 }  // namespace occ

@@ -1,6 +1,7 @@
-// EGL back end: Mesa's surfaceless platform first, then every device of the EGL device
-// platform (a GPU driver, or Mesa's software device). Surfaceless contexts only
-// (EGL_KHR_surfaceless_context): GlContext renders into its own framebuffer object.
+// EGL back end: the EGL device platform's hardware devices first (a GPU driver), then Mesa's
+// surfaceless platform, then a software device (Mesa's llvmpipe). Surfaceless contexts only
+// (EGL_KHR_surfaceless_context): GlContext renders into its own framebuffer object. Linked
+// against libEGL alone (libglvnd's on Debian); GL entry points come from eglGetProcAddress.
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
@@ -8,6 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/gl/surface.hpp"
 
@@ -87,41 +89,70 @@ std::unique_ptr<Surface> create_on(EGLDisplay display, const char* name) {
   throw std::runtime_error("no OpenGL 4.5 core context: " + egl_error());
 }
 
+// The device platform's devices, hardware first: a device of Mesa's software rasteriser
+// (EGL_MESA_device_software) goes to `software`, every other one (a GPU driver) to `hardware`.
+void query_devices(const char* client, std::vector<EGLDeviceEXT>& hardware, std::vector<EGLDeviceEXT>& software,
+                   std::string& why) {
+  auto query = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+  auto device_string =
+      reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+  EGLDeviceEXT devices[16];
+  EGLint count = 0;
+  if (!has_extension(client, "EGL_EXT_platform_device") || !query) {
+    why += "; no EGL_EXT_platform_device / EGL_EXT_device_enumeration";
+    return;
+  }
+  if (!query(16, devices, &count) || count == 0) {
+    why += "; device platform: no devices";
+    return;
+  }
+  for (EGLint i = 0; i < count; ++i) {
+    // Without EGL_EXT_device_query a device cannot tell what it is: tried after surfaceless.
+    const char* ext = device_string ? device_string(devices[i], EGL_EXTENSIONS) : nullptr;
+    const bool is_software = !device_string || has_extension(ext, "EGL_MESA_device_software");
+    (is_software ? software : hardware).push_back(devices[i]);
+  }
+}
+
+// The first of `devices` that gives a context, or null (each failure appended to `why`).
+std::unique_ptr<Surface> create_on_devices(PFNEGLGETPLATFORMDISPLAYEXTPROC get_display,
+                                           const std::vector<EGLDeviceEXT>& devices, const char* kind,
+                                           std::string& why) {
+  for (size_t i = 0; i < devices.size(); ++i) {
+    try {
+      return create_on(get_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr), "egl-device");
+    } catch (const std::runtime_error& e) {
+      why += std::string("; ") + kind + " device " + std::to_string(i) + ": " + e.what();
+    }
+  }
+  return nullptr;
+}
+
 }  // namespace
 
+// A hardware GPU's device first (the EGL device platform: what a GPU machine with only its
+// driver and libglvnd has), then Mesa's surfaceless platform, then a software device.
 std::unique_ptr<Surface> create_egl_surface() {
   const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   auto get_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
       eglGetProcAddress("eglGetPlatformDisplayEXT"));
   if (!client || !get_display) throw std::runtime_error("EGL: no client extensions / eglGetPlatformDisplayEXT");
   std::string why;
+  std::vector<EGLDeviceEXT> hardware, software;
+  query_devices(client, hardware, software, why);
+  if (auto s = create_on_devices(get_display, hardware, "GPU", why)) return s;
   if (has_extension(client, "EGL_MESA_platform_surfaceless")) {
     try {
       return create_on(get_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr),
                        "egl-surfaceless");
     } catch (const std::runtime_error& e) {
-      why += std::string("surfaceless platform: ") + e.what();
+      why += std::string("; surfaceless platform: ") + e.what();
     }
   } else {
-    why += "no EGL_MESA_platform_surfaceless";
+    why += "; no EGL_MESA_platform_surfaceless";
   }
-  auto query_devices =
-      reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-  EGLDeviceEXT devices[16];
-  EGLint count = 0;
-  if (!has_extension(client, "EGL_EXT_platform_device") || !query_devices) {
-    why += "; no EGL_EXT_platform_device / EGL_EXT_device_enumeration";
-  } else if (!query_devices(16, devices, &count) || count == 0) {
-    why += "; device platform: no devices";
-  }
-  for (EGLint i = 0; i < count; ++i) {
-    try {
-      return create_on(get_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr), "egl-device");
-    } catch (const std::runtime_error& e) {
-      why += "; device " + std::to_string(i) + ": " + e.what();
-    }
-  }
-  throw std::runtime_error("EGL: " + why);
+  if (auto s = create_on_devices(get_display, software, "software", why)) return s;
+  throw std::runtime_error("EGL: " + why.substr(why.empty() ? 0 : 2));
 }
 
 }  // namespace occ::gl_detail

@@ -18,12 +18,14 @@ void add_view_options(Cli& cli, SceneOptions& scene, int* width, int* height, Gl
   cli.option("height", height, 16, kMaxViewportPx, "viewport height in pixels" + note);
   cli.choice<GlBackend>("gl", backend,
                         {{"auto", GlBackend::Auto}, {"egl", GlBackend::Egl}, {"osmesa", GlBackend::OSMesa}},
-                        "GL back end (auto: EGL, else OSMesa)");
+                        "GL back end (auto: EGL on a GPU's device, else Mesa's surfaceless EGL, else OSMesa)");
 }
 
 std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, int width, int height) {
   auto ctx = GlContext::create(backend, width, height);
-  std::cerr << who << ": GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << ")\n";
+  std::cerr << who << ": GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << "), GL_VERSION "
+            << ctx->version() << ", GL_VENDOR " << ctx->vendor() << ", " << renderer_class_name(ctx->renderer_class())
+            << " renderer\n";
   return ctx;
 }
 

@@ -1,6 +1,7 @@
 // What every GL process does first, written once: the scene, viewport and --gl flags, then the
 // scene (load_and_build), its renderables and a context with a renderer, announced on one line
-// each ("switch_node 0: GL_RENDERER llvmpipe (...) (egl-surfaceless)").
+// each ("switch_node 0: GL_RENDERER llvmpipe (...) (egl-surfaceless), GL_VERSION 4.5 (Core Profile)
+// Mesa 22.3.6, GL_VENDOR Mesa, software renderer").
 #pragma once
 #include <functional>
 #include <memory>
@@ -19,7 +20,9 @@ class Cli;
 void add_view_options(Cli& cli, SceneOptions& scene, int* width, int* height, GlBackend* backend,
                       const std::string& what = "");
 
-// Creates the context and prints "<who>: GL_RENDERER <renderer> (<back end>)" to stderr.
+// Creates the context and prints "<who>: GL_RENDERER <renderer> (<back end>), GL_VERSION <version>,
+// GL_VENDOR <vendor>, <software|hardware> renderer" to stderr: which GPU and driver, and the
+// renderer class (GlContext::renderer_class(); defaults chosen by it are a later step).
 std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, int width, int height);
 
 // A process's scene and GL state. The members refer to each other: keep the object in place.
