@@ -106,11 +106,7 @@ Hierarchy Hierarchy::build(Scene& scene, const BuildParams& params_in) {
   fh.u32(p.cluster_triangles);
   fh.u64(h.nodes_.size());
   for (const HNode& n : h.nodes_) {
-    fh.u32(n.parent);
-    fh.u32(n.first_child);
-    fh.u32(n.child_count);
-    fh.u32(n.first_item);
-    fh.u32(n.item_count);
+    for (uint32_t v : {n.parent, n.first_child, n.child_count, n.first_item, n.item_count}) fh.u32(v);
     for (int a = 0; a < 3; ++a) {
       fh.f64(n.box.min[a]);
       fh.f64(n.box.max[a]);

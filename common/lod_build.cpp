@@ -53,94 +53,164 @@ void for_each_on_two_threads(size_t n, const Work& work, const Report& report) {
   if (failure) std::rethrow_exception(failure);
 }
 
+// The build's progress over `total` slots and HLODs, finished by both threads: a bar on a
+// terminal, a plain line every 10 s in a log file (no terminal), so a long first build shows it is
+// alive and how far it got. Silent when the label is empty.
+class BuildProgress {
+ public:
+  BuildProgress(const std::string& label, size_t total) : label_(label), total_(total) {}
+  void finished_one() { ++finished_; }  // any thread
+  // On the calling thread only, after each of its items.
+  void tick(const char* phase) {
+    const size_t done = finished_.load();
+    const double t = now_ms();
+    if (!label_.empty() && !tty_ && t - last_line_ >= 10000 && done != total_) {
+      last_line_ = t;
+      const double frac = double(done) / double(std::max<size_t>(total_, 1));
+      std::fprintf(stderr, "%s: building LODs: %zu/%zu nodes (%s, %.0f %%), %.0f s, ETA %.0f s\n", label_.c_str(),
+                   done, total_, phase, 100.0 * frac, (t - t0_) / 1000.0,
+                   frac > 0 ? (t - t0_) * (1 - frac) / frac / 1000.0 : 0.0);
+    }
+    if (label_.empty() || (t - last_print_ < 200 && done != total_)) return;
+    last_print_ = t;
+    const double frac = double(done) / double(std::max<size_t>(total_, 1));
+    const double eta = frac > 0 ? (t - t0_) * (1 - frac) / frac / 1000.0 : 0;
+    char bar[31];
+    const int filled = int(frac * 30);
+    for (int k = 0; k < 30; ++k) bar[k] = k < filled ? '#' : '.';
+    bar[30] = 0;
+    progress("%s: building LODs [%s] %zu/%zu nodes (%s) ETA %.0f s   ", label_.c_str(), bar, done, total_, phase, eta);
+  }
+
+ private:
+  const std::string& label_;
+  const size_t total_;
+  std::atomic<size_t> finished_{0};
+  const double t0_ = now_ms();
+  double last_print_ = -1e9;
+  double last_line_ = t0_;
+  const bool tty_ = isatty(STDERR_FILENO);
+};
+
+// A distinct (mesh, cluster): its leaf LOD chain is built once for all its instances.
+struct Slot {
+  uint32_t mesh, cluster;
+};
+
+// The cluster's triangles as a compact mesh of only the vertices they use (missing normals: +z).
+LodMesh compact_cluster(const Mesh& mesh, const MeshCluster& cl) {
+  LodMesh base;
+  std::unordered_map<uint32_t, uint32_t> local;
+  for (uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) {
+    const uint32_t v = mesh.indices[i];
+    auto [it, fresh] = local.emplace(v, uint32_t(base.positions.size()));
+    if (fresh) {
+      base.positions.push_back(mesh.positions[v]);
+      base.normals.push_back(v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1));
+    }
+    base.indices.push_back(it->second);
+  }
+  return base;
+}
+
+// Appends m, moved to world by to_world, to merged (positions relative to merged.origin, normals
+// by the inverse transpose); vertices without a source object get `object`.
+void append_in_world(LodMesh& merged, const LodMesh& m, const glm::dmat4& to_world, uint32_t object) {
+  const uint32_t base = uint32_t(merged.positions.size());
+  const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(to_world)));
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const glm::dvec3 world = glm::dvec3(to_world * glm::dvec4(glm::dvec3(m.positions[v]), 1.0));
+    merged.positions.push_back(glm::vec3(world - merged.origin));
+    glm::dvec3 nrm = nm * glm::dvec3(m.normals[v]);
+    const double len = glm::length(nrm);
+    merged.normals.push_back(len > 0 ? glm::vec3(nrm / len) : glm::vec3(0, 0, 1));
+    merged.objects.push_back(m.objects.empty() ? object : m.objects[v]);
+  }
+  for (uint32_t i : m.indices) merged.indices.push_back(base + i);
+}
+
 }  // namespace
 
+// The build in its steps: slots, leaf LOD chains, leaf errors, HLODs bottom-up.
 struct LodBuilder {
   static LodData run(const Scene& scene, const Hierarchy& h, const LodParams& p, const std::string& label) {
     LodData d;
     d.key_ = LodData::cache_key(h, p);
-    const auto& items = h.items();
-    // Distinct (mesh, cluster) slots.
-    std::unordered_map<uint64_t, uint32_t> slot_of;
-    std::vector<std::pair<uint32_t, uint32_t>> slots;
-    d.item_slot_.resize(items.size());
-    for (size_t i = 0; i < items.size(); ++i) {
-      const uint32_t mesh = scene.objects[items[i].object].mesh;
-      const uint64_t key = uint64_t(mesh) << 32 | items[i].cluster;
-      auto [it, fresh] = slot_of.emplace(key, uint32_t(slots.size()));
-      if (fresh) slots.emplace_back(mesh, items[i].cluster);
-      d.item_slot_[i] = it->second;
-    }
+    const std::vector<Slot> slots = assign_slots(scene, h, d);
     uint32_t interior = 0;
     for (const HNode& n : h.nodes()) interior += !n.leaf() && n.item_count > 0;
-    const size_t total = slots.size() + interior;
-    std::atomic<size_t> finished{0};  // slots and HLODs built, by both threads
-    const double t0 = now_ms();
-    double last_print = -1e9;
-    double last_line = t0;
-    const bool tty = isatty(STDERR_FILENO);
-    auto tick = [&](const char* phase) {
-      const size_t done = finished.load();
-      const double t = now_ms();
-      // In a log file (no terminal): a plain line every 10 s, so a long first build shows it is
-      // alive and how far it got.
-      if (!label.empty() && !tty && t - last_line >= 10000 && done != total) {
-        last_line = t;
-        const double frac = double(done) / double(std::max<size_t>(total, 1));
-        std::fprintf(stderr, "%s: building LODs: %zu/%zu nodes (%s, %.0f %%), %.0f s, ETA %.0f s\n", label.c_str(),
-                     done, total, phase, 100.0 * frac, (t - t0) / 1000.0,
-                     frac > 0 ? (t - t0) * (1 - frac) / frac / 1000.0 : 0.0);
-      }
-      if (label.empty() || (t - last_print < 200 && done != total)) return;
-      last_print = t;
-      const double frac = double(done) / double(std::max<size_t>(total, 1));
-      const double eta = frac > 0 ? (t - t0) * (1 - frac) / frac / 1000.0 : 0;
-      char bar[31];
-      const int filled = int(frac * 30);
-      for (int k = 0; k < 30; ++k) bar[k] = k < filled ? '#' : '.';
-      bar[30] = 0;
-      progress("%s: building LODs [%s] %zu/%zu nodes (%s) ETA %.0f s   ", label.c_str(), bar, done, total, phase, eta);
-    };
+    BuildProgress progress(label, slots.size() + interior);
 
     // Leaf LOD chains per slot, in mesh space (slots are independent: two threads).
     d.cluster_lods_.resize(slots.size() * kLeafLodLevels);
     for_each_on_two_threads(
         slots.size(),
         [&](size_t s) {
-          const Mesh& mesh = scene.meshes[slots[s].first];
-          const MeshCluster& cl = mesh.clusters[slots[s].second];
-          LodMesh base;  // the cluster, compacted
-          std::unordered_map<uint32_t, uint32_t> local;
-          for (uint32_t i = cl.first_index; i < cl.first_index + cl.index_count; ++i) {
-            const uint32_t v = mesh.indices[i];
-            auto [it, fresh] = local.emplace(v, uint32_t(base.positions.size()));
-            if (fresh) {
-              base.positions.push_back(mesh.positions[v]);
-              base.normals.push_back(v < mesh.normals.size() ? mesh.normals[v] : glm::vec3(0, 0, 1));
-            }
-            base.indices.push_back(it->second);
-          }
-          const LodMesh* prev = &base;
-          for (uint32_t l = 1; l <= kLeafLodLevels; ++l) {
-            LodMesh& dst = d.cluster_lods_[s * kLeafLodLevels + l - 1];
-            const size_t target = simplify_target(prev->indices.size(), p.level_ratio, p.min_triangles);
-            if (target < prev->indices.size())
-              dst = simplify_lod_mesh(*prev, target);
-            else
-              dst = *prev;
-            if (dst.indices.size() > prev->indices.size()) dst = *prev;  // never finer
-            dst.error = std::max(dst.error, prev->error);
-            prev = &dst;
-          }
-          ++finished;
+          build_leaf_chain(scene, slots[s], p, &d.cluster_lods_[s * kLeafLodLevels]);
+          progress.finished_one();
         },
-        [&] { tick("leaf LODs"); });
+        [&] { progress.tick("leaf LODs"); });
+    leaf_errors(scene, h, d);
 
-    // Errors of leaves (world units), HLODs bottom-up (children have larger ids).
+    // Interior nodes level by level from the deepest: children first. The nodes of one level are
+    // independent (each reads only its children's finished HLODs): two threads per level.
+    const std::vector<std::vector<uint32_t>> levels = place_hlods(h, d);
+    for (size_t level = levels.size(); level-- > 0;)
+      for_each_on_two_threads(
+          levels[level].size(),
+          [&](size_t k) {
+            build_hlod(scene, h, p, levels[level][k], d);
+            progress.finished_one();
+          },
+          [&] { progress.tick("HLODs"); });
+    progress_done();
+    d.finish_hash();
+    return d;
+  }
+
+ private:
+  // The distinct (mesh, cluster) slots in item order; fills d.item_slot_.
+  static std::vector<Slot> assign_slots(const Scene& scene, const Hierarchy& h, LodData& d) {
+    const auto& items = h.items();
+    std::unordered_map<uint64_t, uint32_t> slot_of;
+    std::vector<Slot> slots;
+    d.item_slot_.resize(items.size());
+    for (size_t i = 0; i < items.size(); ++i) {
+      const uint32_t mesh = scene.objects[items[i].object].mesh;
+      const uint64_t key = uint64_t(mesh) << 32 | items[i].cluster;
+      auto [it, fresh] = slot_of.emplace(key, uint32_t(slots.size()));
+      if (fresh) slots.push_back({mesh, items[i].cluster});
+      d.item_slot_[i] = it->second;
+    }
+    return slots;
+  }
+
+  // Levels 1..kLeafLodLevels of one slot into chain[0..kLeafLodLevels): each simplifies the one
+  // before, never finer, errors monotone.
+  static void build_leaf_chain(const Scene& scene, Slot slot, const LodParams& p, LodMesh* chain) {
+    const Mesh& mesh = scene.meshes[slot.mesh];
+    const LodMesh base = compact_cluster(mesh, mesh.clusters[slot.cluster]);
+    const LodMesh* prev = &base;
+    for (uint32_t l = 1; l <= kLeafLodLevels; ++l) {
+      LodMesh& dst = chain[l - 1];
+      const size_t target = simplify_target(prev->indices.size(), p.level_ratio, p.min_triangles);
+      if (target < prev->indices.size())
+        dst = simplify_lod_mesh(*prev, target);
+      else
+        dst = *prev;
+      if (dst.indices.size() > prev->indices.size()) dst = *prev;  // never finer
+      dst.error = std::max(dst.error, prev->error);
+      prev = &dst;
+    }
+  }
+
+  // Errors of the leaves in world units (max over their items, scaled by each object's largest
+  // axis scale, monotone over levels); sizes d.errors_ and d.hlod_of_node_ for every node.
+  static void leaf_errors(const Scene& scene, const Hierarchy& h, LodData& d) {
+    const auto& items = h.items();
     const size_t N = h.size();
     d.errors_.assign(N, {0, 0, 0, 0});
     d.hlod_of_node_.assign(N, kNoNode);
-    std::vector<uint32_t> hlod_index(N, kNoNode);
     for (uint32_t id = 0; id < N; ++id) {
       const HNode& n = h.node(id);
       if (!n.leaf() || n.item_count == 0) continue;
@@ -152,64 +222,51 @@ struct LodBuilder {
       for (uint32_t l = 1; l <= kLeafLodLevels; ++l)
         d.errors_[id][l] = std::max(d.errors_[id][l], d.errors_[id][l - 1]);
     }
-    // Interior nodes level by level from the deepest: children first. The nodes of one level are
-    // independent (each reads only its children's finished HLODs): two threads per level.
+  }
+
+  // One HLOD per non-empty interior node, numbered in id order (d.hlods_, d.hlod_of_node_); returns
+  // those nodes grouped by depth.
+  static std::vector<std::vector<uint32_t>> place_hlods(const Hierarchy& h, LodData& d) {
     std::vector<uint32_t> order;
-    for (uint32_t id = 0; id < N; ++id)
+    for (uint32_t id = 0; id < h.size(); ++id)
       if (!h.node(id).leaf() && h.node(id).item_count > 0) order.push_back(id);
     d.hlods_.resize(order.size());
     for (size_t k = 0; k < order.size(); ++k) d.hlod_of_node_[order[k]] = uint32_t(k);
     std::vector<std::vector<uint32_t>> levels(h.depth());
     for (uint32_t id : order) levels[h.node(id).depth].push_back(id);
-    for (size_t level = levels.size(); level-- > 0;)
-      for_each_on_two_threads(
-          levels[level].size(),
-          [&](size_t k) {
-            const uint32_t id = levels[level][k];
-            const HNode& n = h.node(id);
-            LodMesh merged;
-            merged.origin = n.box.center();
-            double child_err = 0;
-            auto append = [&](const LodMesh& m, const glm::dmat4& to_world, uint32_t object) {
-              const uint32_t base = uint32_t(merged.positions.size());
-              const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(to_world)));
-              for (size_t v = 0; v < m.positions.size(); ++v) {
-                const glm::dvec3 world = glm::dvec3(to_world * glm::dvec4(glm::dvec3(m.positions[v]), 1.0));
-                merged.positions.push_back(glm::vec3(world - merged.origin));
-                glm::dvec3 nrm = nm * glm::dvec3(m.normals[v]);
-                const double len = glm::length(nrm);
-                merged.normals.push_back(len > 0 ? glm::vec3(nrm / len) : glm::vec3(0, 0, 1));
-                merged.objects.push_back(m.objects.empty() ? object : m.objects[v]);
-              }
-              for (uint32_t i : m.indices) merged.indices.push_back(base + i);
-            };
-            for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
-              const HNode& cn = h.node(c);
-              if (cn.item_count == 0) continue;
-              child_err = std::max(child_err, d.errors_[c][kLeafLodLevels]);
-              if (cn.leaf()) {
-                for (uint32_t i = cn.first_item; i < cn.first_item + cn.item_count; ++i)
-                  append(d.item_lod(i, kLeafLodLevels), scene.objects[items[i].object].transform, items[i].object);
-              } else {
-                const LodMesh& ch = d.hlods_[d.hlod_of_node_[c]];
-                glm::dmat4 shift(1.0);
-                shift[3] = glm::dvec4(ch.origin, 1.0);
-                append(ch, shift, 0);
-              }
-            }
-            merged.error = 0;
-            const size_t target = simplify_target(merged.indices.size(), p.hlod_ratio, p.min_triangles);
-            LodMesh& out = d.hlods_[d.hlod_of_node_[id]];
-            out = target < merged.indices.size() ? simplify_lod_mesh(merged, target) : merged;
-            out.error += child_err;  // children's error + this simplification's: monotone
-            out.error = std::max(out.error, child_err);
-            d.errors_[id].fill(out.error);
-            ++finished;
-          },
-          [&] { tick("HLODs"); });
-    progress_done();
-    d.finish_hash();
-    return d;
+    return levels;
+  }
+
+  // The HLOD of interior node id: its children's coarsest representations (leaf level 3 or child
+  // HLOD) merged around the node's box centre and simplified; error = children's + its own.
+  static void build_hlod(const Scene& scene, const Hierarchy& h, const LodParams& p, uint32_t id, LodData& d) {
+    const auto& items = h.items();
+    const HNode& n = h.node(id);
+    LodMesh merged;
+    merged.origin = n.box.center();
+    double child_err = 0;
+    for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
+      const HNode& cn = h.node(c);
+      if (cn.item_count == 0) continue;
+      child_err = std::max(child_err, d.errors_[c][kLeafLodLevels]);
+      if (cn.leaf()) {
+        for (uint32_t i = cn.first_item; i < cn.first_item + cn.item_count; ++i)
+          append_in_world(merged, d.item_lod(i, kLeafLodLevels), scene.objects[items[i].object].transform,
+                          items[i].object);
+      } else {
+        const LodMesh& ch = d.hlods_[d.hlod_of_node_[c]];
+        glm::dmat4 shift(1.0);
+        shift[3] = glm::dvec4(ch.origin, 1.0);
+        append_in_world(merged, ch, shift, 0);
+      }
+    }
+    merged.error = 0;
+    const size_t target = simplify_target(merged.indices.size(), p.hlod_ratio, p.min_triangles);
+    LodMesh& out = d.hlods_[d.hlod_of_node_[id]];
+    out = target < merged.indices.size() ? simplify_lod_mesh(merged, target) : merged;
+    out.error += child_err;  // children's error + this simplification's: monotone
+    out.error = std::max(out.error, child_err);
+    d.errors_[id].fill(out.error);
   }
 };
 

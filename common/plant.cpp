@@ -247,133 +247,190 @@ class Generator {
     return k < h ? -half_width_ + k * kBay : 0.5 * kAisle + (k - h) * kBay;
   }
 
+  static constexpr double kBeamH = 0.45, kBeamW = 0.3;  // the beams under each slab
+
+  // Where one bay stands: x0..x1, z0..z1 on its level's floor y0, up to `top` (under the next
+  // slab); near_aisle for the bays beside the central aisle, aisle_edge the bay's edge towards z = 0.
+  struct BaySpace {
+    int k, level;
+    double x0, x1, z0, z1, y0, top;
+    bool near_aisle;
+    double aisle_edge;
+  };
+  // The floor of a bay that main equipment may use (a 1 m margin inside the bay) and the height
+  // free above it.
+  struct EquipmentSpace {
+    double ex0, ex1, ez0, ez1, y0, room;
+  };
+
+  // Bay k of column i on `level`: its slab, frame, equipment, cable tray and pipe runs, in that
+  // order, each while the triangle budget lasts.
   void bay(int i, int k, int level) {
     const double x0 = i * kBay, z0 = bay_z0(k), y0 = level * kLevelHeight;
     const double x1 = x0 + kBay, z1 = z0 + kBay, top = y0 + kLevelHeight - kSlab;  // under the next slab
     const bool near_aisle = k == nz_ / 2 - 1 || k == nz_ / 2;
     const double aisle_edge = k < nz_ / 2 ? z1 : z0;  // the bay's edge towards z = 0
-    const dvec3 corner(x0, y0, z0);
-    const double beam_h = 0.45, beam_w = 0.3;
+    const BaySpace b{k, level, x0, x1, z0, z1, y0, top, near_aisle, aisle_edge};
 
-    if (level > 0 && rng_.chance(0.8)) {  // floor slab (some bays are open to the level below)
-      Builder b(corner);
-      b.box({x0, y0 - kSlab, z0}, {x1, y0, z1});
-      add(b, corner, "slab");
-      if (near_aisle) {  // railing along the aisle
-        Builder r(corner);
-        const double z = aisle_edge + (k < nz_ / 2 ? -0.1 : 0.1);
-        for (double x = x0 + 0.5; x < x1; x += 2.0) r.cylinder({x, y0, z}, {x, y0 + 1.1, z}, 0.025, 6);
-        r.cylinder({x0, y0 + 1.1, z}, {x1, y0 + 1.1, z}, 0.03, 8);
-        r.cylinder({x0, y0 + 0.55, z}, {x1, y0 + 0.55, z}, 0.025, 6);
-        add(r, corner, "railing");
-      }
-    }
-    {  // columns at the bay's -x corners (and the far corner of the outermost bays)
-      for (double z : {z0, z1}) {
-        if (z == z1 && k != nz_ / 2 - 1 && k != nz_ - 1) continue;  // owned by the next bay
-        Builder b({x0, y0, z});
-        b.ibeam({x0, y0, z}, top - y0, 1, 0, 0.4, 0.35);
-        add(b, {x0, y0, z}, "column");
-      }
-      // beams under the next slab: along x at both z edges' nearest side, along z at x0 and mid-x
-      const double yb = top - 0.5 * beam_h;
-      for (double z : {z0 + 0.2, z1 - 0.2}) {
-        Builder b({x0, yb, z});
-        b.ibeam({x0, yb, z}, kBay, 0, 1, beam_h, beam_w);
-        add(b, {x0, yb, z}, "beam");
-      }
-      for (double x : {x0 + 0.2, x0 + 0.5 * kBay}) {
-        Builder b({x, yb, z0});
-        b.ibeam({x, yb, z0}, kBay, 2, 1, x == x0 + 0.2 ? beam_h : 0.7 * beam_h, beam_w);
-        add(b, {x, yb, z0}, "beam");
-      }
-    }
+    if (level > 0 && rng_.chance(0.8)) floor_slab(b);  // some bays are open to the level below
+    frame(b);
     if (done()) return;
-
-    // Main equipment on the floor, inside a 1 m margin.
-    const double ex0 = x0 + 1, ex1 = x1 - 1, ez0 = z0 + 1, ez1 = z1 - 1, room = top - beam_h - y0 - 0.3;
-    const double kind = rng_.uniform(0, 1);
-    if (kind < 0.25) {  // vertical tank
-      const double r = rng_.uniform(1.5, 4.0), cx = 0.5 * (ex0 + ex1) + rng_.uniform(-4.0 + r, 4.0 - r),
-                   cz = 0.5 * (ez0 + ez1) + rng_.uniform(-4.0 + r, 4.0 - r);
-      const double h = std::max(1.5, rng_.uniform(0.5, 1.0) * (room - 0.5 * r));
-      const dvec3 base(cx, y0, cz);
-      Builder b(base);
-      const int s = seg(rng_.pick(3, 6) * 8.0);
-      b.cylinder(base, base + dvec3(0, h, 0), r, s, rng_.pick(2, 8), true, false);
-      b.head(base + dvec3(0, h, 0), {0, 1, 0}, r, s, seg(rng_.pick(3, 8)));
-      add(b, base, "tank");
-    } else if (kind < 0.40) {  // boiler: panelled casing and an exposed tube bank beside it
-      const double w = rng_.uniform(5.0, 8.0), d = rng_.uniform(3.0, 5.0), h = room - 0.2;
-      const dvec3 lo(ex0, y0, ez0);
-      Builder b(lo);
-      b.box(lo, lo + dvec3(w, h, d), rng_.uniform(0.5, 1.5));
-      add(b, lo, "boiler");
-      Builder t(lo);
-      const int nx = rng_.pick(4, 12), nzt = rng_.pick(3, 10);
-      const double tr = rng_.uniform(0.03, 0.08);
-      for (int a = 0; a < nx; ++a)
-        for (int c = 0; c < nzt; ++c) {
-          const dvec3 p(ex0 + 0.3 + a * (w - 0.6) / std::max(1, nx - 1), y0 + 0.3, ez0 + d + 0.3 + c * 0.25);
-          if (p.z + tr > ez1) continue;
-          t.cylinder(p, p + dvec3(0, h - 0.6, 0), tr, seg(8), rng_.pick(1, 4));
-        }
-      add(t, lo, "tubes");
-    } else if (kind < 0.55) {  // heat exchanger: shell with heads on saddles, tube bundle inside
-      const double r = rng_.uniform(0.5, 1.1), len = rng_.uniform(5.0, 9.0);
-      const double cy = y0 + std::min(room - r - 0.1, rng_.uniform(1.0, 2.5) + r * 0.5);
-      const dvec3 p0(ex0 + 0.5, std::max(cy, y0 + r + 0.2), 0.5 * (ez0 + ez1) + rng_.uniform(-2.0, 2.0));
-      const dvec3 p1 = p0 + dvec3(len, 0, 0);
-      Builder b(p0);
-      const int s = seg(rng_.pick(2, 5) * 8.0);
-      b.cylinder(p0, p1, r, s, rng_.pick(1, 6));
-      b.head(p1, {1, 0, 0}, r, s, seg(4));
-      b.head(p0, {-1, 0, 0}, r, s, seg(4));
-      for (double x : {p0.x + 0.2 * len, p0.x + 0.8 * len})
-        b.box({x - 0.15, y0, p0.z - 0.7 * r}, {x + 0.15, p0.y - 0.8 * r, p0.z + 0.7 * r});
-      add(b, p0, "exchanger");
-      Builder t(p0);  // hidden inside the shell: depth complexity no eye ever sees
-      const int tubes = rng_.pick(20, 120);
-      for (int n = 0; n < tubes; ++n) {
-        const double a = 2.0 * kPi * n * 0.618033988749895, rr = 0.8 * r * std::sqrt((n + 0.5) / tubes);
-        const dvec3 o(0, rr * std::cos(a), rr * std::sin(a));
-        t.cylinder(p0 + o, p1 + o, 0.015, seg(6), rng_.pick(1, 3));
-      }
-      add(t, p0, "bundle");
-    } else if (kind < 0.75) {  // pumps
-      const int pumps = rng_.pick(2, 5);
-      for (int n = 0; n < pumps && !done(); ++n) {
-        const dvec3 base(rng_.uniform(ex0, ex1 - 2.0), y0, rng_.uniform(ez0, ez1 - 1.0));
-        Builder b(base);
-        b.box(base, base + dvec3(2.0, 0.3, 0.8));
-        const double mr = rng_.uniform(0.2, 0.35);
-        b.cylinder(base + dvec3(0.1, 0.3 + mr, 0.4), base + dvec3(1.1, 0.3 + mr, 0.4), mr, seg(16), 2, true, true);
-        b.cylinder(base + dvec3(1.5, 0.3, 0.4), base + dvec3(1.5, 0.9, 0.4), 0.3, seg(16), 1, false, true);
-        b.cylinder(base + dvec3(1.5, 0.9, 0.4), base + dvec3(1.5, 1.5, 0.4), 0.1, seg(12), 1, false, true);
-        add(b, base, "pump");
-      }
-    } else if (kind < 0.90) {  // horizontal vessel along z on saddles
-      const double r = rng_.uniform(0.8, std::min(2.0, 0.5 * room)), len = rng_.uniform(4.0, 8.0);
-      const dvec3 p0(0.5 * (ex0 + ex1) + rng_.uniform(-2.0, 2.0), y0 + r + 0.4, ez0 + 0.5 * (10.0 - len));
-      const dvec3 p1 = p0 + dvec3(0, 0, len);
-      Builder b(p0);
-      const int s = seg(rng_.pick(3, 6) * 8.0);
-      b.cylinder(p0, p1, r, s, rng_.pick(1, 4));
-      b.head(p1, {0, 0, 1}, r, s, seg(5));
-      b.head(p0, {0, 0, -1}, r, s, seg(5));
-      for (double z : {p0.z + 0.2 * len, p0.z + 0.8 * len})
-        b.box({p0.x - 0.7 * r, y0, z - 0.15}, {p0.x + 0.7 * r, p0.y - 0.8 * r, z + 0.15});
-      add(b, p0, "vessel");
-    }  // else an open bay
-    if (!done() && rng_.chance(0.4)) {  // cable tray along x
-      const double y = top - beam_h - 0.3, z = rng_.uniform(z0 + 0.5, z1 - 0.5);
-      Builder b({x0, y, z});
-      b.box({x0, y - 0.1, z - 0.3}, {x1, y, z + 0.3});
-      add(b, {x0, y, z}, "tray");
-    }
-
+    equipment(b);
+    if (!done() && rng_.chance(0.4)) cable_tray(b);
     const int runs = rng_.pick(3, 9);
-    for (int n = 0; n < runs && !done(); ++n) pipe_run(x0, x1, z0, z1, y0, top - beam_h, near_aisle, level, k);
+    for (int n = 0; n < runs && !done(); ++n) pipe_run(x0, x1, z0, z1, y0, top - kBeamH, near_aisle, level, k);
+  }
+
+  // The floor slab, and a railing along the aisle for the bays beside it.
+  void floor_slab(const BaySpace& bs) {
+    const auto& [k, level, x0, x1, z0, z1, y0, top, near_aisle, aisle_edge] = bs;
+    const dvec3 corner(x0, y0, z0);
+    Builder b(corner);
+    b.box({x0, y0 - kSlab, z0}, {x1, y0, z1});
+    add(b, corner, "slab");
+    if (near_aisle) {  // railing along the aisle
+      Builder r(corner);
+      const double z = aisle_edge + (k < nz_ / 2 ? -0.1 : 0.1);
+      for (double x = x0 + 0.5; x < x1; x += 2.0) r.cylinder({x, y0, z}, {x, y0 + 1.1, z}, 0.025, 6);
+      r.cylinder({x0, y0 + 1.1, z}, {x1, y0 + 1.1, z}, 0.03, 8);
+      r.cylinder({x0, y0 + 0.55, z}, {x1, y0 + 0.55, z}, 0.025, 6);
+      add(r, corner, "railing");
+    }
+  }
+
+  // Columns at the bay's -x corners (and the far corner of the outermost bays), and the beams
+  // under the next slab: along x at both z edges' nearest side, along z at x0 and mid-x.
+  void frame(const BaySpace& bs) {
+    const auto& [k, level, x0, x1, z0, z1, y0, top, near_aisle, aisle_edge] = bs;
+    for (double z : {z0, z1}) {
+      if (z == z1 && k != nz_ / 2 - 1 && k != nz_ - 1) continue;  // owned by the next bay
+      Builder b({x0, y0, z});
+      b.ibeam({x0, y0, z}, top - y0, 1, 0, 0.4, 0.35);
+      add(b, {x0, y0, z}, "column");
+    }
+    const double yb = top - 0.5 * kBeamH;
+    for (double z : {z0 + 0.2, z1 - 0.2}) {
+      Builder b({x0, yb, z});
+      b.ibeam({x0, yb, z}, kBay, 0, 1, kBeamH, kBeamW);
+      add(b, {x0, yb, z}, "beam");
+    }
+    for (double x : {x0 + 0.2, x0 + 0.5 * kBay}) {
+      Builder b({x, yb, z0});
+      b.ibeam({x, yb, z0}, kBay, 2, 1, x == x0 + 0.2 ? kBeamH : 0.7 * kBeamH, kBeamW);
+      add(b, {x, yb, z0}, "beam");
+    }
+  }
+
+  // Main equipment on the floor, inside a 1 m margin: a tank, a boiler, a heat exchanger, pumps,
+  // a horizontal vessel, or nothing (an open bay).
+  void equipment(const BaySpace& bs) {
+    const EquipmentSpace e{bs.x0 + 1, bs.x1 - 1, bs.z0 + 1, bs.z1 - 1, bs.y0, bs.top - kBeamH - bs.y0 - 0.3};
+    const double kind = rng_.uniform(0, 1);
+    if (kind < 0.25) tank(e);
+    else if (kind < 0.40) boiler(e);
+    else if (kind < 0.55) exchanger(e);
+    else if (kind < 0.75) pumps(e);
+    else if (kind < 0.90) vessel(e);
+  }
+
+  // A vertical tank with a vessel head.
+  void tank(const EquipmentSpace& es) {
+    const auto& [ex0, ex1, ez0, ez1, y0, room] = es;
+    const double r = rng_.uniform(1.5, 4.0), cx = 0.5 * (ex0 + ex1) + rng_.uniform(-4.0 + r, 4.0 - r),
+                 cz = 0.5 * (ez0 + ez1) + rng_.uniform(-4.0 + r, 4.0 - r);
+    const double h = std::max(1.5, rng_.uniform(0.5, 1.0) * (room - 0.5 * r));
+    const dvec3 base(cx, y0, cz);
+    Builder b(base);
+    const int s = seg(rng_.pick(3, 6) * 8.0);
+    b.cylinder(base, base + dvec3(0, h, 0), r, s, rng_.pick(2, 8), true, false);
+    b.head(base + dvec3(0, h, 0), {0, 1, 0}, r, s, seg(rng_.pick(3, 8)));
+    add(b, base, "tank");
+  }
+
+  // A boiler: panelled casing and an exposed tube bank beside it.
+  void boiler(const EquipmentSpace& es) {
+    const auto& [ex0, ex1, ez0, ez1, y0, room] = es;
+    const double w = rng_.uniform(5.0, 8.0), d = rng_.uniform(3.0, 5.0), h = room - 0.2;
+    const dvec3 lo(ex0, y0, ez0);
+    Builder b(lo);
+    b.box(lo, lo + dvec3(w, h, d), rng_.uniform(0.5, 1.5));
+    add(b, lo, "boiler");
+    Builder t(lo);
+    const int nx = rng_.pick(4, 12), nzt = rng_.pick(3, 10);
+    const double tr = rng_.uniform(0.03, 0.08);
+    for (int a = 0; a < nx; ++a)
+      for (int c = 0; c < nzt; ++c) {
+        const dvec3 p(ex0 + 0.3 + a * (w - 0.6) / std::max(1, nx - 1), y0 + 0.3, ez0 + d + 0.3 + c * 0.25);
+        if (p.z + tr > ez1) continue;
+        t.cylinder(p, p + dvec3(0, h - 0.6, 0), tr, seg(8), rng_.pick(1, 4));
+      }
+    add(t, lo, "tubes");
+  }
+
+  // A heat exchanger: shell with heads on saddles, tube bundle inside.
+  void exchanger(const EquipmentSpace& es) {
+    const auto& [ex0, ex1, ez0, ez1, y0, room] = es;
+    const double r = rng_.uniform(0.5, 1.1), len = rng_.uniform(5.0, 9.0);
+    const double cy = y0 + std::min(room - r - 0.1, rng_.uniform(1.0, 2.5) + r * 0.5);
+    const dvec3 p0(ex0 + 0.5, std::max(cy, y0 + r + 0.2), 0.5 * (ez0 + ez1) + rng_.uniform(-2.0, 2.0));
+    const dvec3 p1 = p0 + dvec3(len, 0, 0);
+    Builder b(p0);
+    const int s = seg(rng_.pick(2, 5) * 8.0);
+    b.cylinder(p0, p1, r, s, rng_.pick(1, 6));
+    b.head(p1, {1, 0, 0}, r, s, seg(4));
+    b.head(p0, {-1, 0, 0}, r, s, seg(4));
+    for (double x : {p0.x + 0.2 * len, p0.x + 0.8 * len})
+      b.box({x - 0.15, y0, p0.z - 0.7 * r}, {x + 0.15, p0.y - 0.8 * r, p0.z + 0.7 * r});
+    add(b, p0, "exchanger");
+    Builder t(p0);  // hidden inside the shell: depth complexity no eye ever sees
+    const int tubes = rng_.pick(20, 120);
+    for (int n = 0; n < tubes; ++n) {
+      const double a = 2.0 * kPi * n * 0.618033988749895, rr = 0.8 * r * std::sqrt((n + 0.5) / tubes);
+      const dvec3 o(0, rr * std::cos(a), rr * std::sin(a));
+      t.cylinder(p0 + o, p1 + o, 0.015, seg(6), rng_.pick(1, 3));
+    }
+    add(t, p0, "bundle");
+  }
+
+  // 2..5 pumps, each a base plate, a motor and a casing with its nozzle.
+  void pumps(const EquipmentSpace& es) {
+    const auto& [ex0, ex1, ez0, ez1, y0, room] = es;
+    const int count = rng_.pick(2, 5);
+    for (int n = 0; n < count && !done(); ++n) {
+      const dvec3 base(rng_.uniform(ex0, ex1 - 2.0), y0, rng_.uniform(ez0, ez1 - 1.0));
+      Builder b(base);
+      b.box(base, base + dvec3(2.0, 0.3, 0.8));
+      const double mr = rng_.uniform(0.2, 0.35);
+      b.cylinder(base + dvec3(0.1, 0.3 + mr, 0.4), base + dvec3(1.1, 0.3 + mr, 0.4), mr, seg(16), 2, true, true);
+      b.cylinder(base + dvec3(1.5, 0.3, 0.4), base + dvec3(1.5, 0.9, 0.4), 0.3, seg(16), 1, false, true);
+      b.cylinder(base + dvec3(1.5, 0.9, 0.4), base + dvec3(1.5, 1.5, 0.4), 0.1, seg(12), 1, false, true);
+      add(b, base, "pump");
+    }
+  }
+
+  // A horizontal vessel along z on saddles.
+  void vessel(const EquipmentSpace& es) {
+    const auto& [ex0, ex1, ez0, ez1, y0, room] = es;
+    const double r = rng_.uniform(0.8, std::min(2.0, 0.5 * room)), len = rng_.uniform(4.0, 8.0);
+    const dvec3 p0(0.5 * (ex0 + ex1) + rng_.uniform(-2.0, 2.0), y0 + r + 0.4, ez0 + 0.5 * (10.0 - len));
+    const dvec3 p1 = p0 + dvec3(0, 0, len);
+    Builder b(p0);
+    const int s = seg(rng_.pick(3, 6) * 8.0);
+    b.cylinder(p0, p1, r, s, rng_.pick(1, 4));
+    b.head(p1, {0, 0, 1}, r, s, seg(5));
+    b.head(p0, {0, 0, -1}, r, s, seg(5));
+    for (double z : {p0.z + 0.2 * len, p0.z + 0.8 * len})
+      b.box({p0.x - 0.7 * r, y0, z - 0.15}, {p0.x + 0.7 * r, p0.y - 0.8 * r, z + 0.15});
+    add(b, p0, "vessel");
+  }
+
+  // A cable tray along x under the beams.
+  void cable_tray(const BaySpace& bs) {
+    const auto& [k, level, x0, x1, z0, z1, y0, top, near_aisle, aisle_edge] = bs;
+    const double y = top - kBeamH - 0.3, z = rng_.uniform(z0 + 0.5, z1 - 0.5);
+    Builder b({x0, y, z});
+    b.box({x0, y - 0.1, z - 0.3}, {x1, y, z + 0.3});
+    add(b, {x0, y, z}, "tray");
   }
 
   // A run of straight pipes joined by elbows, with flanges at both ends. Stays inside the bay's

@@ -50,6 +50,14 @@ class Out {
     pod(uint64_t(s.size()));
     raw(s.data(), s.size());
   }
+  // One field as the cache stores it: strings and arrays with their size first, bools as a byte.
+  template <class T>
+  void field(const T& v) {
+    if constexpr (std::is_same_v<T, std::string>) str(v);
+    else if constexpr (std::is_same_v<T, bool>) pod(uint8_t(v));
+    else if constexpr (requires { v.data(); v.size(); }) vec(v);
+    else pod(v);
+  }
   void flush() {
     if (!buf_.empty()) ok_ &= std::fwrite(buf_.data(), 1, buf_.size(), f_) == buf_.size();
     buf_.clear();
@@ -95,6 +103,18 @@ class In {
     off_ += n;
     return true;
   }
+  // One field as Out::field wrote it.
+  template <class T>
+  bool field(T& v) {
+    if constexpr (std::is_same_v<T, std::string>) return str(v);
+    else if constexpr (std::is_same_v<T, bool>) {
+      uint8_t b = 0;
+      if (!pod(b)) return false;
+      v = b;
+      return true;
+    } else if constexpr (requires { v.data(); v.size(); }) return vec(v);
+    else return pod(v);
+  }
   bool count(uint64_t& n, size_t min_bytes_each) {  // a count of records of >= min_bytes_each
     return pod(n) && n <= (f_.size() - off_) / std::max<size_t>(min_bytes_each, 1);
   }
@@ -105,44 +125,74 @@ class In {
   size_t off_;
 };
 
+// The fields of each record in the order the cache stores them, one list for the writer and the
+// reader: f(field) for each (Out::field / In::field say how each type is stored).
+template <class M, class F>
+void mesh_fields(M& m, const F& f) {
+  f(m.name), f(m.positions), f(m.normals), f(m.indices), f(m.clusters), f(m.uvs), f(m.colors), f(m.material);
+}
+template <class O, class F>
+void object_fields(O& ob, const F& f) {
+  f(ob.mesh), f(ob.transform), f(ob.name);
+}
+template <class M, class F>
+void material_fields(M& m, const F& f) {
+  f(m.name), f(m.base_color), f(m.base_color_texture), f(m.alpha_mode), f(m.alpha_cutoff), f(m.double_sided),
+      f(m.unlit), f(m.object_color);
+}
+static_assert(sizeof(Image::width) == 4 && sizeof(Image::height) == 4);  // stored as int32
+template <class I, class F>
+void image_fields(I& im, const F& f) {
+  f(im.width), f(im.height), f(im.rgba);
+}
+
+// Writes each record of v with write_fields, after their count.
+template <class T, class Fields>
+void write_records(Out& o, const std::vector<T>& v, const Fields& write_fields) {
+  o.pod(uint64_t(v.size()));
+  for (const T& r : v) write_fields(r, [&](const auto& field) { o.field(field); });
+}
+
+// Reads a count (nullopt and "corrupt <what> count" unless the file can hold that many records
+// of min_bytes each) and the records, each with read_fields ("<what> k: truncated") then checked
+// by check, which returns nullptr or what is wrong ("<what> k: <what is wrong>").
+template <class T, class Fields, class Check>
+std::optional<std::string> read_records(In& in, std::vector<T>& v, size_t min_bytes, const std::string& what,
+                                        const Fields& read_fields, const Check& check) {
+  uint64_t n = 0;
+  if (!in.count(n, min_bytes)) return "corrupt " + what + " count";
+  v.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    bool ok = true;  // every field so far read
+    read_fields(v[k], [&](auto& field) { ok = ok && in.field(field); });
+    if (!ok) return what + " " + std::to_string(k) + ": truncated";
+    if (const char* bad = check(v[k])) return what + " " + std::to_string(k) + ": " + bad;
+  }
+  return std::nullopt;
+}
+
+// What is wrong with a mesh read from the cache: nullptr if nothing.
+const char* check_mesh(const Mesh& me) {
+  const size_t nv = me.positions.size();
+  if (me.normals.size() != nv || (!me.uvs.empty() && me.uvs.size() != nv) ||
+      (!me.colors.empty() && me.colors.size() != nv) || me.indices.size() % 3 != 0)
+    return "inconsistent array sizes";
+  for (uint32_t i : me.indices)
+    if (i >= nv) return "index out of range";
+  for (const MeshCluster& cl : me.clusters)
+    if (cl.index_count % 3 != 0 || uint64_t(cl.first_index) + cl.index_count > me.indices.size())
+      return "cluster out of range";
+  return nullptr;
+}
+
 void write_payload(Out& o, const Scene& s, const BuildParams& p, uint32_t depth, uint64_t fp,
                    const std::vector<HNode>& nodes, const std::vector<Item>& items) {
   o.str(s.source);
-  o.pod(uint64_t(s.meshes.size()));
-  for (const Mesh& m : s.meshes) {
-    o.str(m.name);
-    o.vec(m.positions);
-    o.vec(m.normals);
-    o.vec(m.indices);
-    o.vec(m.clusters);
-    o.vec(m.uvs);
-    o.vec(m.colors);
-    o.pod(m.material);
-  }
-  o.pod(uint64_t(s.objects.size()));
-  for (const Object& ob : s.objects) {
-    o.pod(ob.mesh);
-    o.pod(ob.transform);
-    o.str(ob.name);
-  }
-  o.pod(uint64_t(s.materials.size()));
-  for (const Material& m : s.materials) {
-    o.str(m.name);
-    o.pod(m.base_color);
-    o.pod(m.base_color_texture);
-    o.pod(m.alpha_mode);
-    o.pod(m.alpha_cutoff);
-    o.pod(uint8_t(m.double_sided));
-    o.pod(uint8_t(m.unlit));
-    o.pod(uint8_t(m.object_color));
-  }
+  write_records(o, s.meshes, [](const Mesh& m, const auto& f) { mesh_fields(m, f); });
+  write_records(o, s.objects, [](const Object& ob, const auto& f) { object_fields(ob, f); });
+  write_records(o, s.materials, [](const Material& m, const auto& f) { material_fields(m, f); });
   o.vec(s.textures);
-  o.pod(uint64_t(s.images.size()));
-  for (const Image& im : s.images) {
-    o.pod(int32_t(im.width));
-    o.pod(int32_t(im.height));
-    o.vec(im.rgba);
-  }
+  write_records(o, s.images, [](const Image& im, const auto& f) { image_fields(im, f); });
   o.pod(p);
   o.pod(depth);
   o.pod(fp);
@@ -215,53 +265,27 @@ struct SceneCacheIo {
     Scene& s = c.scene;
     Hierarchy& h = c.hierarchy;
     In in(f, kHead);
-    uint64_t n = 0;
     if (!in.str(s.source)) return fail("corrupt source name");
-    if (!in.count(n, 8 * 7 + 4)) return fail("corrupt mesh count");
-    s.meshes.resize(n);
-    for (size_t m = 0; m < n; ++m) {
-      Mesh& me = s.meshes[m];
-      if (!in.str(me.name) || !in.vec(me.positions) || !in.vec(me.normals) || !in.vec(me.indices) ||
-          !in.vec(me.clusters) || !in.vec(me.uvs) || !in.vec(me.colors) || !in.pod(me.material))
-        return fail("mesh " + std::to_string(m) + ": truncated");
-      const size_t nv = me.positions.size();
-      if (me.normals.size() != nv || (!me.uvs.empty() && me.uvs.size() != nv) ||
-          (!me.colors.empty() && me.colors.size() != nv) || me.indices.size() % 3 != 0)
-        return fail("mesh " + std::to_string(m) + ": inconsistent array sizes");
-      for (uint32_t i : me.indices)
-        if (i >= nv) return fail("mesh " + std::to_string(m) + ": index out of range");
-      for (const MeshCluster& cl : me.clusters)
-        if (cl.index_count % 3 != 0 || uint64_t(cl.first_index) + cl.index_count > me.indices.size())
-          return fail("mesh " + std::to_string(m) + ": cluster out of range");
-    }
-    if (!in.count(n, 4 + 128 + 8)) return fail("corrupt object count");
-    s.objects.resize(n);
-    for (size_t o = 0; o < n; ++o) {
-      Object& ob = s.objects[o];
-      if (!in.pod(ob.mesh) || !in.pod(ob.transform) || !in.str(ob.name)) return fail("object " + std::to_string(o) + ": truncated");
-      if (ob.mesh >= s.meshes.size()) return fail("object " + std::to_string(o) + ": mesh out of range");
-    }
-    if (!in.count(n, 8)) return fail("corrupt material count");
-    s.materials.resize(n);
-    for (size_t k = 0; k < n; ++k) {
-      Material& m = s.materials[k];
-      uint8_t ds = 0, ul = 0, oc = 0;
-      if (!in.str(m.name) || !in.pod(m.base_color) || !in.pod(m.base_color_texture) || !in.pod(m.alpha_mode) ||
-          !in.pod(m.alpha_cutoff) || !in.pod(ds) || !in.pod(ul) || !in.pod(oc))
-        return fail("material " + std::to_string(k) + ": truncated");
-      if (uint8_t(m.alpha_mode) > uint8_t(AlphaMode::Blend)) return fail("material " + std::to_string(k) + ": bad alpha mode");
-      m.double_sided = ds, m.unlit = ul, m.object_color = oc;
-    }
+    if (auto bad = read_records(in, s.meshes, 8 * 7 + 4, "mesh", [](Mesh& m, const auto& f) { mesh_fields(m, f); },
+                                check_mesh))
+      return fail(*bad);
+    if (auto bad = read_records(
+            in, s.objects, 4 + 128 + 8, "object", [](Object& ob, const auto& f) { object_fields(ob, f); },
+            [&](const Object& ob) { return ob.mesh >= s.meshes.size() ? "mesh out of range" : nullptr; }))
+      return fail(*bad);
+    if (auto bad = read_records(
+            in, s.materials, 8, "material", [](Material& m, const auto& f) { material_fields(m, f); },
+            [](const Material& m) { return uint8_t(m.alpha_mode) > uint8_t(AlphaMode::Blend) ? "bad alpha mode" : nullptr; }))
+      return fail(*bad);
     if (!in.vec(s.textures)) return fail("corrupt texture table");
-    if (!in.count(n, 16)) return fail("corrupt image count");
-    s.images.resize(n);
-    for (size_t k = 0; k < n; ++k) {
-      int32_t w = 0, hh = 0;
-      if (!in.pod(w) || !in.pod(hh) || !in.vec(s.images[k].rgba)) return fail("image " + std::to_string(k) + ": truncated");
-      s.images[k].width = w, s.images[k].height = hh;
-      if (w < 0 || hh < 0 || s.images[k].rgba.size() != size_t(w) * size_t(hh) * 4)
-        return fail("image " + std::to_string(k) + ": size mismatch");
-    }
+    if (auto bad = read_records(
+            in, s.images, 16, "image", [](Image& im, const auto& f) { image_fields(im, f); },
+            [](const Image& im) {
+              const bool fits = im.width >= 0 && im.height >= 0 &&
+                                im.rgba.size() == size_t(im.width) * size_t(im.height) * 4;
+              return fits ? nullptr : "size mismatch";
+            }))
+      return fail(*bad);
     for (const Texture& t : s.textures)
       if (t.image >= s.images.size()) return fail("texture image out of range");
     for (size_t m = 0; m < s.meshes.size(); ++m)
