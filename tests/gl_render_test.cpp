@@ -450,9 +450,9 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   for (SceneRenderer::Mode mode : {SceneRenderer::Mode::Shaded, SceneRenderer::Mode::ItemIds}) {
     Image first;
     DrawStats first_stats;
-    // nullopt: automatic part sizes (flush_part).
+    // nullopt: automatic part sizes (FlushSchedule::part_of).
     for (std::optional<uint32_t> flush : {std::optional<uint32_t>(0u), {1u}, {97u}, {5000u},
-                                          {SceneRenderer::kFlushTriangles}, std::optional<uint32_t>()}) {
+                                          {FlushSchedule::kMaxPart}, std::optional<uint32_t>()}) {
       if (flush)
         r.set_flush_triangles(*flush);
       else
@@ -478,20 +478,20 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   }
 }
 
-// Automatic part sizes: an eighth of the draw call, never below kMinFlushTriangles (a flush costs
-// llvmpipe a scene of its own) nor above kFlushTriangles.
+// Automatic part sizes: an eighth of the draw call, never below kMinPart (a flush costs
+// llvmpipe a scene of its own) nor above kMaxPart.
 TEST(SceneRenderer, AutomaticFlushPartsAreAnEighthOfTheCallWithinBounds) {
-  EXPECT_EQ(SceneRenderer::flush_part(0), SceneRenderer::kMinFlushTriangles);
-  EXPECT_EQ(SceneRenderer::flush_part(7200), SceneRenderer::kMinFlushTriangles);  // the duplex's V
-  EXPECT_EQ(SceneRenderer::flush_part(32000), 4000u);                              // its frustum set
-  EXPECT_EQ(SceneRenderer::flush_part(198000), SceneRenderer::kFlushTriangles);    // the whole saw
-  EXPECT_EQ(SceneRenderer::flush_part(uint64_t(1) << 40), SceneRenderer::kFlushTriangles);
+  EXPECT_EQ(FlushSchedule::part_of(0), FlushSchedule::kMinPart);
+  EXPECT_EQ(FlushSchedule::part_of(7200), FlushSchedule::kMinPart);    // the duplex's V
+  EXPECT_EQ(FlushSchedule::part_of(32000), 4000u);                      // its frustum set
+  EXPECT_EQ(FlushSchedule::part_of(198000), FlushSchedule::kMaxPart);  // the whole saw
+  EXPECT_EQ(FlushSchedule::part_of(uint64_t(1) << 40), FlushSchedule::kMaxPart);
   for (uint64_t t = 0; t < 400000; t += 1237) {
-    const uint32_t part = SceneRenderer::flush_part(t);
-    EXPECT_GE(part, SceneRenderer::kMinFlushTriangles);
-    EXPECT_LE(part, SceneRenderer::kFlushTriangles);
-    if (part > SceneRenderer::kMinFlushTriangles && part < SceneRenderer::kFlushTriangles) {
-      EXPECT_EQ(part, t / SceneRenderer::kFlushParts);
+    const uint32_t part = FlushSchedule::part_of(t);
+    EXPECT_GE(part, FlushSchedule::kMinPart);
+    EXPECT_LE(part, FlushSchedule::kMaxPart);
+    if (part > FlushSchedule::kMinPart && part < FlushSchedule::kMaxPart) {
+      EXPECT_EQ(part, t / FlushSchedule::kParts);
     }
   }
 }
