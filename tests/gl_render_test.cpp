@@ -496,6 +496,37 @@ TEST(SceneRenderer, AutomaticFlushPartsAreAnEighthOfTheCallWithinBounds) {
   }
 }
 
+// The schedule alone: a part is full when the triangles submitted since the last flush reach
+// it; requests change the part size, not the count; 0 never flushes; queries use the fixed size
+// (kMaxPart when automatic).
+TEST(FlushSchedule, CutsCallsIntoPartsAndFlushesWhenAPartIsFull) {
+  FlushSchedule s;
+  EXPECT_EQ(s.fixed(), std::optional<uint32_t>(FlushSchedule::kMaxPart));
+  EXPECT_FALSE(s.pinned());
+  s.request(100u);
+  s.begin_call(1000);
+  EXPECT_TRUE(s.fits(99));
+  EXPECT_FALSE(s.fits(100));
+  EXPECT_FALSE(s.submitted(60));
+  EXPECT_TRUE(s.fits(39));
+  EXPECT_FALSE(s.fits(40));
+  EXPECT_TRUE(s.submitted(50));  // 110: flush, the count starts again
+  EXPECT_TRUE(s.fits(99));
+  EXPECT_FALSE(s.submitted(30));
+  s.request(std::nullopt);  // automatic: an eighth of the call
+  EXPECT_EQ(s.fixed(), std::nullopt);
+  s.begin_call(32000);
+  EXPECT_TRUE(s.fits(3969));  // 30 still counted
+  EXPECT_FALSE(s.fits(3970));
+  s.begin_queries();
+  EXPECT_TRUE(s.fits(FlushSchedule::kMaxPart - 31));
+  EXPECT_FALSE(s.fits(FlushSchedule::kMaxPart - 30));
+  s.request(0u);
+  s.begin_call(1);
+  EXPECT_TRUE(s.fits(uint64_t(1) << 40));
+  EXPECT_FALSE(s.submitted(uint64_t(1) << 40));
+}
+
 // The plant's solids are closed with outward faces (plant.hpp), so culling their back faces (its
 // single-sided material) hides nothing the double-sided drawing shows: from cameras along the walk
 // and looking across the bays, all but a few pixels (slits between abutting faces, sub-pixel
