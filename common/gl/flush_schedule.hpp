@@ -10,7 +10,7 @@
 //              cores to itself (render_client --reference and the baselines); not in the cluster,
 //              where every part is one more llvmpipe scene on cores three processes share
 //              (docs/results.md "Flush parts").
-// OCC_FLUSH_TRIANGLES=N pins fixed parts of N (0: no flushes, for A/B runs) in a whole process:
+// OCC_FLUSH_TRIANGLES=N pins fixed parts of N (0: no flushes, for paired runs) in a whole process:
 // from_environment() reads it, once a process, and the schedule it returns ignores later
 // requests. A bad value is one error (std::runtime_error naming the variable).
 //

@@ -96,7 +96,7 @@ void main() {
   // Headlight: directional, along the view axis (view-space z), two-sided. One interpolant (the
   // normal) instead of two: a light at the eye also needed the view-space position, and
   // llvmpipe sets up every interpolant per triangle (saw 512^2 render ~10 % and duplex 1024^2
-  // ~5 % less time per frame, /tmp A/B of render_client --reference).
+  // ~5 % less time per frame, paired runs of render_client --reference).
   float lambert = min(abs(v_normal.z) * inversesqrt(max(dot(v_normal, v_normal), 1e-36)), 1.0);
   c.rgb *= 0.2 + 0.8 * lambert;
 #endif
