@@ -525,7 +525,7 @@ TEST(TwoPassDrawer, DepthTiesBetweenThePassesAreDrawnAgainInOnePass) {
   const Camera far_cam = Camera::look_at({0, 0, 10}, {0, 0, 0}, {0, 1, 0}, 60, double(kW) / kH, 0.1, 100);
   // The quads' boxes are as far from the eye on the axis: the first (lower item) comes first.
   renderer.begin_frame(far_cam, true);
-  const auto first_places = renderer.draw_places(r, 1), second_places = renderer.draw_places(r, 2);
+  const auto first_places = two.draw_places(1), second_places = two.draw_places(2);
   ASSERT_EQ(h.node(1).first_item, 0u);
   EXPECT_LT(first_places.second, second_places.first);
   EXPECT_LE(first_places.first, first_places.second);

@@ -450,9 +450,9 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   for (SceneRenderer::Mode mode : {SceneRenderer::Mode::Shaded, SceneRenderer::Mode::ItemIds}) {
     Image first;
     DrawStats first_stats;
-    // nullopt: automatic part sizes (flush_part).
+    // nullopt: automatic part sizes (FlushSchedule::part_of).
     for (std::optional<uint32_t> flush : {std::optional<uint32_t>(0u), {1u}, {97u}, {5000u},
-                                          {SceneRenderer::kFlushTriangles}, std::optional<uint32_t>()}) {
+                                          {FlushSchedule::kMaxPart}, std::optional<uint32_t>()}) {
       if (flush)
         r.set_flush_triangles(*flush);
       else
@@ -478,22 +478,53 @@ TEST(SceneRenderer, FlushingEveryFewTrianglesDrawsTheSameFrames) {
   }
 }
 
-// Automatic part sizes: an eighth of the draw call, never below kMinFlushTriangles (a flush costs
-// llvmpipe a scene of its own) nor above kFlushTriangles.
+// Automatic part sizes: an eighth of the draw call, never below kMinPart (a flush costs
+// llvmpipe a scene of its own) nor above kMaxPart.
 TEST(SceneRenderer, AutomaticFlushPartsAreAnEighthOfTheCallWithinBounds) {
-  EXPECT_EQ(SceneRenderer::flush_part(0), SceneRenderer::kMinFlushTriangles);
-  EXPECT_EQ(SceneRenderer::flush_part(7200), SceneRenderer::kMinFlushTriangles);  // the duplex's V
-  EXPECT_EQ(SceneRenderer::flush_part(32000), 4000u);                              // its frustum set
-  EXPECT_EQ(SceneRenderer::flush_part(198000), SceneRenderer::kFlushTriangles);    // the whole saw
-  EXPECT_EQ(SceneRenderer::flush_part(uint64_t(1) << 40), SceneRenderer::kFlushTriangles);
+  EXPECT_EQ(FlushSchedule::part_of(0), FlushSchedule::kMinPart);
+  EXPECT_EQ(FlushSchedule::part_of(7200), FlushSchedule::kMinPart);    // the duplex's V
+  EXPECT_EQ(FlushSchedule::part_of(32000), 4000u);                      // its frustum set
+  EXPECT_EQ(FlushSchedule::part_of(198000), FlushSchedule::kMaxPart);  // the whole saw
+  EXPECT_EQ(FlushSchedule::part_of(uint64_t(1) << 40), FlushSchedule::kMaxPart);
   for (uint64_t t = 0; t < 400000; t += 1237) {
-    const uint32_t part = SceneRenderer::flush_part(t);
-    EXPECT_GE(part, SceneRenderer::kMinFlushTriangles);
-    EXPECT_LE(part, SceneRenderer::kFlushTriangles);
-    if (part > SceneRenderer::kMinFlushTriangles && part < SceneRenderer::kFlushTriangles) {
-      EXPECT_EQ(part, t / SceneRenderer::kFlushParts);
+    const uint32_t part = FlushSchedule::part_of(t);
+    EXPECT_GE(part, FlushSchedule::kMinPart);
+    EXPECT_LE(part, FlushSchedule::kMaxPart);
+    if (part > FlushSchedule::kMinPart && part < FlushSchedule::kMaxPart) {
+      EXPECT_EQ(part, t / FlushSchedule::kParts);
     }
   }
+}
+
+// The schedule alone: a part is full when the triangles submitted since the last flush reach
+// it; requests change the part size, not the count; 0 never flushes; queries use the fixed size
+// (kMaxPart when automatic).
+TEST(FlushSchedule, CutsCallsIntoPartsAndFlushesWhenAPartIsFull) {
+  FlushSchedule s;
+  EXPECT_EQ(s.fixed(), std::optional<uint32_t>(FlushSchedule::kMaxPart));
+  EXPECT_FALSE(s.pinned());
+  s.request(100u);
+  s.begin_call(1000);
+  EXPECT_TRUE(s.fits(99));
+  EXPECT_FALSE(s.fits(100));
+  EXPECT_FALSE(s.submitted(60));
+  EXPECT_TRUE(s.fits(39));
+  EXPECT_FALSE(s.fits(40));
+  EXPECT_TRUE(s.submitted(50));  // 110: flush, the count starts again
+  EXPECT_TRUE(s.fits(99));
+  EXPECT_FALSE(s.submitted(30));
+  s.request(std::nullopt);  // automatic: an eighth of the call
+  EXPECT_EQ(s.fixed(), std::nullopt);
+  s.begin_call(32000);
+  EXPECT_TRUE(s.fits(3969));  // 30 still counted
+  EXPECT_FALSE(s.fits(3970));
+  s.begin_queries();
+  EXPECT_TRUE(s.fits(FlushSchedule::kMaxPart - 31));
+  EXPECT_FALSE(s.fits(FlushSchedule::kMaxPart - 30));
+  s.request(0u);
+  s.begin_call(1);
+  EXPECT_TRUE(s.fits(uint64_t(1) << 40));
+  EXPECT_FALSE(s.submitted(uint64_t(1) << 40));
 }
 
 // The plant's solids are closed with outward faces (plant.hpp), so culling their back faces (its

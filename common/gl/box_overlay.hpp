@@ -2,8 +2,8 @@
 // no depth test, so boxes hidden behind what the frame shows tint the pixels in front of them.
 // The tint is cull_overview's colour for occlusion-culled nodes (orange, 255,110,0) at 30 %
 // opacity per box face layer (front faces only, so each box tints its silhouette once).
-// Contracts: the GlContext is current on the calling thread and outlives the overlay; draw()
-// goes after the frame (it changes blend, depth and cull state and leaves them off).
+// Contracts: the GlContext is current on the calling thread for every call and outlives the
+// overlay.
 #pragma once
 #include <span>
 
@@ -14,11 +14,15 @@ namespace occ {
 
 class BoxOverlay {
  public:
+  // Links the overlay's program (box_query.hpp's box vertex shader, one flat tint).
   explicit BoxOverlay(GlContext& ctx);
   ~BoxOverlay();
   BoxOverlay(const BoxOverlay&) = delete;
   BoxOverlay& operator=(const BoxOverlay&) = delete;
 
+  // Tints each non-empty box of `boxes` (world space) as `cam` sees it, over the frame in the
+  // framebuffer: goes after the frame. Leaves blending and face culling off, depth test and
+  // depth writes on.
   void draw(const Camera& cam, std::span<const Aabb> boxes);
 
  private:

@@ -31,7 +31,7 @@
 // compiled at construction; no texture coordinates, textures or blending state unless the
 // scene has them. The first renderer of a process logs the scene's variants in one line.
 //
-// GPU layout (uploaded once at construction, in segments: see Upload):
+// GPU layout (uploaded once at construction by SceneGpu, scene_gpu.hpp, in segments: see Upload):
 //   vertex buffer  all meshes back to back (per segment), interleaved {vec3 position; vec3 normal; RGBA8
 //                  colour} (28 bytes; attributes 0, 1, 10, binding 0); colour = COLOR_0 (white
 //                  if none) or an HLOD vertex's object colour; a mesh starts at its base vertex;
@@ -56,10 +56,13 @@
 // hierarchy outlive the renderer; `scene` is the one the hierarchy was built from (its clusters)
 // and is only read in the constructor (meshes, materials and images go to the GPU, transforms
 // are copied) unless Upload::release frees its geometry there. Invalid item or node ids throw std::out_of_range.
+//
+// Parts: SceneGpu (scene_gpu.hpp) uploads the scene and owns what is on the GPU; the shader
+// variants are in scene_shaders.hpp; FlushSchedule (flush_schedule.hpp) says when a frame is
+// flushed; this file draws (scene_renderer.cpp) and counts samples with occlusion queries
+// (scene_renderer_queries.cpp). The two-pass frames' draw places are TwoPassDrawer's.
 #pragma once
-#include <algorithm>
 #include <array>
-#include <optional>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -69,6 +72,8 @@
 
 #include "common/camera.hpp"
 #include "common/gl/context.hpp"
+#include "common/gl/flush_schedule.hpp"
+#include "common/gl/scene_gpu.hpp"
 #include "common/hierarchy.hpp"
 #include "common/image.hpp"
 #include "common/lod.hpp"
@@ -88,7 +93,7 @@ struct DrawStats {
 
 class SceneRenderer {
  public:
-  enum class Mode { Shaded, DepthOnly, ItemIds };
+  using Mode = DrawMode;
   static constexpr std::array<uint8_t, 4> kBackgroundRgba8{20, 23, 28, 255};
   // With set_occluder_offset(true), DepthOnly draws use glPolygonOffset(-this, -this).
   static constexpr float kOccluderSlopeOffset = 0.1f;
@@ -96,19 +101,9 @@ class SceneRenderer {
   // With `lod`, its leaf LODs and HLODs are uploaded too (draw_renderables); it must outlive
   // nothing (only read here).
   SceneRenderer(GlContext& ctx, const Scene& scene, const Hierarchy& hierarchy, const LodData* lod = nullptr);
-  // How the geometry reaches GL: in segments of about segment_bytes (vertices + indices), each
-  // its own vertex and index buffer, staged on the CPU and uploaded when full, never the whole
-  // scene in one piece (llvmpipe zeroes a buffer's whole storage when it is created, so one big
-  // buffer would be resident next to the whole CPU geometry). With release, every mesh's CPU
-  // arrays (scene meshes and LOD/HLOD meshes) are freed as soon as they are staged
-  // (Mesh::release_geometry, LodData::release): the driver's copy is then the only one, and
-  // what stays on the CPU is what culling needs (objects, clusters and their boxes, triangle
-  // counts, the LOD errors and tables). start_scene_gl does this for the processes. Draws keep
-  // their order; a run of one batch key is split where the segment changes.
-  struct Upload {
-    size_t segment_bytes = size_t(64) << 20;
-    bool release = false;
-  };
+  // How the geometry reaches GL (SceneUpload, scene_gpu.hpp): in segments, and with release
+  // the CPU arrays freed as they are staged.
+  using Upload = SceneUpload;
   SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hierarchy, LodData* lod, const Upload& upload);
   ~SceneRenderer();
   SceneRenderer(const SceneRenderer&) = delete;
@@ -124,35 +119,12 @@ class SceneRenderer {
   // it (CHC, stop-and-wait) does not need it, and toggling the state per draw costs llvmpipe.
   void set_occluder_offset(bool on) { occluder_offset_ = on; }
 
-  // glFlush after about this many triangles submitted. llvmpipe bins a whole frame on the
-  // calling thread and rasterises it only at a flush, so without one the two run one after the
-  // other; a flush hands each part to the rasteriser thread while the next is binned. Frames are
-  // unchanged (test SceneRenderer.FlushingEveryFewTrianglesDrawsTheSameFrames).
-  // Fixed parts of kFlushTriangles by default. Against no flushes (render_client --reference
-  // --cull frustum, paired runs, LP_NUM_THREADS=1): the saw orbit 0.62-0.72x the frame time at
-  // 512^2 and 1024^2, the duplex 0.75x / 0.88x.
-  // set_flush_automatic(): parts of an eighth of each draw call's triangles, at least
-  // kMinFlushTriangles and at most kFlushTriangles (flush_part), so that small frames are split
-  // too. For a process with the cores to itself (render_client --reference and the baselines),
-  // against fixed 20k: the duplex frustum frame 0.88-0.90x at 512^2, 0.94-0.95x at 1024^2 (30 k
-  // triangles: 2 parts became 8), the saw unchanged (a fixed 4k: 1.05x there at 1024^2). Not in
-  // the cluster, where three processes share two cores: every part is one more llvmpipe scene
-  // (CPU), and the render client's CPU per frame rose 5 % on the duplex at 1024^2, its frame
-  // interval 1.02-1.06x (docs/results.md "Flush parts"). OCC_FLUSH_TRIANGLES=N fixes the part
-  // size in every process (0: no flushes, for A/B runs), over both.
-  static constexpr uint32_t kFlushTriangles = 20000;
-  static constexpr uint32_t kMinFlushTriangles = 2000;
-  static constexpr uint32_t kFlushParts = 8;
-  static uint32_t flush_part(uint64_t call_triangles) {
-    return uint32_t(std::clamp<uint64_t>(call_triangles / kFlushParts, kMinFlushTriangles, kFlushTriangles));
-  }
-  void set_flush_triangles(uint32_t n) { flush_triangles_ = n; }
-  // The part size (nullopt: automatic) and whether OCC_FLUSH_TRIANGLES fixed it.
-  std::optional<uint32_t> flush_triangles() const { return flush_triangles_; }
-  bool flush_fixed() const { return flush_from_environment_; }
-  void set_flush_automatic() {
-    if (!flush_from_environment_) flush_triangles_.reset();
-  }
+  // When draws are flushed mid-frame (flush_schedule.hpp): fixed parts of
+  // FlushSchedule::kMaxPart at construction, unless OCC_FLUSH_TRIANGLES pinned the process's
+  // schedule (then requests are ignored).
+  FlushSchedule& flush_schedule() { return flush_; }
+  void set_flush_triangles(uint32_t n) { flush_.request(n); }
+  void set_flush_automatic() { flush_.request(std::nullopt); }
 
   // Starts a frame for `cam`: clears depth to 0 (far) and, if clear_color, colour to
   // kBackgroundRgba8; forgets the previous frame's per-object transforms. Each Shaded draw call
@@ -174,16 +146,37 @@ class SceneRenderer {
   // near to far, then that order (submit), so z-ties resolve identically in every renderer.
   // Without LOD data uploaded, LOD ids fall back to full detail.
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
-  // Occlusion queries with real geometry (geometry_query.hpp): for each renderable ids[k], a
-  // GL_SAMPLES_PASSED query queries[k] around its DepthOnly draws — the same programs, vertices,
-  // face culling and MASK alpha test as draw_renderables(..., DepthOnly), so its depth is
-  // bit-identical to the occluder pass's — with colour and depth writes off, depth test
-  // GL_GEQUAL (reverse-Z: ties pass) and no occluder offset. BLEND items are left out, as in
-  // DepthOnly (holds_blended() tells which renderables have them). All records and commands are
-  // uploaded once. Leaves depth writes on and the depth test GL_GREATER. With depth_func
-  // GL_EQUAL the queries count the samples that tie with the depth buffer exactly (every mode
-  // computes the same depth: a Shaded draw of the renderable would tie there too). One query
-  // (queries.size() 1) counts the samples of all the renderables together.
+  // ItemIds rendering of whole nodes, each in colour node id + 1.
+  DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);
+  // Draws the BLEND items deferred since begin_frame(..., defer_blended = true), back to front
+  // (the order above). Returns what it drew; nothing without deferred items.
+  DrawStats end_frame();
+
+  // Where a draw goes in one draw call's order of opaque and MASK draws: by batch key, then
+  // segment, then the squared distance from the eye to its object's box centre (then the order
+  // collected, which the caller knows).
+  struct DrawOrder {
+    uint64_t key = 0;
+    uint32_t segment = 0;
+    double distance2 = 0;
+    auto operator<=>(const DrawOrder&) const = default;
+  };
+  // The DrawOrder of each opaque and MASK Shaded draw of renderable `id` in this frame
+  // (begin_frame's eye), in the order draw_renderables collects them, into `out` (cleared).
+  // Draws nothing. Throws std::out_of_range for an id not in r.
+  void draw_order(const Renderables& r, uint32_t id, std::vector<DrawOrder>& out);
+
+  // Occlusion queries (scene_renderer_queries.cpp).
+  // For each renderable ids[k], a GL_SAMPLES_PASSED query queries[k] around its DepthOnly draws
+  // — the same programs, vertices, face culling and MASK alpha test as draw_renderables(...,
+  // DepthOnly), so its depth is bit-identical to the occluder pass's — with colour and depth
+  // writes off, depth test depth_func (GL_GEQUAL, reverse-Z: ties pass) and no occluder offset.
+  // BLEND items are left out, as in DepthOnly (holds_blended() tells which renderables have
+  // them). All records and commands are uploaded once. Leaves depth writes on and the depth test
+  // GL_GREATER. With depth_func GL_EQUAL the queries count the samples that tie with the depth
+  // buffer exactly (every mode computes the same depth: a Shaded draw of the renderable would
+  // tie there too). One query (queries.size() 1) counts the samples of all the renderables
+  // together (TwoPassDrawer's tie check); one query per renderable is GeometryQuerier's.
   void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries,
                          GLenum depth_func = GL_GEQUAL);
   // The BLEND items' share of an exact visibility count: for each BLEND item items[k] (others
@@ -192,152 +185,92 @@ class SceneRenderer {
   // glass after the opaque draws). A non-zero count means the item shows in the frame; the item
   // buffer (ItemIds) leaves BLEND items out. Leaves depth writes on.
   void query_blended_items(std::span<const uint32_t> items, std::span<const GLuint> queries);
-  // Where renderable `id`'s opaque and MASK Shaded draws fall in the order of one
-  // draw_renderables call of this frame (begin_frame's eye): its first and its last place.
-  // Places of different renderables compare as their draws would be ordered; a renderable with
-  // no such draws gets {max, min}, before and after nothing. Draws nothing.
-  struct DrawPlace {
-    uint64_t key = 0;
-    uint32_t segment = 0;
-    double distance2 = 0;
-    uint64_t collected = 0;  // the renderable's collection rank (first item << 8 | level), then draw
-    auto operator<=>(const DrawPlace&) const = default;
-  };
-  std::pair<DrawPlace, DrawPlace> draw_places(const Renderables& r, uint32_t id);
   // True when item `item` has a BLEND material.
   bool item_blended(uint32_t item) const;
-  // True when renderable `id` draws BLEND items (HLODs never do).
+  // True when renderable `id` draws BLEND items (HLODs never do). Only GeometryQuerier asks.
   bool holds_blended(const Renderables& r, uint32_t id) const;
-  // ItemIds rendering of whole nodes, each in colour node id + 1.
-  DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);
-  // Draws the BLEND items deferred since begin_frame(..., defer_blended = true), back to front
-  // (the order above). Returns what it drew; nothing without deferred items.
-  DrawStats end_frame();
 
   // The scene's shader variants, e.g. "shaded: plain, blended; depth: plain; ids: plain".
-  const std::string& variants() const { return variants_; }
-  bool has_blended() const { return has_blended_; }
+  const std::string& variants() const { return gpu_.variants; }
+  bool has_blended() const { return gpu_.has_blended; }
 
  private:
-  bool occluder_offset_ = false;
-  std::optional<uint32_t> flush_triangles_ = kFlushTriangles;  // fixed part size; none: automatic
-  bool flush_from_environment_ = false;  // OCC_FLUSH_TRIANGLES set: fixed whatever is asked
-  uint32_t part_triangles_ = kFlushTriangles;  // this draw call's part size (0: no flushes)
-  uint64_t unflushed_triangles_ = 0;          // submitted since the last glFlush
-  struct ItemDraw {
-    uint32_t index_count, first_index;  // first_index, base_vertex: within its segment
-    int32_t base_vertex;
-    uint32_t object;
-    uint32_t segment;
-  };
-  // A piece of the geometry upload: its own vertex, index (and uv) buffers.
-  struct Segment {
-    GLuint vertices = 0, indices = 0, uvs = 0;
-  };
-  struct ObjectMatrices {  // an object's per-frame data, as laid out in DrawRecord
-    glm::mat4 model_view;
-    glm::vec4 normal_color[3];
-    glm::vec2 alpha_cutoff;
-  };
-  struct DrawRecord {
-    ObjectMatrices object;
-    uint32_t id_plus_one;
-  };
+  using ItemDraw = SceneGpu::ItemDraw;
+  using ObjectMatrices = SceneGpu::ObjectMatrices;
+  using DrawRecord = SceneGpu::DrawRecord;
   struct IndirectCommand {
     uint32_t count, instance_count, first_index;
     int32_t base_vertex;
     uint32_t base_instance;
-  };
-  // What an object draws with (constant): material variant bits (kTextured, kMask, kBlend,
-  // kUnlit), texture (-1: none), face culling, colour.
-  struct ObjectLook {
-    uint8_t bits = 0;
-    uint8_t cull = 0;  // kCullNone, kCullBackCcw, kCullBackCw
-    int32_t texture = -1;
-    glm::vec4 color{1.0f};  // base colour, alpha
-    float cutoff = 0.5f;
   };
   struct Pending {  // a collected draw
     uint64_t key;   // batch key (variant bits << 40 | texture + 1 << 8 | culling)
     ItemDraw draw;
     uint32_t id_plus_one;
   };
-  struct Program {
-    GLuint id = 0;
-    GLint projection_loc = -1;
-  };
-
-  void begin(const Camera& cam, const float clear_rgba[4]);
-  void check_items(std::span<const uint32_t> item_indices) const;
-  void check_nodes(std::span<const uint32_t> node_ids) const;
-  void add_item(uint32_t item, uint32_t id_plus_one, Mode mode, DrawStats& stats);
-  // lod: a leaf LOD draw (no texture coordinates, no vertex colours).
-  void add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool lod, DrawStats& stats);
-  uint64_t batch_key(uint32_t object, Mode mode, bool lod) const;
-  const ObjectMatrices& object_matrices(uint32_t object);
-  void add_renderable(const Renderables& r, uint32_t id, Mode mode, DrawStats& stats);
-  DrawStats submit(Mode mode, DrawStats stats);
-  DrawStats draw_blended();
-  // Uploads `draws` as records and commands and draws them in runs of equal key.
-  void draw_batches(std::span<const Pending> draws, Mode mode, bool blended);
-  uint32_t part_for(std::span<const Pending> draws) const;  // the fixed part size, or flush_part
-  void upload_draws(std::span<const Pending> draws);  // draw i = record i = command i
   struct RunState {  // GL state bound by draw_runs
     unsigned bits = ~0u;
     int64_t texture = -1;
     int cull = -1;
     uint32_t segment = ~0u;
   };
+  struct BatchOrder {  // submit(): the order draws are drawn in
+    DrawOrder order;
+    uint32_t index;  // into pending_
+  };
+
+  void begin(const Camera& cam, const float clear_rgba[4]);
+  void check_items(std::span<const uint32_t> item_indices) const;
+  void check_nodes(std::span<const uint32_t> node_ids) const;
+  void check_renderable(const Renderables& r, uint32_t id) const;
+  void add_item(uint32_t item, uint32_t id_plus_one, Mode mode, DrawStats& stats);
+  // lod: a leaf LOD draw (no texture coordinates, no vertex colours).
+  void add_draw(const ItemDraw& d, uint32_t id_plus_one, Mode mode, bool lod, DrawStats& stats);
+  uint64_t batch_key(uint32_t object, Mode mode, bool lod) const;
+  DrawOrder order_of(const Pending& p) const;
+  const ObjectMatrices& object_matrices(uint32_t object);
+  void add_renderable(const Renderables& r, uint32_t id, Mode mode, DrawStats& stats);
+  DrawStats submit(Mode mode, DrawStats stats);
+  DrawStats draw_blended();
+  // Uploads `draws` as records and commands and draws them in runs of equal key.
+  void draw_batches(std::span<const Pending> draws, Mode mode, bool blended);
+  void upload_draws(std::span<const Pending> draws);  // draw i = record i = command i
   // Draws uploaded draws [first, last) in runs of equal key and segment.
   void draw_runs(std::span<const Pending> draws, size_t first, size_t last, Mode mode, RunState& bound);
-  void compile(Mode mode, unsigned bits);
-  void upload_textures(const Scene& scene, const std::vector<uint8_t>& used_textures);
+  // Binds what draws of batch key `key` in segment `segment` need, where `bound` differs.
+  void bind_run(uint64_t key, uint32_t segment, Mode mode, RunState& bound);
+  // Uploaded draws [first, last) in indirect calls cut where the flush schedule says.
+  void draw_parts(std::span<const Pending> draws, size_t first, size_t last);
+  // Face culling back to the default (off, counter-clockwise fronts) after runs left `bound`.
+  void reset_cull(const RunState& bound);
+  // pending_'s depth-only draws, query k around [query_ends_[k-1], query_ends_[k]), colour and
+  // depth writes off, depth test depth_func; leaves depth writes on and the test GL_GREATER.
+  void query_pending(std::span<const GLuint> queries, GLenum depth_func);
 
   const GlApi& gl_;
   const Hierarchy& hierarchy_;
-  std::vector<glm::dmat4> transforms_;  // per object
-  std::vector<glm::dmat3> normal_world_;  // per object: inverse transpose of its 3x3
-  std::vector<ObjectLook> looks_;       // per object
-  std::vector<glm::dvec3> centers_;     // per object: its box centre (BLEND sorting)
-  std::vector<ItemDraw> item_draws_;    // per hierarchy item
-  std::vector<ItemDraw> lod_draws_;     // per LodData cluster LOD (object filled per draw)
-  std::vector<ItemDraw> hlod_draws_;    // per HLOD (object = a pseudo-object: its origin)
-  std::vector<uint32_t> item_slot_;     // per item: LodData slot
-  std::vector<uint32_t> hlod_of_node_;  // per node: HLOD index or kNoNode
-  Program programs_[3][32];             // [mode][variant bits] (kVariants); id 0 = not compiled
-  GLuint vao_ = 0, record_buf_ = 0, indirect_buf_ = 0;
-  std::vector<Segment> segments_;       // the geometry, in upload order (at least one)
-  void bind_segment(uint32_t s);
+  SceneGpu gpu_;  // what is on the GPU, constant after construction
+  bool occluder_offset_ = false;
+  FlushSchedule flush_;
+
+  // Per-draw buffers: they keep their storage between frames (they grow, never shrink).
+  GLuint record_buf_ = 0, indirect_buf_ = 0;
   size_t record_capacity_ = 0, indirect_capacity_ = 0;  // bytes
-  std::vector<GLuint> textures_;        // per scene image (0: unused)
-  std::vector<GLuint> samplers_;        // per scene texture (0: unused)
-  std::vector<uint32_t> texture_image_; // per scene texture: its image
-  bool has_blended_ = false;
-  std::string variants_;
+  std::vector<IndirectCommand> commands_;
+  std::vector<DrawRecord> records_;
 
   // Current frame.
   glm::dmat4 view_rotation_{1.0};
   glm::dvec3 eye_{0.0};
   uint32_t frame_ = 0;
   bool defer_blended_ = false;
-  std::vector<uint32_t> object_frame_;         // per object: frame its matrices are from
+  std::vector<uint32_t> object_frame_;           // per object: frame its matrices are from
   std::vector<ObjectMatrices> object_matrices_;  // per object
-  std::vector<Pending> pending_;               // this draw call's draws
-  std::vector<Pending> blended_;               // BLEND draws not drawn yet
+  std::vector<Pending> pending_;                 // this draw call's draws
+  std::vector<Pending> blended_;                 // BLEND draws not drawn yet
   std::vector<Pending> sorted_;
-  // pending_'s depth-only draws, query k around [query_ends_[k-1], query_ends_[k]), colour and
-  // depth writes off, depth test depth_func; leaves depth writes on and the test GL_GREATER.
-  void query_pending(std::span<const GLuint> queries, GLenum depth_func);
-  struct BatchOrder {  // submit(): the order draws are drawn in
-    uint64_t key;
-    uint32_t segment;
-    double distance2;
-    uint32_t index;  // into pending_
-  };
   std::vector<BatchOrder> batch_order_;
   std::vector<std::pair<double, uint32_t>> blend_order_;
-  std::vector<IndirectCommand> commands_;
-  std::vector<DrawRecord> records_;
   std::vector<size_t> query_ends_;  // query_renderables: end of each renderable's draws
 };
 

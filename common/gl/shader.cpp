@@ -7,6 +7,17 @@
 namespace occ {
 namespace {
 
+// The driver's info log of a shader or program (GetShaderiv + GetShaderInfoLog, or the
+// Program pair), up to its first NUL.
+template <class GetIv, class GetLog>
+std::string info_log(GLuint object, GetIv get_iv, GetLog get_log) {
+  GLint len = 0;
+  get_iv(object, GL_INFO_LOG_LENGTH, &len);
+  std::string log(size_t(std::max(len, 1)), '\0');
+  get_log(object, len, nullptr, log.data());
+  return log.c_str();
+}
+
 GLuint compile(const GlApi& gl, GLenum stage, const std::string& src) {
   GLuint sh = gl.CreateShader(stage);
   const char* text = src.c_str();
@@ -15,15 +26,12 @@ GLuint compile(const GlApi& gl, GLenum stage, const std::string& src) {
   GLint ok = GL_FALSE;
   gl.GetShaderiv(sh, GL_COMPILE_STATUS, &ok);
   if (!ok) {
-    GLint len = 0;
-    gl.GetShaderiv(sh, GL_INFO_LOG_LENGTH, &len);
-    std::string log(size_t(std::max(len, 1)), '\0');
-    gl.GetShaderInfoLog(sh, len, nullptr, log.data());
+    const std::string log = info_log(sh, gl.GetShaderiv, gl.GetShaderInfoLog);
     gl.DeleteShader(sh);
     throw std::runtime_error(std::string(stage == GL_VERTEX_SHADER     ? "vertex"
                                          : stage == GL_COMPUTE_SHADER ? "compute"
                                                                       : "fragment") +
-                             " shader does not compile: " + log.c_str());
+                             " shader does not compile: " + log);
   }
   return sh;
 }
@@ -36,12 +44,9 @@ GLuint link(const GlApi& gl, std::initializer_list<GLuint> shaders) {
   GLint ok = GL_FALSE;
   gl.GetProgramiv(prog, GL_LINK_STATUS, &ok);
   if (!ok) {
-    GLint len = 0;
-    gl.GetProgramiv(prog, GL_INFO_LOG_LENGTH, &len);
-    std::string log(size_t(std::max(len, 1)), '\0');
-    gl.GetProgramInfoLog(prog, len, nullptr, log.data());
+    const std::string log = info_log(prog, gl.GetProgramiv, gl.GetProgramInfoLog);
     gl.DeleteProgram(prog);
-    throw std::runtime_error(std::string("program does not link: ") + log.c_str());
+    throw std::runtime_error("program does not link: " + log);
   }
   return prog;
 }

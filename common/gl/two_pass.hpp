@@ -14,7 +14,7 @@
 // on any query). Except at exact depth ties between a pass-2 and a pass-1 draw (coplanar faces):
 // one draw call orders those by its sort (scene_renderer.hpp), two calls by pass. That matters
 // only for a pass-2 renderable whose box meets the box of a pass-1 renderable it may come before
-// in that order (SceneRenderer::draw_places): one GL_EQUAL occlusion query of those against
+// in that order (draw_places): one GL_EQUAL occlusion query of those against
 // pass 1's depth finds any tie; their screen rectangles are then drawn again in one pass
 // (scissored: everything whose box reaches them, in the set's order): frames stay pixel-exact.
 // What showed is learned from the same pyramid: pass 1's renderables are tested after pass 2 is
@@ -37,7 +37,7 @@ class TwoPassDrawer {
  public:
   // Texels a box's proof may visit (DepthPyramid::occludes_refined) before it counts as shown.
   static constexpr int kProofTexels = 64;
-  // Flush parts while drawing a frame (SceneRenderer::set_flush_triangles): pass 1's depth is
+  // Flush parts while drawing a frame (FlushSchedule::request): pass 1's depth is
   // read back once llvmpipe has rasterised its last part, so small parts keep that wait short
   // (saw 512^2, paired runs: 20k-triangle parts 11.0 ms a frame, 5k 10.1, 2.5k 10.5).
   static constexpr uint32_t kFlushTriangles = 4000;
@@ -64,6 +64,16 @@ class TwoPassDrawer {
   // (forget), or with what showed in the last of them (seed: e.g. the switch's visible set).
   void forget();
   void seed(std::span<const uint32_t> shown_ids);
+  // Where renderable `id`'s opaque and MASK Shaded draws fall in the order of one
+  // draw_renderables call of this frame (the renderer's begin_frame eye): its first and its
+  // last place. Places of different renderables compare as their draws would be ordered; a
+  // renderable with no such draws gets {max, min}, before and after nothing. Draws nothing.
+  struct DrawPlace {
+    SceneRenderer::DrawOrder order;
+    uint64_t collected = 0;  // the renderable's collection rank (first item << 8 | level), then draw
+    auto operator<=>(const DrawPlace&) const = default;
+  };
+  std::pair<DrawPlace, DrawPlace> draw_places(uint32_t id);
   // The renderables the last draw() drew in its two passes (the set less those proven hidden).
   void drawn_ids(std::vector<uint32_t>& out) const {
     out.assign(first_.begin(), first_.end());
@@ -83,8 +93,19 @@ class TwoPassDrawer {
   std::vector<uint8_t> memo_;
   std::vector<uint32_t> touched_;
   bool node_hidden(uint32_t node, const Camera& cam);
+  // The steps of draw(): pass 2's candidates less what pass 1's depth hides; the pass-2
+  // renderables that may tie with pass 1 (checked_); the screen rectangle of a found tie (empty:
+  // x0 > x1); that rectangle drawn again in one pass.
+  void drop_hidden(const Camera& cam, Frame& f);
+  void find_tie_candidates();
+  struct Rect {
+    int x0, y0, x1, y1;
+  };
+  Rect tie_rectangle(const Camera& cam);
+  void redraw(const Camera& cam, std::span<const uint32_t> ids, const Rect& rect, Frame& f);
   std::vector<uint32_t> first_, second_, checked_, redraw_;
-  std::vector<SceneRenderer::DrawPlace> first_last_;  // per pass-1 renderable: its last draw's place
+  std::vector<DrawPlace> first_last_;  // per pass-1 renderable: its last draw's place
+  std::vector<SceneRenderer::DrawOrder> orders_;  // draw_places' scratch
   GLuint tie_query_ = 0;
 };
 
