@@ -35,7 +35,7 @@ struct ClientOptions {
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
-  bool degrade = true;  // --on-node-failure degrade|exit (client.cpp)
+  bool degrade = true;  // --on-node-failure degrade|exit (node_links.hpp)
   OcclusionGate::Policy occlusion_gate = OcclusionGate::Policy::automatic;  // --occlusion-gate
   OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;        // --two-pass (on/off/automatic)
   uint32_t test_alternate = 0;  // tests only (OCC_TEST_ALTERNATE, main.cpp): both gates alternate
