@@ -7,18 +7,17 @@
 namespace occ {
 
 bool OcclusionGate::occlusion(uint32_t camera) const {
+  if (o_.test_alternate > 0) return (camera / o_.test_alternate) % 2 == 0;
   switch (o_.policy) {
     case Policy::on: return true;
     case Policy::off: return false;
-    case Policy::alternate: return (camera / std::max(o_.period, 1u)) % 2 == 0;
-    case Policy::selected: return true;
     case Policy::automatic: break;
   }
   return state_ == State::on || state_ == State::trial_on;
 }
 
 bool OcclusionGate::wants_frustum_triangles() const {
-  return o_.policy == Policy::automatic && state_ == State::on && n_ >= next_trial_ &&
+  return o_.policy == Policy::automatic && o_.test_alternate == 0 && state_ == State::on && n_ >= next_trial_ &&
          on_.size() >= std::min(o_.trial_after, o_.window);
 }
 
@@ -64,7 +63,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   same_ = occlusion == last_mode_ ? same_ + 1 : 1;
   last_mode_ = occlusion;
   if (!occlusion) ++frames_off_;
-  if (o_.policy != Policy::automatic) return;
+  if (o_.policy != Policy::automatic || o_.test_alternate > 0) return;
   // Only settled frames are measured: the first frames of a mode still carry the other's work
   // (the OR of the first frame with occlusion draws a whole frustum set).
   const bool settled = same_ > o_.settle;

@@ -20,9 +20,6 @@
 // The render client's choice between two passes and one for those frustum sets (--two-pass) is a
 // second gate of this kind, fed the render time: "occlusion" there means two passes.
 // Either way is conservative: the frustum set holds the visible set, so frames never change.
-// Policy::selected (the user's choice, not automatic) culls every frame with selected occluders
-// (wire.hpp Camera.occlusion 2): docs/results.md has what they did on the saw, and why auto does
-// not choose them (they cost the render client what they save the OR).
 // GL-free and clock-free: the caller feeds it what each displayed frame measured.
 #pragma once
 #include <cstdint>
@@ -34,13 +31,13 @@ namespace occ {
 
 class OcclusionGate {
  public:
-  // automatic (above); on: always occlusion (the switch as designed); off: frustum sets only;
-  // alternate: `period` cameras each way in turn (tests of the switch between the two); selected:
-  // always occlusion, with selected occluders.
-  enum class Policy { automatic, on, off, alternate, selected };
+  // automatic (above); on: always occlusion (the switch as designed); off: frustum sets only.
+  enum class Policy { automatic, on, off };
   struct Options {
     Policy policy = Policy::automatic;
-    uint32_t period = 4;            // Policy::alternate
+    // Tests only (not a user mode): > 0 overrides the policy with `test_alternate` cameras each
+    // way in turn, so that a test sees both changes of mode many times.
+    uint32_t test_alternate = 0;
     uint32_t window = 8, settle = 3;
     // A trial needs this many settled frames with occlusion measured (at most `window`). With
     // fewer than `window` of them it ends by measuring occlusion again (a trial with it) before
@@ -57,10 +54,8 @@ class OcclusionGate {
 
   // Whether the next camera sent (number `camera`) is culled with occlusion.
   bool occlusion(uint32_t camera) const;
-  // With occlusion, whether its occluders are selected (Camera.occlusion 2).
-  bool selected_occluders() const { return o_.policy == Policy::selected; }
-  // Camera.occlusion for the next camera sent: 0, 1 or 2.
-  uint8_t wire_occlusion(uint32_t camera) const { return occlusion(camera) ? (selected_occluders() ? 2 : 1) : 0; }
+  // Camera.occlusion for the next camera sent: 0 (the frustum set) or 1.
+  uint8_t wire_occlusion(uint32_t camera) const { return occlusion(camera) ? 1 : 0; }
   // Whether the next frame() should carry the frustum set's triangles (computed only when asked:
   // automatic policy, occlusion on, and a trial may start).
   bool wants_frustum_triangles() const;

@@ -1,5 +1,6 @@
 // render_client: the RVG display client of the occlusion switch, or (--reference) the
 // single-process reference renderer.
+#include <cstdlib>
 #include <string>
 
 #include "common/camera_path.hpp"
@@ -8,8 +9,28 @@
 #include "common/error.hpp"
 #include "common/gl/startup.hpp"
 #include "common/memory.hpp"
-#include "protocol/wire.hpp"
 #include "render_client/options.hpp"
+
+namespace {
+
+// --occlusion-gate and --two-pass: auto, on or off.
+void gate_option(occ::Cli& cli, const std::string& name, occ::OcclusionGate::Policy* out, const std::string& help) {
+  using P = occ::OcclusionGate::Policy;
+  cli.choice<P>(name, out, {{"auto", P::automatic}, {"on", P::on}, {"off", P::off}}, help);
+}
+
+// Tests only, not a user mode: OCC_TEST_ALTERNATE=N makes both gates take N frames each way in
+// turn (OcclusionGate::Options::test_alternate), so a cluster test sees many changes of mode.
+uint32_t test_alternate() {
+  const char* v = std::getenv("OCC_TEST_ALTERNATE");
+  if (!v || !*v) return 0;
+  char* end = nullptr;
+  const long n = std::strtol(v, &end, 10);
+  if (*end || n < 1 || n > 1000) throw occ::InputError("OCC_TEST_ALTERNATE '" + std::string(v) + "': not 1..1000");
+  return uint32_t(n);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   occ::use_huge_pages(argv);
@@ -27,8 +48,12 @@ int main(int argc, char** argv) {
     cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl);
     cli.flag("reference", &o.reference, "single-process reference renderer");
-    cli.choice("cull", &o.cull, {"none", "frustum", "stop-and-wait", "chc"},
-               "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
+    cli.choice<occ::Cull>("cull", &o.cull,
+                          {{"none", occ::Cull::none},
+                           {"frustum", occ::Cull::frustum},
+                           {"stop-and-wait", occ::Cull::stop_and_wait},
+                           {"chc", occ::Cull::chc}},
+                          "reference renderer: culling (stop-and-wait, chc: single-process occlusion queries)");
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
     cli.option("save-scene", &o.save_scene, "FILE.gltf",
                "reference renderer: also write the scene as glTF (FILE.gltf + FILE.bin, geometry only)");
@@ -38,29 +63,14 @@ int main(int argc, char** argv) {
                "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
                "in flight)");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
-    cli.choice<occ::OcclusionGate::Policy>(
-        "occlusion-gate", &o.occlusion_gate,
-        {{"auto", occ::OcclusionGate::Policy::automatic},
-         {"on", occ::OcclusionGate::Policy::on},
-         {"off", occ::OcclusionGate::Policy::off},
-         {"alternate", occ::OcclusionGate::Policy::alternate},
-         {"selected", occ::OcclusionGate::Policy::selected}},
-        "occlusion only where it pays: auto = frames without occlusion (the switch sends frustum sets: no OR, no "
-        "queries) while they are measured faster at the display, tried where culling removes little; on = always "
-        "occlusion; off = never; alternate = 4 cameras each way (tests); selected = always occlusion, the OR and "
-        "occluder fusion drawing only objects that cover at least " +
-            std::to_string(int(occ::wire::kSelectedOccluderPixelsPerTriangle)) +
-            " px per triangle (cheaper OR, larger visible sets)");
-    cli.choice<occ::OcclusionGate::Policy>(
-        "two-pass", &o.two_pass,
-        {{"auto", occ::OcclusionGate::Policy::automatic},
-         {"on", occ::OcclusionGate::Policy::on},
-         {"off", occ::OcclusionGate::Policy::off},
-         {"alternate", occ::OcclusionGate::Policy::alternate}},
-        "frames of frustum sets (the switch culled without occlusion, or no node serves) culled here: drawn in two "
-        "passes, first what showed last time, then what that depth does not prove hidden (one depth read-back; "
-        "exact). auto = where measured faster than one pass, tried where it hides little; on; off; alternate = 4 "
-        "frames each way (tests)");
+    gate_option(cli, "occlusion-gate", &o.occlusion_gate,
+                "occlusion only where it pays: auto = frames without occlusion (the switch sends frustum sets: no OR, "
+                "no queries) while they are measured faster at the display, tried where culling removes little; on = "
+                "always occlusion; off = never");
+    gate_option(cli, "two-pass", &o.two_pass,
+                "frames of frustum sets (the switch culled without occlusion, or no node serves) culled here: drawn in "
+                "two passes, first what showed last time, then what that depth does not prove hidden (one depth "
+                "read-back; exact). auto = where measured faster than one pass, tried where it hides little; on; off");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "
@@ -94,6 +104,7 @@ int main(int argc, char** argv) {
           "--help)");
     for (const auto& c : o.connect) occ::net::parse_endpoint("connect", c);  // fail before loading the scene
     o.key = occ::load_cluster_key(key_file);
+    o.test_alternate = test_alternate();
     return occ::run_cluster_client(o);
   });
 }

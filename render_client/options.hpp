@@ -13,6 +13,11 @@
 
 namespace occ {
 
+// --cull of the reference renderer: no culling, hierarchical frustum culling, or a single-process
+// occlusion baseline (render_client/baselines/single_process.hpp).
+enum class Cull { none, frustum, stop_and_wait, chc };
+const char* cull_name(Cull c);  // its --cull word
+
 struct ClientOptions {
   SceneOptions scene;
   ClusterConfig config;
@@ -23,16 +28,17 @@ struct ClientOptions {
   GlBackend gl = GlBackend::Auto;
   // reference mode
   bool reference = false;
-  std::string cull = "frustum";
+  Cull cull = Cull::frustum;
   bool exact = false;  // item-buffer pass per frame: exactly visible nodes
   std::string save_scene;  // write the loaded scene as glTF (ditto, generated scenes included)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
-  bool degrade = true;  // --on-node-failure degrade|exit (client.cpp)
+  bool degrade = true;  // --on-node-failure degrade|exit (node_links.hpp)
   OcclusionGate::Policy occlusion_gate = OcclusionGate::Policy::automatic;  // --occlusion-gate
   OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;        // --two-pass (on/off/automatic)
+  uint32_t test_alternate = 0;  // tests only (OCC_TEST_ALTERNATE, main.cpp): both gates alternate
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   // --window (viewer.hpp)
   bool window = false;

@@ -144,13 +144,11 @@ class SwitchNode {
     peer_lost_.clear();
     peer_epoch_wait_ = peer_resync_seen_ = 0;
     next_poll_ = Clock::time_point{};
-    peer_sent_bytes_ = resyncs_ = single_frames_ = 0;
+    totals_ = {};  // a fresh set of the summary's counts
     or_triangles_ = 0;
     ms_per_query_ = ms_per_triangle_ = 0;
     tail_cpu0_ = hc_cpu0_ = 0;
     or_us_ = or_cpu_us_ = or_tail_cpu_us_ = or_tail_us_ = 0;
-    geometry_queries_ = geometry_occluded_ = 0;
-    whole_ = frames_ = queries_ = skipped_ = pixel_stops_ = hlods_ = assumed_visible_ = held_ = 0;
   }
 
   net::PeerExpectation expect(std::optional<wire::Role> role, std::optional<uint8_t> node_id) const {
@@ -330,7 +328,7 @@ class SwitchNode {
   void drop_peer(const std::string& why) {
     if (!peer_) return;
     const auto st = peer_->stats();
-    peer_sent_bytes_ += st.sent.bytes;
+    totals_.peer_sent_bytes += st.sent.bytes;
     peer_->close_with_error(why);
     set_peer(nullptr);
   }
@@ -338,7 +336,7 @@ class SwitchNode {
   // The render client's instruction: start over at r.frame with empty sets, as the switch (2) or
   // alone (1). Answers with the same Resync once ready.
   wire::Resync follow(const wire::Resync& r) {
-    ++resyncs_;
+    ++totals_.resyncs;
     visible_.clear();
     stream_ = DiffReceiver{};
     last_camera_.reset();
@@ -561,7 +559,7 @@ class SwitchNode {
       finish_or(or_start, or_cpu0, Clock::duration{0});
       send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
       hc_frame(frame, cam->camera);
-      ++single_frames_;
+      ++totals_.single_frames;
     }
   }
 
@@ -704,7 +702,7 @@ class SwitchNode {
       HcFrame hc = step_->hc(frame, visible_, cam, all, HcLocal{.order = o_.hc.order}, out);
       hc.stats.queries = hc.eof.queries = 0;
       end_hc(hc, hc_start, out);
-      ++frustum_frames_;
+      ++totals_.frustum_frames;
       return;
     }
     HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
@@ -738,16 +736,16 @@ class SwitchNode {
     hc.eof.or_tail_cpu_us = or_tail_cpu_us_;
     hc.eof.or_tail_us = or_tail_us_;
     out.send(hc.eof);
-    ++frames_;
-    queries_ += hc.stats.queries;
-    geometry_queries_ += hc.stats.geometry_queries;
-    geometry_occluded_ += hc.stats.geometry_occluded;
-    assumed_visible_ += hc.stats.skipped;
-    pixel_stops_ += hc.stats.pixel_stops;
-    hlods_ += hc.stats.hlods;
-    skipped_ += hc.tests_above_fronts;
-    whole_ += hc.stats.whole;
-    held_ += hc.held;
+    ++totals_.frames;
+    totals_.queries += hc.stats.queries;
+    totals_.geometry_queries += hc.stats.geometry_queries;
+    totals_.geometry_occluded += hc.stats.geometry_occluded;
+    totals_.assumed_visible += hc.stats.skipped;
+    totals_.pixel_stops += hc.stats.pixel_stops;
+    totals_.hlods += hc.stats.hlods;
+    totals_.skipped += hc.tests_above_fronts;
+    totals_.whole += hc.stats.whole;
+    totals_.held += hc.held;
   }
 
   // The query budget's prices, measured on this node (moving averages): a query = HC time per
@@ -771,19 +769,19 @@ class SwitchNode {
   void print_summary() const {
     if (!rvg_) return;
     auto r = rvg_->stats();
-    const uint64_t peer_bytes = peer_sent_bytes_ + (peer_ ? peer_->stats().sent.bytes : 0);
-    std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
-              << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
-              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << held_
+    const uint64_t peer_bytes = totals_.peer_sent_bytes + (peer_ ? peer_->stats().sent.bytes : 0);
+    std::cerr << who_ << ": " << totals_.frames << " HC frames, " << totals_.queries << " queries (" << totals_.assumed_visible
+              << " more skipped by adaptive queries; " << totals_.whole << " subtrees accepted whole by the query budget, "
+              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << totals_.held
               << " renderables kept by the visibility hold; leaf test " << (o_.hc.leaf_test == LeafTest::geometry ? "geometry: " : "box")
               << (o_.hc.leaf_test == LeafTest::geometry
-                      ? std::to_string(geometry_queries_) + " geometry queries, " + std::to_string(geometry_occluded_) + " leaves rejected"
+                      ? std::to_string(totals_.geometry_queries) + " geometry queries, " + std::to_string(totals_.geometry_occluded) + " leaves rejected"
                       : std::string())
-              << "); " << frustum_frames_ << " frames without occlusion and " << selected_frames_
+              << "); " << totals_.frustum_frames << " frames without occlusion and " << totals_.selected_frames
               << " with selected occluders (the render client's gate), sent " << r.sent.bytes
               << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
-    if (resyncs_)
-      std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
+    if (totals_.resyncs)
+      std::cerr << who_ << ": " << totals_.resyncs << " resyncs from the render client, " << totals_.single_frames
                 << " HC frames served alone\n";
     if (querier_) {
       const HcQuerier::Stats& q = querier_->stats();
@@ -802,8 +800,8 @@ class SwitchNode {
                  "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
                  "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
                  who_.c_str(), o_.config.pixel_error, o_.config.visible_pixel_lod ? "on" : "off",
-                 o_.config.front_tracking ? "on" : "off", (unsigned long long)hlods_, (unsigned long long)pixel_stops_,
-                 (unsigned long long)skipped_, frames_ ? double(skipped_) / double(frames_) : 0.0);
+                 o_.config.front_tracking ? "on" : "off", (unsigned long long)totals_.hlods, (unsigned long long)totals_.pixel_stops,
+                 (unsigned long long)totals_.skipped, totals_.frames ? double(totals_.skipped) / double(totals_.frames) : 0.0);
   }
 
   const NodeOptions& o_;
@@ -814,7 +812,6 @@ class SwitchNode {
   std::unique_ptr<HcQuerier> querier_;
   std::unique_ptr<GeometryQuerier> geometry_;  // --leaf-test geometry: wraps querier_
   Camera hc_camera_;                           // the current HC's camera (geometry_'s restore)
-  uint64_t geometry_queries_ = 0, geometry_occluded_ = 0;
   std::unique_ptr<net::Connection> peer_, rvg_;
   // peer_ (the pointer; the session thread writes it, the Door reads it) and rejoined_peer_ (a
   // restarted node 1 the Door let in, for the session to take).
@@ -828,12 +825,10 @@ class SwitchNode {
   uint32_t peer_resync_seen_ = 0;  // the other node's marker of a resync this node has not followed yet
   bool single_ = false;      // serving alone (no peer)
   bool occlusion_ = true;    // this frame's camera asks for occlusion (else: the frustum set)
-  uint64_t frustum_frames_ = 0;  // HC frames sent as frustum sets (OcclusionGate)
   Clock::time_point next_poll_;
   VisibleSet visible_;
   DiffReceiver stream_;  // diffs of the other node's HC frames
   std::optional<uint32_t> last_camera_;
-  uint64_t peer_sent_bytes_ = 0, resyncs_ = 0, single_frames_ = 0;
   uint32_t or_us_ = 0;
   std::optional<CameraBuffer> cameras_;
   std::optional<CameraReceiver> cameras_in_;
@@ -847,10 +842,9 @@ class SwitchNode {
   void take_mode(const NumberedCamera& cam) {
     occlusion_ = cam.occlusion;
     selected_ = cam.selected_occluders;
-    selected_frames_ += occlusion_ && selected_;
+    totals_.selected_frames += occlusion_ && selected_;
   }
   bool selected_ = false;        // this frame's camera asks for selected occluders
-  uint64_t selected_frames_ = 0;  // frames (OR) with selected occluders
   Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)
   std::optional<QueryBudget> budget_;
   uint64_t or_triangles_ = 0;  // drawn by the current OR
@@ -858,10 +852,20 @@ class SwitchNode {
   uint64_t tail_cpu0_ = 0, hc_cpu0_ = 0;  // process CPU time (us) at the OR tail's / HC's start
   uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0, or_tail_us_ = 0;
   Clock::time_point tail_t0_;
-  uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
   std::optional<VisibilityHold> hold_;
-  uint64_t held_ = 0;  // renderables kept in V by the hold (summed over HC frames)
+  // What the session's summary counts (print_summary): one client's, made fresh for each.
+  struct SessionTotals {
+    uint64_t frames = 0, queries = 0;       // HC frames; their occlusion queries
+    uint64_t assumed_visible = 0, whole = 0;  // skipped by adaptive queries; accepted whole by the budget
+    uint64_t held = 0;                      // renderables kept in V by the hold (summed over HC frames)
+    uint64_t geometry_queries = 0, geometry_occluded = 0;
+    uint64_t frustum_frames = 0;   // HC frames sent as frustum sets (OcclusionGate)
+    uint64_t selected_frames = 0;  // frames (OR) with selected occluders
+    uint64_t skipped = 0, pixel_stops = 0, hlods = 0;
+    uint64_t peer_sent_bytes = 0, resyncs = 0, single_frames = 0;
+  };
+  SessionTotals totals_;
   Door door_;  // last: stopped first (it reads the connections above)
 };
 

@@ -201,6 +201,16 @@ inline std::string expect_client_stops_naming_node1(Proc& client, bool timed_out
   return log;
 }
 
+// Waits (at most `timeout`) until `p`'s log contains `text`.
+inline bool wait_log(Proc& p, const std::string& text, std::chrono::milliseconds timeout = std::chrono::seconds(60)) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (p.log().find(text) == std::string::npos) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
 // Every frame file in `out` is complete (no .tmp left) and has its row in stats.csv.
 inline void expect_no_partial_frames(const fs::path& out) {
   size_t frames = 0;

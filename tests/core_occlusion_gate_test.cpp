@@ -13,12 +13,11 @@ namespace {
 
 struct Sim {
   // interval(frame, mode): what a displayed frame measures (mode: Camera.occlusion, 0 without
-  // occlusion, 1 with, 2 with selected occluders); triangles drawn with occlusion and without (the
-  // frustum set).
+  // occlusion, 1 with); triangles drawn with occlusion and without (the frustum set).
   std::function<double(uint32_t, uint8_t)> interval;
   uint64_t visible_triangles = 1000, frustum_triangles = 1100;
   uint32_t lag = 2;
-  uint32_t off_frames = 0, selected_frames = 0;
+  uint32_t off_frames = 0;
   std::vector<bool> shown = {};  // per displayed frame: with occlusion
   std::vector<uint8_t> modes = {};
 
@@ -35,7 +34,6 @@ struct Sim {
       if (g.wants_frustum_triangles()) ft = frustum_triangles;
       g.frame(mode, interval(f, mode), drawn, ft);
       off_frames += mode == 0;
-      selected_frames += mode == 2;
       shown.push_back(mode != 0);
       modes.push_back(mode);
     }
@@ -141,12 +139,20 @@ TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
     EXPECT_EQ(s.off_frames, expect_off);
     EXPECT_EQ(g.trials(), 0u);
   }
-  OcclusionGate every{{.policy = OcclusionGate::Policy::alternate, .period = 4}};
-  for (uint32_t c = 0; c < 16; ++c) EXPECT_EQ(every.occlusion(c), (c / 4) % 2 == 0) << c;
-  OcclusionGate selected{{.policy = OcclusionGate::Policy::selected}};
-  Sim s{[](uint32_t, uint8_t) { return 13.0; }, 1000, 3000};
-  s.run(selected, 50);
-  EXPECT_EQ(s.selected_frames, 50u);
+}
+
+// The tests' hook (not a user mode): `test_alternate` cameras each way in turn, whatever the
+// policy and the timings.
+TEST(OcclusionGate, TestAlternateSwitchesEveryPeriodWhateverTheTimings) {
+  for (auto policy : {OcclusionGate::Policy::automatic, OcclusionGate::Policy::on, OcclusionGate::Policy::off}) {
+    OcclusionGate every{{.policy = policy, .test_alternate = 4}};
+    Sim s{[](uint32_t, bool occ) { return occ ? 18.0 : 13.0; }};
+    s.run(every, 16);
+    for (uint32_t c = 0; c < 16; ++c) EXPECT_EQ(every.occlusion(c), (c / 4) % 2 == 0) << c;
+    EXPECT_EQ(s.off_frames, 8u);
+    EXPECT_FALSE(every.wants_frustum_triangles());
+    EXPECT_EQ(every.trials(), 0u);
+  }
 }
 
 }  // namespace

@@ -73,16 +73,6 @@ struct HeldCluster {
   bool release() { return c.control("resume").rfind("ok", 0) == 0; }
 };
 
-// Waits (at most `timeout`) until `p`'s log contains `text`.
-bool wait_log(Proc& p, const std::string& text, std::chrono::milliseconds timeout = 60s) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (p.log().find(text) == std::string::npos) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(20ms);
-  }
-  return true;
-}
-
 size_t count(const std::string& s, const std::string& part) {
   size_t n = 0;
   for (size_t p = s.find(part); p != std::string::npos; p = s.find(part, p + 1)) ++n;

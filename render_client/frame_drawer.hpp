@@ -1,0 +1,54 @@
+// How the render client draws a frame's set: the switch's visible set in one pass; a frustum set
+// (the switch culled without occlusion, or no node serves) in two passes against the frame's own
+// depth where the --two-pass gate measures that they pay (common/gl/two_pass.hpp); and the
+// window's O overlay of what occlusion culling removed.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "common/gl/box_overlay.hpp"
+#include "common/gl/startup.hpp"
+#include "common/gl/two_pass.hpp"
+#include "common/occlusion_gate.hpp"
+#include "render_client/options.hpp"
+
+namespace occ {
+
+class FrameDrawer {
+ public:
+  // `g` outlives the drawer.
+  FrameDrawer(const ClientOptions& o, SceneGl& g);
+
+  struct Drawn {
+    DrawStats st;             // everything drawn
+    TwoPassDrawer::Frame tp;  // two passes: what each did (else empty)
+    bool frustum_set = false;
+    bool two_pass = false;
+  };
+  // Draws `ids` (renderables) with camera `cam`, finished (glFinish); `frustum_set`: a set the
+  // switch did not cull with occlusion.
+  Drawn draw(const Camera& cam, const std::vector<uint32_t>& ids, bool frustum_set);
+  // A frame drawn by draw() took `render_ms` to show: the --two-pass gate's measure.
+  void measured(const Drawn& d, double render_ms);
+  // What the last draw() drew: `ids` less what two passes proved hidden.
+  std::vector<uint32_t> drawn_ids(const Drawn& d, const std::vector<uint32_t>& ids) const;
+  // The O overlay: tints the boxes of the leaves in the frustum that occlusion culling removed
+  // over the frame just drawn; returns how many.
+  size_t draw_overlay(const Camera& cam, const std::vector<uint32_t>& visible_ids);
+  // The log line of the frustum sets and how they were drawn (nothing when there were none).
+  void print_summary() const;
+
+ private:
+  SceneGl& g_;
+  // Frustum sets culled here (--two-pass): on = two passes, off = one; measured by render time.
+  // Its first frame draws everything in pass 1 (nothing showed before): the trial waits for 3.
+  OcclusionGate gate_;
+  TwoPassDrawer two_pass_;
+  std::unique_ptr<BoxOverlay> overlay_;  // --window, O
+  bool two_pass_last_ = false, switch_culled_last_ = false;
+  std::vector<uint32_t> last_visible_;  // the last visible set the switch culled with occlusion
+  uint32_t frames_ = 0, used_ = 0, redrawn_ = 0;  // frustum sets; drawn in two passes; drawn again
+};
+
+}  // namespace occ
