@@ -60,15 +60,9 @@ while [ $# -gt 0 ]; do
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
     --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
-    --no-images) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
-    --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
-    --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
-    --*) occ_need_value "$@"; common+=("$1" "$2"); shift 2 ;;
-    *) occ_unexpected "$1" ;;
+    *) occ_route_flag "$@"; shift $occ_shift ;;
   esac
 done
 [ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
@@ -103,9 +97,7 @@ mkdir -p "$out"
 rm -f "$out"/*.port "$out"/*.pid "$out"/node?.restart*.log "$out"/frame_*.png
 if [ -z "$key_file" ]; then  # a fresh random key per run, readable by this user only
   key_file=$out/cluster.key
-  rm -f "$key_file"
-  (umask 077 && head -c 32 /dev/urandom | od -An -tx1 -v | tr -d ' \n' >"$key_file") ||
-    occ_die "cannot write the cluster key $key_file"
+  occ_make_key "$key_file"
 fi
 common+=(--cluster-key-file "$key_file")
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
@@ -152,12 +144,7 @@ if [ $netns = 1 ]; then
 fi
 
 # The process's own error lines (its log's "error:" lines, else its last line) and where its log is.
-report_failure() {  # name why [log]
-  local log=${3:-$out/$1.log} lines
-  lines=$(grep -m 3 '^error' "$log" 2>/dev/null) || lines=$(tail -n 1 "$log" 2>/dev/null)
-  echo "cluster: $1 $2 (log: $log):" >&2
-  [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
-}
+report_failure() { occ_report_failure "$1" "$2" "${3:-$out/$1.log}"; }
 
 wait_port() {  # file pid name (OCC_PORT_WAIT_S, default 60: big scenes load and build LODs first)
   for _ in $(seq 1 $((${OCC_PORT_WAIT_S:-60} * 10))); do

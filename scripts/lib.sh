@@ -1,4 +1,4 @@
-# Sourced by the scripts (bench.sh, cluster.sh, netlab.sh, accuracy_sweep.sh): what their
+# Sourced by the scripts (bench.sh, cluster.sh, cluster_rank.sh, netlab.sh, accuracy_sweep.sh): what their
 # argument handling and start-up share. Defines `here` (the checkout) and `BIN` (the binaries'
 # folder, OCC_BIN overrides it); usage errors exit 2 with one line naming the flag.
 #
@@ -36,6 +36,38 @@ occ_set() {
   occ_need_value "$@"
   local name=${1#--}
   printf -v "${name//-/_}" '%s' "$2"
+}
+
+# occ_route_flag "$@": a flag of the cluster's processes (cluster.sh, cluster_rank.sh) joins the
+# arrays of the processes it is for: rvg_only (the render client), node_only (the switch nodes) or
+# common (all three). Sets occ_shift to the words it took (the caller shifts them).
+occ_route_flag() {
+  occ_shift=2
+  case "$1" in
+    --no-images) rvg_only+=("$1"); occ_shift=1 ;;
+    --full-sets) common+=("$1"); occ_shift=1 ;;
+    --record|--lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2") ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|\
+    --visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2") ;;
+    --*) occ_need_value "$@"; common+=("$1" "$2") ;;
+    *) occ_unexpected "$1" ;;
+  esac
+}
+
+# occ_make_key FILE: a fresh random cluster key (64 hex digits), readable by this user only.
+occ_make_key() {
+  rm -f "$1"
+  (umask 077 && head -c 32 /dev/urandom | od -An -tx1 -v | tr -d ' \n' >"$1.tmp" && mv "$1.tmp" "$1") ||
+    occ_die "cannot write the cluster key $1"
+}
+
+# occ_report_failure NAME WHY LOG: "SCRIPT: NAME WHY (log: LOG):" and the process's own error lines
+# (its log's "error:" lines, else its last line), on stderr.
+occ_report_failure() {
+  local lines
+  lines=$(grep -m 3 '^error' "$3" 2>/dev/null) || lines=$(tail -n 1 "$3" 2>/dev/null)
+  echo "$(basename "$0" .sh): $1 $2 (log: $3):" >&2
+  [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
 }
 
 # occ_require_bins NAME...: each binary must be built in $BIN.

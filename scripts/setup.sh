@@ -21,6 +21,7 @@ PKGS=(
   libx11-dev                                               # render_client --window (Xlib)
   xvfb xdotool                                             # window tests (virtual X server, key presses)
   ffmpeg                                                   # scripts/video.sh (frames -> MP4)
+  openmpi-bin                                              # mpirun: scripts/cluster_rank.sh under a job launcher (tests)
 )
 
 missing=()
