@@ -11,7 +11,7 @@
 # A switch node that dies once the render client has shown a frame does not end the run: the
 # client degrades (docs/recovery.md) and cluster.sh says so, then starts the node again with the
 # same flags on its old port, where the client (and node 1) take it back: --restart-nodes N times
-# per node (default 3; 0: never), at once, then 2 s after each failed restart. Restarted nodes log
+# per node (default 3; 0: never; the first at once, later ones after 2 s). Restarted nodes log
 # to DIR/nodeK.restartN.log. The summary says per node when it died (frame, time, status), its
 # restarts and from which frame it serves again. Exit 0 when the client finished its path. With
 # --on-node-failure exit a node's death ends the run as before.
@@ -242,7 +242,8 @@ stop_all() {
 node_died() {  # name status: said; due for a restart (at once, then after 2 s) while restarts are left
   local n=$1 at
   at="at $(date +%T), noticed after frame $(shown)"
-  report_failure "$n" "died with status $2 $at; the render client goes on without it" "${logs[$n]}"
+  report_failure "$n" "died with status $2 $at$([ -n "${running[render_client]:-}" ] &&
+    echo '; the render client goes on without it')" "${logs[$n]}"
   story[$n]+="; died with status $2 at $(date +%T)"
   if [ -z "${running[render_client]:-}" ]; then
     :  # the path has ended

@@ -23,8 +23,9 @@
 # --kill-on-bad-exit does not). A node that dies once it has served does not end its rank: the
 # render client degrades (docs/recovery.md) and the rank starts the node again on its port with
 # the same flags, --restart-nodes N times (default 3; 0: never), as scripts/cluster.sh does; the
-# restarted node logs to OUT/ROLE.restartN.log, OUT/ROLE.pid names the process. Each rank logs to OUT/ROLE.log (default out/cluster_rank, on its own
-# host); the render client's frames and stats.csv go to OUT; rank 2 prints the summary.
+# restarted node logs to OUT/ROLE.restartN.log, OUT/ROLE.pid names the process. Each rank logs to
+# OUT/ROLE.log (default out/cluster_rank, on its own host); the render client's frames and
+# stats.csv go to OUT; rank 2 prints the summary.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 
@@ -46,7 +47,8 @@ done
 [[ "$restart_nodes" =~ ^[0-9]+$ ]] || occ_die "--restart-nodes '$restart_nodes': expected a whole number (0: never)"
 rank=${rank:-${OMPI_COMM_WORLD_RANK:-${PMIX_RANK:-${PMI_RANK:-${SLURM_PROCID:-}}}}}
 size=${OMPI_COMM_WORLD_SIZE:-${PMI_SIZE:-${SLURM_NTASKS:-3}}}
-[ -n "$rank" ] || occ_die "no rank: start it with mpirun -np 3 or srun -n 3 (OMPI_COMM_WORLD_RANK, PMIX_RANK, PMI_RANK or SLURM_PROCID), or give --rank 0|1|2"
+[ -n "$rank" ] || occ_die "no rank: start it with mpirun -np 3 or srun -n 3 (OMPI_COMM_WORLD_RANK, PMIX_RANK," \
+  "PMI_RANK or SLURM_PROCID), or give --rank 0|1|2"
 [[ "$rank" =~ ^[012]$ ]] && [ "$size" = 3 ] ||
   occ_die "rank $rank of $size: the cluster is exactly 3 ranks (mpirun -np 3, srun -n 3)"
 role=$([ "$rank" = 2 ] && echo render_client || echo "node$rank")
