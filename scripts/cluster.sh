@@ -44,10 +44,13 @@
 # HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
 # paired runs: frame interval 0.92-0.98x against 1 (docs/results.md). It also keeps the nodes
 # clear of a Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
+# --hosts HOST0,HOST1,HOSTC runs the three processes on three hosts over ssh instead
+# (scripts/cluster_hosts.sh --help, docs/clusters.md).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
 # it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
 # names one to use instead.
 set -uo pipefail
+for a in "$@"; do [ "$a" = --hosts ] && exec "$(dirname "$0")/cluster_hosts.sh" "$@"; done  # three hosts over ssh
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 

@@ -57,7 +57,7 @@ rdv=$rendezvous${job:+/$job}
 [ -n "$address" ] || address=$(hostname -I 2>/dev/null | awk '{print $1}')
 [ -n "$address" ] || address=$(hostname)
 case "$address" in 127.*|localhost|::1) listen=127.0.0.1:0 ;; *) listen=0.0.0.0:0 ;; esac
-host=$(hostname)
+host=${OCC_HOST_NAME:-$(hostname)}  # (scripts/cluster_hosts.sh names it by its ssh address)
 tag="$(basename "$0" .sh) $rank ($role on $host)"
 path=$(occ_frames_path "$path" "$frames")
 occ_require_bins switch_node render_client
