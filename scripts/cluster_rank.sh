@@ -25,18 +25,19 @@
 # the same flags, --restart-nodes N times (default 3; 0: never), as scripts/cluster.sh does; the
 # restarted node logs to OUT/ROLE.restartN.log, OUT/ROLE.pid names the process. Each rank logs to
 # OUT/ROLE.log (default out/cluster_rank, on its own host); the render client's frames and
-# stats.csv go to OUT; rank 2 prints the summary.
+# stats.csv go to OUT; rank 2 prints the summary. --node-raster-threads N as in scripts/cluster.sh.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 
 rendezvous="" scene="" path="walk" frames=60 out="out/cluster_rank" address="" wait=300 rank="" key_file=""
-restart_nodes=3
+restart_nodes=3 node_threads=0
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --rendezvous|--scene|--path|--frames|--out|--address|--wait|--rank|--restart-nodes) occ_set "$@"; shift 2 ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
-    --window|--netns|--link|--node-raster-threads) occ_die "$1 is a scripts/cluster.sh option" ;;
+    --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
+    --window|--netns|--link) occ_die "$1 is a scripts/cluster.sh option (one machine)" ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;
   esac
@@ -44,6 +45,8 @@ done
 [ -n "$rendezvous" ] || occ_die "--rendezvous DIR is required (a folder every rank sees)"
 [ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
 [[ "$wait" =~ ^[0-9]+$ ]] || occ_die "--wait '$wait': expected a whole number of seconds"
+[[ "$node_threads" =~ ^[0-9]+$ ]] && [ "$node_threads" -le 64 ] ||
+  occ_die "--node-raster-threads '$node_threads': expected a whole number from 0 to 64"
 [[ "$restart_nodes" =~ ^[0-9]+$ ]] || occ_die "--restart-nodes '$restart_nodes': expected a whole number (0: never)"
 rank=${rank:-${OMPI_COMM_WORLD_RANK:-${PMIX_RANK:-${PMI_RANK:-${SLURM_PROCID:-}}}}}
 size=${OMPI_COMM_WORLD_SIZE:-${PMI_SIZE:-${SLURM_NTASKS:-3}}}
@@ -63,7 +66,10 @@ path=$(occ_frames_path "$path" "$frames")
 occ_require_bins switch_node render_client
 mkdir -p "$out" "$rdv" || occ_die "cannot make the folders $out and $rdv"
 log=$out/$role.log
+# llvmpipe's rasteriser threads: the render client keeps $LP_NUM_THREADS (default 1), the nodes
+# get --node-raster-threads (default 0), as with scripts/cluster.sh (its header says why).
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
+[ "$rank" = 2 ] || export LP_NUM_THREADS=$node_threads
 
 child=""
 trap '[ -n "$child" ] && kill "$child" 2>/dev/null; exit 143' TERM INT
