@@ -1,4 +1,4 @@
-# Sourced by the scripts (bench.sh, cluster.sh, cluster_rank.sh, netlab.sh, accuracy_sweep.sh): what their
+# Sourced by the scripts (bench.sh, cluster.sh, netlab.sh, accuracy_sweep.sh): what their
 # argument handling and start-up share. Defines `here` (the checkout) and `BIN` (the binaries'
 # folder, OCC_BIN overrides it); usage errors exit 2 with one line naming the flag.
 #
