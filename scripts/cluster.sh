@@ -53,6 +53,7 @@ set -uo pipefail
 for a in "$@"; do [ "$a" = --hosts ] && exec "$(dirname "$0")/cluster_hosts.sh" "$@"; done  # three hosts over ssh
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
+exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
 scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 restart_nodes=3
 common=() rvg_only=() node_only=()
@@ -107,7 +108,7 @@ export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; }
-trap 'echo "cluster: interrupted, stopping all processes" >&2; cleanup; exit 130' INT TERM
+trap 'occ_trap_say "cluster: interrupted, stopping all processes"; cleanup; exit 130' INT TERM
 
 # Where each process runs and how the others reach it.
 in_a=() in_b=() in_c=() listen=127.0.0.1:0 addr_a_from_c=127.0.0.1 addr_b_from_c=127.0.0.1 addr_a_from_b=127.0.0.1
@@ -122,7 +123,7 @@ if [ $netns = 1 ]; then
     for ns in $ns_a $ns_b $ns_c; do ip netns del "$ns" 2>/dev/null; done  # takes its veths and qdiscs
   }
   trap teardown EXIT
-  trap 'echo "cluster: interrupted, stopping all processes" >&2; exit 130' INT TERM
+  trap 'occ_trap_say "cluster: interrupted, stopping all processes"; exit 130' INT TERM
   veth() {  # NS1 IF1 ADDR1 NS2 IF2 ADDR2
     ip link add "$2" type veth peer name "$5" &&
     ip link set "$2" netns "$1" && ip link set "$5" netns "$4" &&
@@ -316,7 +317,7 @@ while [ ${#running[@]} -gt 0 ]; do
     stop_all
     break
   fi
-  { sleep 0.1; } 2>/dev/null  # bash says "Killed" for a node killed by a signal after a command: not here
+  occ_quiet_sleep 0.1  # (no "Killed" line from bash for a node killed by a signal)
 done
 cleanup
 grep -h "^summary:" "$out/render_client.log" || true

@@ -19,6 +19,7 @@
 # each runs under ssh -tt, so a closed connection hangs it up, and its pid files are killed too.
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
+exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
 hosts="" scene="" path="walk" frames=60 out="out/cluster_hosts" remote_dir=$here remote_out="" ssh_config=""
 key_file="" rest=()
@@ -43,23 +44,23 @@ role=(node0 node1 render_client)
 mkdir -p "$out"
 rm -f "$out"/*.log "$out"/frame_*.png "$out"/stats.csv
 
-# One connection per host carries all the short calls (the rank's own, while it runs).
-ssh_cmd=(ssh ${ssh_config:+-F "$ssh_config"} -o BatchMode=yes -o ConnectTimeout=10 -o ControlMaster=auto
-  -o "ControlPath=/tmp/occ-ssh-$$-%C" -o ControlPersist=no)
-ssh_() { "${ssh_cmd[@]}" "$@"; }
+# Each call its own connection (a rank's ends with it: the rank hangs up).
+ssh_cmd=(ssh ${ssh_config:+-F "$ssh_config"} -o BatchMode=yes -o ConnectTimeout=10 -o ControlMaster=no)
+ssh_() { timeout 60 "${ssh_cmd[@]}" "$@"; }  # a short call: bounded, so a trap is never held up long
 q() { local s; s=$(printf '%q ' "$@"); printf '%s' "${s% }"; }  # words quoted for the remote shell
 say() { echo "cluster: $*" >&2; }
 
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
-  for k in 0 1 2; do  # whatever still runs there (its pid files), then the work folder
-    ssh_ "${host[$k]}" "for f in $(q "$rout/out")/*.pid; do [ -s \"\$f\" ] && kill \$(cat \"\$f\") 2>/dev/null; done
-      rm -rf $(q "$rout")" </dev/null 2>/dev/null &
+  for k in 0 1 2; do  # whatever still runs there (its pid files: the rank first), then the work folder
+    timeout 30 "${ssh_cmd[@]}" "${host[$k]}" "cd $(q "$rout/out") 2>/dev/null &&
+      { kill \$(cat *.rank.pid) 2>/dev/null; sleep 0.5; kill \$(cat *.pid) 2>/dev/null; }; rm -rf $(q "$rout")" \
+      </dev/null 2>/dev/null &
   done
   wait
 }
-trap 'say "interrupted, stopping all processes"; cleanup; exit 130' INT TERM
+trap 'occ_trap_say "cluster: interrupted, stopping all processes"; cleanup; exit 130' INT TERM
 
 # 1. Every host answers, has the script and the binaries, and gets its work folder and the key.
 [ -n "$key_file" ] || { key_file=$out/cluster.key; occ_make_key "$key_file"; }
@@ -71,8 +72,12 @@ for k in 0 1 2; do
     <"$key_file" 2>&1)
   rc=$?
   [ $rc = 0 ] && continue
-  [ $rc = 255 ] && echo "error: host $h (${role[$k]}): unreachable over ssh: ${err##*$'\n'}" >&2
-  [ $rc != 255 ] && echo "error: host $h (${role[$k]}): ${err##*$'\n'}" >&2
+  case $rc in
+    255) err="unreachable over ssh: ${err##*$'\n'}" ;;
+    124) err="no answer over ssh within 60 s" ;;
+    *) err=${err##*$'\n'} ;;
+  esac
+  echo "error: host $h (${role[$k]}): $err" >&2
   cleanup
   exit 1
 done
@@ -102,7 +107,7 @@ status=0
 while kill -0 "${pids[2]}" 2>/dev/null; do
   forward 0 node0.addr; forward 1 node1.addr
   forward 0 node0.failed; forward 1 node1.failed; forward 2 render_client.failed
-  { sleep 0.3; } 2>/dev/null
+  occ_quiet_sleep 0.3
 done
 wait "${pids[2]}" || status=1
 forward 2 render_client.done || forward 2 render_client.failed
@@ -114,7 +119,7 @@ done
 
 # 4. Logs and frames back here, the hosts cleaned up, the summary.
 for k in 0 1 2; do
-  ssh_ "${host[$k]}" "tar -C $(q "$rout/out") -cf - --exclude='*.pid' --exclude='*.port' ." </dev/null |
+  timeout 900 "${ssh_cmd[@]}" "${host[$k]}" "tar -C $(q "$rout/out") -cf - --exclude='*.pid' --exclude='*.port' ." </dev/null |
     tar -C "$out" -xf - || say "could not fetch the logs of ${role[$k]} from ${host[$k]}"
 done
 cleanup

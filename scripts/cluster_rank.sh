@@ -72,7 +72,8 @@ export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 [ "$rank" = 2 ] || export LP_NUM_THREADS=$node_threads
 
 child=""
-trap '[ -n "$child" ] && kill "$child" 2>/dev/null; exit 143' TERM INT
+echo $$ >"$out/$role.rank.pid"  # (scripts/cluster_hosts.sh stops a rank by it)
+trap '[ -n "$child" ] && kill "$child" 2>/dev/null; exit 143' TERM INT HUP  # (HUP: its ssh -tt connection closed)
 
 # This rank's process failed: say so here and in the rendezvous, for the ranks that wait for it.
 fail() {  # why
@@ -155,7 +156,7 @@ while :; do
       echo "$tag: the render client $([ -e "$rdv/render_client.failed" ] && echo failed || echo finished): stopped" >&2
       break
     fi
-    { sleep 0.2; } 2>/dev/null  # (not bash's "Killed" line for a node killed by a signal)
+    occ_quiet_sleep 0.2
   done
   { wait $child; } 2>/dev/null
   rc=$?

@@ -70,6 +70,13 @@ occ_report_failure() {
   [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
 }
 
+# occ_quiet_sleep S: sleep without bash's "Killed" line for a background job that a signal ended
+# (bash prints it on its own stderr after the next command). A trap can run while stderr is
+# redirected like this: it says its line with occ_trap_say, on fd 3 where the script kept its own
+# stderr (exec 3>&2 at its start), else on stderr.
+occ_quiet_sleep() { { sleep "$1"; } 2>/dev/null; }
+occ_trap_say() { { echo "$*" >&3; } 2>/dev/null || echo "$*" >&2; }
+
 # occ_require_bins NAME...: each binary must be built in $BIN.
 occ_require_bins() {
   local b

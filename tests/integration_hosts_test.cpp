@@ -39,20 +39,29 @@ class Hosts : public testing::Test {
   void TearDown() override {
     if (!dir_.empty()) run_to_end({helper(), "down", (dir_ / "ssh").string()}, dir_ / "down.log", 60s);
   }
-  Outcome cluster(const std::string& hosts, const std::string& scene, const std::string& path) {
+  std::vector<std::string> cluster_args(const std::string& hosts, const std::string& scene, const std::string& path) {
     std::vector<std::string> a = {"/bin/bash", std::string(OCC_SOURCE_DIR) + "/scripts/cluster.sh", "--hosts", hosts,
                                   "--ssh-config", (dir_ / "ssh" / "ssh_config").string(), "--remote-out",
                                   (dir_ / "remote").string(), "--scene", scene, "--path", path, "--out",
                                   (dir_ / "cluster").string()};
     a.insert(a.end(), kView.begin(), kView.end());
-    return run_to_end(a, dir_ / "cluster.log", 240s);
+    return a;
   }
-  // Nothing but its sshd runs in namespace i, and the work folder is gone.
+  Outcome cluster(const std::string& hosts, const std::string& scene, const std::string& path) {
+    return run_to_end(cluster_args(hosts, scene, path), dir_ / "cluster.log", 240s);
+  }
+  // Nothing but its sshd runs in namespace i (within 10 s: what was stopped may still be exiting),
+  // and the work folder is gone.
   void expect_nothing_left() {
     for (int i = 0; i < 3; ++i) {
-      const Outcome pids = run_to_end({"/bin/sh", "-c", "ip netns pids " + tag_ + std::to_string(i) + " | wc -l"},
-                                      dir_ / "pids.log", 30s);
-      EXPECT_EQ(std::stoi(pids.log), 1) << "namespace " << i << " still runs processes besides sshd";
+      int left = 0;
+      for (int t = 0; t < 100 && left != 1; ++t) {
+        if (t) std::this_thread::sleep_for(100ms);
+        const Outcome pids = run_to_end({"/bin/sh", "-c", "ip netns pids " + tag_ + std::to_string(i) + " | wc -l"},
+                                        dir_ / "pids.log", 30s);
+        left = std::stoi(pids.log);
+      }
+      EXPECT_EQ(left, 1) << "namespace " << i << " still runs processes besides sshd";
     }
     EXPECT_FALSE(fs::exists(dir_ / "remote"));
   }
@@ -97,5 +106,17 @@ TEST_F(Hosts, AWrongScenePathOrAnUnreachableHostIsNamedAndNothingIsLeft) {
   const Outcome gone = cluster(hosts, kScene, "walk:10");
   EXPECT_EQ(gone.code, 1) << gone.log;
   EXPECT_NE(gone.log.find("error: host " + nobody + " (node1): unreachable over ssh"), std::string::npos) << gone.log;
+  expect_nothing_left();
+}
+
+// Ctrl-C (SIGTERM here) mid-run: every process on every host is stopped, the work folders removed.
+TEST_F(Hosts, InterruptedRunLeavesNothingBehind) {
+  std::vector<std::string> a = cluster_args(hosts_, kScene, "walk:1000000");
+  a.push_back("--no-images");
+  Proc run(a, dir_ / "cluster.log");
+  ASSERT_GE(wait_frames(dir_ / "remote" / "out" / "stats.csv", 5, 120s, &run), 5u) << run.log();
+  run.signal(SIGTERM);
+  EXPECT_EQ(run.wait(120s), 130) << run.log();
+  EXPECT_NE(run.log().find("cluster: interrupted, stopping all processes"), std::string::npos) << run.log();
   expect_nothing_left();
 }

@@ -13,7 +13,10 @@ down() {
   for f in "$dir"/sshd*.pid; do [ -s "$f" ] && kill "$(cat "$f")" 2>/dev/null; done
   [ -f "$dir/names" ] || return 0
   read -r tag net <"$dir/names"
-  for i in 0 1 2; do ip netns del "${tag}$i" 2>/dev/null; done
+  for i in 0 1 2; do  # whatever still runs in it (sshd's sessions, a test's leftovers), then the namespace
+    for p in $(ip netns pids "${tag}$i" 2>/dev/null); do kill "$p" 2>/dev/null; done
+    ip netns del "${tag}$i" 2>/dev/null
+  done
   ip link del "${tag}br" 2>/dev/null
   rm -f "$dir/names"
   return 0
