@@ -1,11 +1,20 @@
 #!/usr/bin/env bash
 # Runs the occlusion-switch cluster on this machine: switch nodes 0 and 1 and the render client
 # on 127.0.0.1 with ephemeral ports (port files, no fixed ports). Prints the render client's
-# summary, keeps every process's log in the output folder, and exits non-zero if any process
-# failed or hung (bounded waits): the first process to fail is named with its own error line and
-# the others are stopped at once. Ctrl-C stops all three.
+# summary, keeps every process's log in the output folder (and its pid in DIR/NAME.pid), and exits
+# non-zero if the render client failed, a node failed at start, or anything hung (bounded waits):
+# that process is named with its own error line and the others are stopped at once. Ctrl-C stops
+# all three.
 #
-#   scripts/cluster.sh --scene S [--path P] [--frames N] [--out DIR] [extra args]
+#   scripts/cluster.sh --scene S [--path P] [--frames N] [--out DIR] [--restart-nodes N] [extra args]
+#
+# A switch node that dies once the render client has shown a frame does not end the run: the
+# client degrades (docs/recovery.md) and cluster.sh says so, then starts the node again with the
+# same flags on its old port, where the client (and node 1) take it back: --restart-nodes N times
+# per node (default 3; 0: never; the first at once, later ones after 2 s). Restarted nodes log
+# to DIR/nodeK.restartN.log. The summary says per node when it died (frame, time, status), its
+# restarts and from which frame it serves again. Exit 0 when the client finished its path. With
+# --on-node-failure exit a node's death ends the run as before.
 #
 # --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file (a missing
 # file or an unknown kind is refused before anything starts). --lookahead N (render client,
@@ -35,14 +44,18 @@
 # HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
 # paired runs: frame interval 0.92-0.98x against 1 (docs/results.md). It also keeps the nodes
 # clear of a Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
+# --hosts HOST0,HOST1,HOSTC runs the three processes on three hosts over ssh instead
+# (scripts/cluster_hosts.sh --help, docs/clusters.md).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
 # it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
 # names one to use instead.
 set -uo pipefail
+for a in "$@"; do [ "$a" = --hosts ] && exec "$(dirname "$0")/cluster_hosts.sh" "$@"; done  # three hosts over ssh
 source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
+exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 restart_nodes=3
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -50,20 +63,18 @@ while [ $# -gt 0 ]; do
     --netns) netns=1; shift ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
-    --no-images) rvg_only+=("$1"); shift ;;
+    --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
-    --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
-    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|--visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2"); shift 2 ;;
-    --full-sets) common+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
-    --*) occ_need_value "$@"; common+=("$1" "$2"); shift 2 ;;
-    *) occ_unexpected "$1" ;;
+    *) occ_route_flag "$@"; shift $occ_shift ;;
   esac
 done
 [ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
 [[ "$node_threads" =~ ^[0-9]+$ ]] && [ "$node_threads" -le 64 ] ||
   occ_die "--node-raster-threads '$node_threads': expected a whole number from 0 to 64"
+[[ "$restart_nodes" =~ ^[0-9]+$ ]] || occ_die "--restart-nodes '$restart_nodes': expected a whole number (0: never)"
+supervise=1  # --on-node-failure exit: a node's death ends the client, so it ends the run
+[[ " ${rvg_only[*]} " == *" --on-node-failure exit "* ]] && supervise=0
 if [ $window = 1 ]; then
   [ -n "$path" ] || path=interactive
   [[ " ${common[*]} " == *" --camera-mode "* ]] || common+=(--camera-mode latest)
@@ -87,19 +98,17 @@ if [ -n "$link" ]; then
 fi
 occ_require_bins switch_node render_client $([ -n "$link" ] && echo link_relay)
 mkdir -p "$out"
-rm -f "$out"/*.port "$out"/frame_*.png
+rm -f "$out"/*.port "$out"/*.pid "$out"/node?.restart*.log "$out"/frame_*.png
 if [ -z "$key_file" ]; then  # a fresh random key per run, readable by this user only
   key_file=$out/cluster.key
-  rm -f "$key_file"
-  (umask 077 && head -c 32 /dev/urandom | od -An -tx1 -v | tr -d ' \n' >"$key_file") ||
-    occ_die "cannot write the cluster key $key_file"
+  occ_make_key "$key_file"
 fi
 common+=(--cluster-key-file "$key_file")
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; }
-trap 'echo "cluster: interrupted, stopping all processes" >&2; cleanup; exit 130' INT TERM
+trap 'occ_trap_say "cluster: interrupted, stopping all processes"; cleanup; exit 130' INT TERM
 
 # Where each process runs and how the others reach it.
 in_a=() in_b=() in_c=() listen=127.0.0.1:0 addr_a_from_c=127.0.0.1 addr_b_from_c=127.0.0.1 addr_a_from_b=127.0.0.1
@@ -114,7 +123,7 @@ if [ $netns = 1 ]; then
     for ns in $ns_a $ns_b $ns_c; do ip netns del "$ns" 2>/dev/null; done  # takes its veths and qdiscs
   }
   trap teardown EXIT
-  trap 'echo "cluster: interrupted, stopping all processes" >&2; exit 130' INT TERM
+  trap 'occ_trap_say "cluster: interrupted, stopping all processes"; exit 130' INT TERM
   veth() {  # NS1 IF1 ADDR1 NS2 IF2 ADDR2
     ip link add "$2" type veth peer name "$5" &&
     ip link set "$2" netns "$1" && ip link set "$5" netns "$4" &&
@@ -139,12 +148,7 @@ if [ $netns = 1 ]; then
 fi
 
 # The process's own error lines (its log's "error:" lines, else its last line) and where its log is.
-report_failure() {  # name why
-  local lines
-  lines=$(grep -m 3 '^error' "$out/$1.log" 2>/dev/null) || lines=$(tail -n 1 "$out/$1.log" 2>/dev/null)
-  echo "cluster: $1 $2 (log: $out/$1.log):" >&2
-  [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
-}
+report_failure() { occ_report_failure "$1" "$2" "${3:-$out/$1.log}"; }
 
 wait_port() {  # file pid name (OCC_PORT_WAIT_S, default 60: big scenes load and build LODs first)
   for _ in $(seq 1 $((${OCC_PORT_WAIT_S:-60} * 10))); do
@@ -167,20 +171,29 @@ start_relay() {
   pids+=($!)
 }
 
-"${in_a[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id 0 --scene "$scene" --listen "$listen" --port-file "$out/node0.port" \
-  "${common[@]}" "${node_only[@]}" >"$out/node0.log" 2>&1 &
-node0_pid=$!
-pids+=($node0_pid)
+# start_node ID PORT LOG: switch node ID listening on PORT (0: a free one; a restarted node takes
+# its old one, where the render client and node 1 look for it), its port in LOG's .port file.
+# Sets node_pid; OUT/nodeID.pid says which process it is.
+start_node() {
+  local ns=("${in_a[@]}") peer=()
+  [ "$1" = 1 ] && ns=("${in_b[@]}") peer=(--peer "$peer0")
+  "${ns[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id "$1" --scene "$scene" "${peer[@]}" \
+    --listen "$listen" --port "$2" --port-file "${3%.log}.port" "${common[@]}" "${node_only[@]}" >"$3" 2>&1 &
+  node_pid=$!
+  pids+=($node_pid)
+  echo $node_pid >"$out/node$1.pid"
+}
+
+start_node 0 0 "$out/node0.log"
+node0_pid=$node_pid
 p0=$(wait_port "$out/node0.port" $node0_pid node0) || { cleanup; exit 1; }
 peer0=$addr_a_from_b:$p0
 if [ -n "$link" ]; then
   start_relay relay_peer "$peer0" "${in_b[@]}"
   peer0=127.0.0.1:$(wait_port "$out/relay_peer.port" "${pids[-1]}" relay_peer) || { cleanup; exit 1; }
 fi
-"${in_b[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id 1 --scene "$scene" --peer "$peer0" --listen "$listen" --port-file "$out/node1.port" \
-  "${common[@]}" "${node_only[@]}" >"$out/node1.log" 2>&1 &
-node1_pid=$!
-pids+=($node1_pid)
+start_node 1 0 "$out/node1.log"
+node1_pid=$node_pid
 p1=$(wait_port "$out/node1.port" $node1_pid node1) || { cleanup; exit 1; }
 c0=$addr_a_from_c:$p0 c1=$addr_b_from_c:$p1
 if [ -n "$link" ]; then
@@ -193,42 +206,130 @@ fi
   --connect "$c1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
 rvg_pid=$!
 pids+=($rvg_pid)
+echo $rvg_pid >"$out/render_client.pid"
 
-# Bounded wait for all three (the relays are stopped afterwards). The first process to fail is
-# reported with its own error line and the others are stopped at once (they would otherwise wait
-# for it until their --timeout-ms); once the render client is done the nodes get 30 s to finish.
+# ---- Supervision. A bounded wait for all three (the relays are stopped afterwards). The render
+# client failing, or a node failing before the client has shown a frame (or with --on-node-failure
+# exit), is reported with the process's own error line and the others are stopped at once (they
+# would otherwise wait for it until their --timeout-ms). A node dying later leaves the client
+# degraded (docs/recovery.md): the run goes on, and the node is started again on its port while
+# --restart-nodes allows (the client's rejoiner takes it back). Once the client is done the nodes
+# get 30 s to finish; a restarted node that had not rejoined by then is stopped.
 status=0
 deadline=$((SECONDS + MAX_SECONDS))
 declare -A running=([render_client]=$rvg_pid [node0]=$node0_pid [node1]=$node1_pid)
+declare -A port=([node0]=$p0 [node1]=$p1) logs=([node0]=$out/node0.log [node1]=$out/node1.log)
+declare -A restarts=([node0]=0 [node1]=0) due=() story=()
+
+shown() {  # frames the render client has shown (stats.csv rows)
+  local n=0
+  [ -f "$out/stats.csv" ] && n=$(($(wc -l <"$out/stats.csv") - 1))
+  echo $((n < 0 ? 0 : n))
+}
+
+# The frames at which the render client's log says something about node ID (PATTERN: what
+# follows the node's address in its line), comma-separated.
+client_frames() {  # id pattern
+  sed -n "s/^render_client: frame \([0-9]*\): .*switch node $1 (.*$2/\1/p" "$out/render_client.log" | paste -sd, -
+}
+dropped_pattern=': degraded: .*'
+
+still_running() { for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done; }
+
+stop_all() {
+  [ ${#running[@]} -gt 0 ] && echo "cluster: stopping$(still_running)" >&2
+  cleanup
+  for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
+  running=() due=()
+}
+
+node_died() {  # name status: said; due for a restart (at once, then after 2 s) while restarts are left
+  local n=$1 at
+  at="at $(date +%T), noticed after frame $(shown)"
+  report_failure "$n" "died with status $2 $at$([ -n "${running[render_client]:-}" ] &&
+    echo '; the render client goes on without it')" "${logs[$n]}"
+  story[$n]+="; died with status $2 at $(date +%T)"
+  if [ -z "${running[render_client]:-}" ]; then
+    :  # the path has ended
+  elif [ "${restarts[$n]}" -lt "$restart_nodes" ]; then
+    due[$n]=$((SECONDS + (restarts[$n] > 0 ? 2 : 0)))
+  else
+    echo "cluster: $n is not started again (--restart-nodes $restart_nodes)" >&2
+  fi
+}
+
+restart_node() {  # name: the same flags, its old port, a log of its own
+  local n=$1 k=$((restarts[$1] + 1))
+  restarts[$n]=$k
+  unset "due[$n]"
+  logs[$n]=$out/$n.restart$k.log
+  start_node "${n#node}" "${port[$n]}" "${logs[$n]}"
+  running[$n]=$node_pid
+  echo "cluster: restarting $n on port ${port[$n]} with the same flags ($k of $restart_nodes; log: ${logs[$n]})" >&2
+  story[$n]+="; restarted ($k of $restart_nodes)"
+}
+
+client_done() {  # status: a failure stops everything; else restarted nodes that never rejoined stop
+  due=()
+  if [ "$1" -ne 0 ]; then
+    report_failure render_client "exited with status $1"
+    status=1
+    stop_all
+    return
+  fi
+  [ $deadline -gt $((SECONDS + 30)) ] && deadline=$((SECONDS + 30))
+  for n in node0 node1; do
+    [ -n "${running[$n]:-}" ] && [ "${restarts[$n]}" -gt 0 ] && ! grep -q "resync at frame" "${logs[$n]}" || continue
+    kill "${running[$n]}" 2>/dev/null
+    wait "${running[$n]}" 2>/dev/null
+    unset "running[$n]"
+    story[$n]+="; the path ended before it rejoined: stopped"
+  done
+}
+
 while [ ${#running[@]} -gt 0 ]; do
   for name in render_client node0 node1; do
     pid=${running[$name]:-}
-    [ -n "$pid" ] && ! kill -0 "$pid" 2>/dev/null || continue
-    wait "$pid"; rc=$?
-    unset "running[$name]"
-    [ "$name" = render_client ] && [ $deadline -gt $((SECONDS + 30)) ] && deadline=$((SECONDS + 30))
-    if [ $rc -ne 0 ]; then
-      report_failure "$name" "exited with status $rc"
-      status=1
-      if [ ${#running[@]} -gt 0 ]; then
-        echo "cluster: stopping$(for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done)" >&2
-        cleanup
-        for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
-        running=()
-      fi
-      break
+    if [ -z "$pid" ]; then
+      [ -n "${due[$name]:-}" ] && [ $SECONDS -ge "${due[$name]}" ] && restart_node $name
+      continue
     fi
+    kill -0 "$pid" 2>/dev/null && continue
+    { wait "$pid"; } 2>/dev/null  # (not bash's own "Killed" line)
+    rc=$?
+    unset "running[$name]"
+    if [ $name = render_client ]; then
+      client_done $rc
+    elif [ $rc -ne 0 ] && [ $supervise = 1 ] && [ "$(shown)" -gt 0 ] &&
+         { [ -n "${running[render_client]:-}" ] || [ -n "$(client_frames "${name#node}" "$dropped_pattern")" ]; }; then
+      node_died $name $rc  # (or the client dropped it, and has finished since)
+    elif [ $rc -ne 0 ]; then
+      report_failure "$name" "exited with status $rc" "${logs[$name]}"
+      status=1
+      stop_all
+    fi
+    [ ${#running[@]} -gt 0 ] || break
   done
   [ ${#running[@]} -gt 0 ] || break
   if [ $SECONDS -ge $deadline ]; then
-    echo "error:$(for n in render_client node0 node1; do [ -n "${running[$n]:-}" ] && printf ' %s' $n; done) still running after the deadline: killed" >&2
-    cleanup; status=1
-    for pid in "${running[@]}"; do wait "$pid" 2>/dev/null; done
+    echo "error:$(still_running) still running after the deadline: killed" >&2
+    status=1
+    stop_all
     break
   fi
-  sleep 0.1
+  occ_quiet_sleep 0.1  # (no "Killed" line from bash for a node killed by a signal)
 done
 cleanup
 grep -h "^summary:" "$out/render_client.log" || true
 grep -hE "HC frames|HC test" "$out/node0.log" "$out/node1.log" || true
+# What supervision did, per node that died: its deaths (status, time), restarts, and the frames
+# at which the render client dropped it and took it back (its own log lines).
+for n in node0 node1; do
+  [ -n "${story[$n]:-}" ] || continue
+  dropped=$(client_frames "${n#node}" "$dropped_pattern") back=$(client_frames "${n#node}" ') is back$')
+  story[$n]+="; the render client dropped it at frame ${dropped:-?}"
+  story[$n]+=$([ -n "$back" ] && echo " and took it back at frame $back" || echo ", it did not serve again")
+  echo "cluster: $n${story[$n]#;}"
+done
+[ ${#story[@]} -gt 0 ] && grep -h "^modes:" "$out/render_client.log"
 exit $status

@@ -45,6 +45,45 @@ occ_set() {
   printf -v "${name//-/_}" '%s' "$2"
 }
 
+# occ_route_flag "$@": a flag of the cluster's processes (cluster.sh, cluster_rank.sh) joins the
+# arrays of the processes it is for: rvg_only (the render client), node_only (the switch nodes) or
+# common (all three). Sets occ_shift to the words it took (the caller shifts them).
+occ_route_flag() {
+  occ_shift=2
+  case "$1" in
+    --no-images) rvg_only+=("$1"); occ_shift=1 ;;
+    --full-sets) common+=("$1"); occ_shift=1 ;;
+    --record|--lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2") ;;
+    --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--query-budget|--occluder-pixels-per-triangle|\
+    --visibility-hold|--leaf-test|--leaf-test-below|--hc-test) occ_need_value "$@"; node_only+=("$1" "$2") ;;
+    --*) occ_need_value "$@"; common+=("$1" "$2") ;;
+    *) occ_unexpected "$1" ;;
+  esac
+}
+
+# occ_make_key FILE: a fresh random cluster key (64 hex digits), readable by this user only.
+occ_make_key() {
+  rm -f "$1"
+  (umask 077 && head -c 32 /dev/urandom | od -An -tx1 -v | tr -d ' \n' >"$1.tmp" && mv "$1.tmp" "$1") ||
+    occ_die "cannot write the cluster key $1"
+}
+
+# occ_report_failure NAME WHY LOG: "SCRIPT: NAME WHY (log: LOG):" and the process's own error lines
+# (its log's "error:" lines, else its last line), on stderr.
+occ_report_failure() {
+  local lines
+  lines=$(grep -m 3 '^error' "$3" 2>/dev/null) || lines=$(tail -n 1 "$3" 2>/dev/null)
+  echo "$(basename "$0" .sh): $1 $2 (log: $3):" >&2
+  [ -n "$lines" ] && sed 's/^/  /' <<<"$lines" >&2
+}
+
+# occ_quiet_sleep S: sleep without bash's "Killed" line for a background job that a signal ended
+# (bash prints it on its own stderr after the next command). A trap can run while stderr is
+# redirected like this: it says its line with occ_trap_say, on fd 3 where the script kept its own
+# stderr (exec 3>&2 at its start), else on stderr.
+occ_quiet_sleep() { { sleep "$1"; } 2>/dev/null; }
+occ_trap_say() { { echo "$*" >&3; } 2>/dev/null || echo "$*" >&2; }
+
 # occ_require_bins NAME...: each binary must be built in $BIN.
 occ_require_bins() {
   local b

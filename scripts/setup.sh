@@ -19,6 +19,8 @@ PKGS=(
   libx11-dev                                               # render_client --window (Xlib)
   xvfb xdotool                                             # window tests (virtual X server, key presses)
   ffmpeg                                                   # scripts/video.sh (frames -> MP4)
+  openmpi-bin                                              # mpirun: scripts/cluster_rank.sh under a job launcher (tests)
+  openssh-server                                           # sshd in network namespaces: cluster.sh --hosts tests
 )
 
 missing=()

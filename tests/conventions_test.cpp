@@ -30,8 +30,9 @@ TEST(Conventions, EveryBinaryAndScriptHasTheSameVersion) {
     EXPECT_EQ(p.wait(30s), 0) << b << ": " << p.log();
     EXPECT_EQ(p.log().rfind(std::string(b) + " (occswitch) " + version(), 0), 0u) << p.log();
   }
-  for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "bench.sh", "netlab.sh",
-                        "accuracy_sweep.sh", "video.sh", "scale_matrix.sh", "gpu_bundle.sh", "run_gpu.sh"}) {
+  for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "cluster_rank.sh",
+                        "cluster_hosts.sh", "bench.sh", "netlab.sh", "accuracy_sweep.sh", "video.sh", "scale_matrix.sh",
+                        "gpu_bundle.sh", "run_gpu.sh"}) {
     Proc p({"/bin/bash", script(s), "--version"}, dir / (std::string(s) + ".log"));
     EXPECT_EQ(p.wait(30s), 0) << s << ": " << p.log();
     EXPECT_EQ(p.log(), std::string(s) + " (occswitch) " + version() + "\n");
@@ -40,9 +41,9 @@ TEST(Conventions, EveryBinaryAndScriptHasTheSameVersion) {
 
 TEST(Conventions, ScriptHelpIsHelpAndDoesNothingElse) {
   const fs::path dir = fresh_dir("help");
-  for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "video.sh", "bench.sh", "netlab.sh",
-                        "accuracy_sweep.sh", "recovery.sh", "scale_matrix.sh", "spikes_matrix.sh", "gpu_bundle.sh",
-                        "run_gpu.sh"}) {
+  for (const char* s : {"run.sh", "build.sh", "test.sh", "setup.sh", "cluster.sh", "cluster_rank.sh",
+                        "cluster_hosts.sh", "video.sh", "bench.sh", "netlab.sh", "accuracy_sweep.sh", "recovery.sh",
+                        "scale_matrix.sh", "spikes_matrix.sh", "gpu_bundle.sh", "run_gpu.sh"}) {
     Proc p({"/bin/bash", script(s), "--help"}, dir / (std::string(s) + ".log"));
     EXPECT_EQ(p.wait(30s), 0) << s << ": " << p.log();
     const std::string out = p.log();

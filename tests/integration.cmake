@@ -23,3 +23,9 @@ add_dependencies(membership_test switch_node render_client frame_diff occlusion_
 # issue 32: each --serve session's summary counts its own client only
 occ_test(serve_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_serve_test.cpp)
 add_dependencies(serve_test switch_node render_client)
+# issue 35: scripts/cluster_rank.sh under mpirun -np 3 (skipped without mpirun) and by hand
+occ_test(launcher_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_launcher_test.cpp)
+add_dependencies(launcher_test switch_node render_client frame_diff)
+# issue 35: scripts/cluster.sh --hosts over ssh, three namespaces with their own sshd (root, sshd)
+occ_test(hosts_test integration LOCK netns LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_hosts_test.cpp)
+add_dependencies(hosts_test switch_node render_client frame_diff)
