@@ -210,8 +210,10 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
     file.drop_before(kHead + r.offset());
   }
   if (!r.vec(d.item_slot_) || d.item_slot_.size() != h.items().size()) return fail("corrupt item table");
-  for (uint32_t s : d.item_slot_)
-    if (uint64_t(s + 1) * kLeafLodLevels > nc) return fail("item slot out of range");
+  for (size_t i = 0; i < d.item_slot_.size(); ++i)  // (slot + 1) in 64 bits: a slot of 2^32 - 1 does not wrap
+    if ((uint64_t(d.item_slot_[i]) + 1) * kLeafLodLevels > nc)
+      return fail("item " + std::to_string(i) + ": slot " + std::to_string(d.item_slot_[i]) + " out of range (" +
+                  std::to_string(nc) + " cluster LODs)");
   if (!r.pod(nh) || nh > payload_size) return fail("corrupt HLOD count");
   d.hlods_.resize(nh);
   for (auto& m : d.hlods_) {

@@ -5,9 +5,17 @@
 // as usable data, never crash (run under OCC_SANITIZE for memory errors). A property the harness
 // checks that fails aborts the test binary with the property's name. The long runs are libFuzzer's
 // (OCC_LIBFUZZER).
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+
 #include <gtest/gtest.h>
 
 #include "common/fuzz/fuzz_targets.hpp"
+#include "common/lod_cache.hpp"
+#include "common/mapped_file.hpp"
+#include "common/scene_cache.hpp"
 
 using namespace occ::fuzz;
 
@@ -53,6 +61,43 @@ TEST(ParserFuzz, EveryHarnessIsTested) {
   EXPECT_EQ(targets().size(), 4u);
   for (const Target& t : targets()) EXPECT_EQ(find_target(t.name), &t);
   EXPECT_EQ(find_target("nope"), nullptr);
+}
+
+// What the harnesses found, kept: a LOD cache whose item slot is 2^32 - 1 (the range check's
+// slot + 1 wrapped to 0 in 32 bits, and the renderer read far past the cluster LODs).
+TEST(ParserFuzzFindings, LodCacheItemSlotAtTheTopOfUint32IsRejected) {
+  std::vector<uint8_t> b = read_seeds(seed_dir(*find_target("lod_cache")))[0];
+  size_t off = occ::CacheHeader::kSize;
+  auto u64 = [&] {
+    uint64_t v = 0;
+    std::memcpy(&v, b.data() + off, 8);
+    off += 8;
+    return v;
+  };
+  for (uint64_t m = 0, clusters = u64(); m < clusters; ++m) {  // origin, error; positions, normals, objects, indices
+    off += 32;
+    for (size_t bytes_each : {12, 12, 4, 4}) off += u64() * bytes_each;
+  }
+  ASSERT_EQ(u64(), fixture().hierarchy.items().size());  // the item slot table
+  const uint32_t top = 0xffffffffu;
+  std::memcpy(b.data() + off, &top, 4);
+  EXPECT_EQ(find_target("lod_cache")->run(b), Verdict::Rejected);  // the harness fits size and checksum
+}
+
+// A scene cache whose material names a texture the file does not have.
+TEST(ParserFuzzFindings, SceneCacheMaterialTextureOutOfRangeIsRejected) {
+  occ::Scene s = fixture().scene;
+  occ::Material m;
+  m.base_color_texture = 3;
+  s.materials.push_back(m);
+  s.meshes[0].material = 0;
+  const occ::Hierarchy h = occ::Hierarchy::build(s, kFixtureBuild);
+  const std::string path = (std::filesystem::temp_directory_path() / ("occ_fuzz_find_" + std::to_string(::getpid()) + ".scene")).string();
+  ASSERT_FALSE(occ::save_scene_cache(path, 1, s, h).has_value());
+  std::string why;
+  EXPECT_FALSE(occ::load_scene_cache(path, 1, &why).has_value());
+  EXPECT_EQ(why, "material 0: texture out of range");
+  std::filesystem::remove(path);
 }
 
 }  // namespace
