@@ -270,12 +270,14 @@ bool writer_gone(const std::string& name, const std::filesystem::path& file) {
   const std::string stem = name.substr(0, at), writer = name.substr(at + 5);
   if (!ends_with(stem, ".lod") && !ends_with(stem, ".scene")) return false;
   const size_t dot = writer.rfind('.');
-  if (dot != std::string::npos && writer.compare(0, dot, writer_place()) == 0) {
+  if (dot != std::string::npos && writer.compare(0, dot, writer_place()) == 0) {  // a writer here: ask it
     char* end = nullptr;
     const long pid = std::strtol(writer.c_str() + dot + 1, &end, 10);
-    if (*end == '\0' && pid > 0) return pid != ::getpid() && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH;
+    if (*end == '\0' && pid > 0 && pid != ::getpid() && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) return true;
   }
-  std::error_code ec;  // a writer this process cannot ask: gone when the file has not changed for long
+  // Any writer (also one whose pid another process now has): gone when the file has not changed
+  // for long (a live writer writes on).
+  std::error_code ec;
   const auto written = std::filesystem::last_write_time(file, ec);
   return !ec && std::filesystem::file_time_type::clock::now() - written > std::chrono::seconds(kStaleTempSeconds);
 }

@@ -20,11 +20,11 @@ std::string lod_cache_path(const std::string& cache_dir, const std::string& scen
 // complete (atomic); a writer killed on the way leaves it behind.
 std::string cache_temp_path(const std::string& path, long pid = -1);
 // Removes the temporaries of cache files (*.lod.tmp.*, *.scene.tmp.*) in `dir` whose writer is
-// gone: one of this host and pid namespace that no longer runs, or one of elsewhere (another
-// host on a shared disk, an older name) untouched for kStaleTempSeconds. Live writers' files stay:
-// processes that start together and build the same cache each write their own temporary, and
-// the last rename wins (the contents are equal). Returns how many it removed; errors are ignored
-// (another process may remove the same file).
+// gone: one of this host and pid namespace that no longer runs, or any (of another host on a
+// shared disk, an older name, a pid taken by another process) untouched for kStaleTempSeconds.
+// Live writers' files stay: processes that start together and build the same cache each write
+// their own temporary, and the last rename wins (the contents are equal). Returns how many it
+// removed; errors are ignored (another process may remove the same file).
 size_t remove_stale_cache_temps(const std::string& dir);
 inline constexpr long kStaleTempSeconds = 3600;
 

@@ -190,12 +190,14 @@ TEST(LodCacheTemporaries, WhoseWriterIsGone) {
   const std::string gone = fs::path(cache_temp_path(base, dead)).filename().string();
   touch(live, 0);
   touch(gone, 0);
+  const std::string reused = fs::path(cache_temp_path(base, 1)).filename().string();  // pid 1 runs: not its writer
+  touch(reused, 2);
   touch("s-00000000.scene.tmp.otherhost.4026531836.77", 2);  // another host, untouched for 2 h
   touch("s-00000000.lod.tmp.otherhost.4026531836.78", 0);    // another host, being written
   touch("s-00000000.lod.tmp.1234", 2);                       // an older name, untouched for 2 h
   touch("notes.txt.tmp.otherhost.1.2", 2);                   // not a cache file's temporary
   touch("s-00000000.lod", 2);                                // a cache
-  EXPECT_EQ(remove_stale_cache_temps(dir.string()), 3u);
+  EXPECT_EQ(remove_stale_cache_temps(dir.string()), 4u);
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
