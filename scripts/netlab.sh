@@ -11,6 +11,7 @@
 # --repeats N (default 3) runs every point N times, interleaved (all points once, then all again),
 # so that a slow minute of the machine spreads over the points instead of landing on one; the
 # figures are the median over the runs, with their min and max.
+#
 # --path walk|orbit|fly gets --frames frames (default walk, 150); the viewport defaults to 512x512 as
 # everywhere; --camera-mode as in scripts/cluster.sh (default latest here).
 #
@@ -18,9 +19,9 @@
 # mean/p95, bytes/frame, frames completed), OUT/net.csv (per point: runs, failed runs, the frames
 # the figures rest on (all runs, shortest run), and median,min,max of each figure:
 # scripts/netlab_aggregate.py), OUT/net_fps.png, OUT/net_latency.png, OUT/net_chunks.png (medians
-# with min-max bars). Rates are Mbit/s per
-# direction; delays are one-way, per link. --netns (root): the three processes run in three
-# network namespaces joined by veth pairs, rates as tc tbf qdiscs (see scripts/cluster.sh).
+# with min-max bars). Rates are Mbit/s per direction; delays are one-way, per link. --netns
+# (root): the three processes run in three network namespaces joined by veth pairs, rates as tc
+# tbf qdiscs (see scripts/cluster.sh).
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 scene="" path="walk" frames=150 delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay_ms=5

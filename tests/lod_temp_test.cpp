@@ -146,6 +146,8 @@ TEST(LodCacheTemporaries, WritersKilledMidWriteLeaveTemporariesThatTheNextStartR
   std::string why;
   const auto lod = LodData::load(path, LodData::cache_key(h, {}), scene, h, &why);
   ASSERT_TRUE(lod.has_value()) << why;
+  EXPECT_GT(fs::file_size(path), 68u << 10) << "the first writer was blocked mid-write: more than the 4 KB read "
+                                                "and a pipe's 64 KB";
   char hash[17];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(lod->hash()));
   EXPECT_EQ(file_text(next.out), std::string(hash) + "\n");
