@@ -9,6 +9,7 @@ set terminal pngcairo size 900,500 font ",10"
 set datafile separator ","
 set key outside right
 set grid
+set offsets graph 0.03, graph 0.03, 0, 0  # room for the bars of the first and last point
 rate_rows(r) = sprintf("< awk -F, 'NR > 1 && $4 > 0 && $3 == 100 && $2 == %s' '%s' | sort -t, -k1,1n -u", r, csv)
 chunk_rows = sprintf("< awk -F, 'NR > 1 && $4 > 0 && $1 == %g && $2 == 1000' '%s' | sort -t, -k3,3n -u", chunk_delay, csv)
 set xlabel "one-way delay per link (ms)"
