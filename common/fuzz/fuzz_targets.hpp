@@ -15,7 +15,7 @@
 //
 // Built two ways (common/fuzz/CMakeLists.txt): occ_fuzz_targets for the fixed-seed runs of the
 // test suite (tests/fuzz_parsers_test.cpp), and one libFuzzer binary per harness (OCC_LIBFUZZER,
-// clang, ASan+UBSan). Seeds: tests/fuzz/<name>/, written by make_fuzz_seeds.
+// clang, ASan+UBSan). Seeds: tests/fuzz/<name>/, written by tests/make_fuzz_seeds.cpp.
 #pragma once
 #include <cstdint>
 #include <random>
@@ -41,8 +41,8 @@ std::span<const Target> targets();
 const Target* find_target(std::string_view name);
 
 // The scene and hierarchy the LOD cache harness loads against (a cache only fits the hierarchy
-// it was built for): hard:walls:1 split and built with kFixtureBuild. make_fuzz_seeds writes
-// the LOD cache seed from the same.
+// it was built for): hard:walls:1 split and built with kFixtureBuild. tests/make_fuzz_seeds.cpp
+// writes the LOD cache seed from the same.
 struct Fixture {
   Scene scene;
   Hierarchy hierarchy;
