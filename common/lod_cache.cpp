@@ -2,9 +2,12 @@
 // load_or_build_lod (lod_cache.hpp).
 #include "common/lod_cache.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <cctype>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -146,7 +149,7 @@ std::optional<std::string> LodData::save(const std::string& path) const {
   std::error_code ec;
   std::filesystem::path p(path);
   if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path(), ec);
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const std::string tmp = cache_temp_path(path);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) return "cannot write " + tmp;
@@ -207,8 +210,10 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
     file.drop_before(kHead + r.offset());
   }
   if (!r.vec(d.item_slot_) || d.item_slot_.size() != h.items().size()) return fail("corrupt item table");
-  for (uint32_t s : d.item_slot_)
-    if (uint64_t(s + 1) * kLeafLodLevels > nc) return fail("item slot out of range");
+  for (size_t i = 0; i < d.item_slot_.size(); ++i)  // (slot + 1) in 64 bits: a slot of 2^32 - 1 does not wrap
+    if ((uint64_t(d.item_slot_[i]) + 1) * kLeafLodLevels > nc)
+      return fail("item " + std::to_string(i) + ": slot " + std::to_string(d.item_slot_[i]) + " out of range (" +
+                  std::to_string(nc) + " cluster LODs)");
   if (!r.pod(nh) || nh > payload_size) return fail("corrupt HLOD count");
   d.hlods_.resize(nh);
   for (auto& m : d.hlods_) {
@@ -228,6 +233,69 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   if (!r.done()) return fail("trailing bytes");
   d.hash_ = hash;
   return d;
+}
+
+// ---- Temporaries of cache files (lod_cache.hpp): named by their writer, removed when it is gone.
+
+namespace {
+
+// This process's host and pid namespace as a temporary names them: "<host>.<namespace inode>",
+// the host name's characters other than letters, digits and '-' written as '-'.
+const std::string& writer_place() {
+  static const std::string place = [] {
+    char host[256] = {};
+    ::gethostname(host, sizeof host - 1);
+    std::string h = host;
+    for (char& c : h)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-') c = '-';
+    std::error_code ec;
+    const std::string ns = std::filesystem::read_symlink("/proc/self/ns/pid", ec).string();  // "pid:[N]"
+    std::string inode;
+    for (char c : ns)
+      if (std::isdigit(static_cast<unsigned char>(c))) inode += c;
+    return (h.empty() ? "host" : h) + "." + (inode.empty() ? "0" : inode);
+  }();
+  return place;
+}
+
+bool ends_with(const std::string& s, const char* suffix) {
+  const size_t n = std::strlen(suffix);
+  return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
+}
+
+// Whether the writer of temporary `name` (a file name) is gone; false for names of other files.
+bool writer_gone(const std::string& name, const std::filesystem::path& file) {
+  const size_t at = name.rfind(".tmp.");
+  if (at == std::string::npos) return false;
+  const std::string stem = name.substr(0, at), writer = name.substr(at + 5);
+  if (!ends_with(stem, ".lod") && !ends_with(stem, ".scene")) return false;
+  const size_t dot = writer.rfind('.');
+  if (dot != std::string::npos && writer.compare(0, dot, writer_place()) == 0) {  // a writer here: ask it
+    char* end = nullptr;
+    const long pid = std::strtol(writer.c_str() + dot + 1, &end, 10);
+    if (*end == '\0' && pid > 0 && pid != ::getpid() && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) return true;
+  }
+  // Any writer (also one whose pid another process now has): gone when the file has not changed
+  // for long (a live writer writes on).
+  std::error_code ec;
+  const auto written = std::filesystem::last_write_time(file, ec);
+  return !ec && std::filesystem::file_time_type::clock::now() - written > std::chrono::seconds(kStaleTempSeconds);
+}
+
+}  // namespace
+
+std::string cache_temp_path(const std::string& path, long pid) {
+  return path + ".tmp." + writer_place() + "." + std::to_string(pid < 0 ? long(::getpid()) : pid);
+}
+
+size_t remove_stale_cache_temps(const std::string& dir) {
+  size_t removed = 0;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir.empty() ? "." : dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code rm;
+    if (writer_gone(it->path().filename().string(), it->path()) && std::filesystem::remove(it->path(), rm)) ++removed;
+  }
+  return removed;
 }
 
 std::string lod_cache_path(const std::string& cache_dir, const std::string& spec) {
@@ -262,6 +330,9 @@ long rss_kb(const char* field) {
 LodData load_or_build_lod(const Scene& scene, const Hierarchy& h, const LodParams& params, const std::string& cache_dir,
                           const std::string& spec, const std::string& who) {
   const std::string path = lod_cache_path(cache_dir, spec);
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  if (const size_t n = remove_stale_cache_temps(dir))
+    std::cerr << who << ": removed " << n << " temporary cache file(s) of writers that are gone in " << dir << "\n";
   const uint64_t key = LodData::cache_key(h, params);
   const double t0 = now_ms();
   std::string why;

@@ -210,7 +210,7 @@ struct SceneCacheIo {
     std::error_code ec;
     std::filesystem::path fp(path);
     if (fp.has_parent_path()) std::filesystem::create_directories(fp.parent_path(), ec);
-    const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+    const std::string tmp = cache_temp_path(path);
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) return "cannot write " + tmp;
     uint8_t head[kHead] = {};
@@ -288,6 +288,9 @@ struct SceneCacheIo {
       return fail(*bad);
     for (const Texture& t : s.textures)
       if (t.image >= s.images.size()) return fail("texture image out of range");
+    for (size_t k = 0; k < s.materials.size(); ++k)
+      if (const int32_t t = s.materials[k].base_color_texture; t != -1 && (t < 0 || size_t(t) >= s.textures.size()))
+        return fail("material " + std::to_string(k) + ": texture out of range");
     for (size_t m = 0; m < s.meshes.size(); ++m)
       if (s.meshes[m].material != kNoMaterial && s.meshes[m].material >= s.materials.size())
         return fail("mesh " + std::to_string(m) + ": material out of range");
@@ -335,6 +338,7 @@ std::optional<std::string> save_scene_cache(const std::string& path, uint64_t ke
 }
 
 std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why) {
+  remove_stale_cache_temps(std::filesystem::path(path).parent_path().string());
   return SceneCacheIo::load(path, key, why);
 }
 

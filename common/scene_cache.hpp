@@ -40,7 +40,8 @@ uint64_t scene_cache_key(const std::string& spec, const BuildParams& params);
 std::optional<std::string> save_scene_cache(const std::string& path, uint64_t key, const Scene& scene,
                                             const Hierarchy& h);
 // nullopt and *why (missing, truncated, bad magic, version, stale key, checksum, inconsistent
-// data, with what and where) when the file cannot be used.
+// data, with what and where) when the file cannot be used. First removes the stale temporaries
+// of its folder (remove_stale_cache_temps, lod_cache.hpp).
 std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why);
 
 }  // namespace occ

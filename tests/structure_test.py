@@ -23,6 +23,7 @@ LAYERS = {
     "common/setup": ["common", "common/scene", "common/lod"],
     "common/cull": ["common", "common/scene", "common/lod"],
     "common/gl": ["common", "common/scene", "common/lod", "common/setup", "common/cull"],
+    "common/fuzz": ["common", "common/scene", "common/lod", "common/setup", "common/cull"],
     "protocol": ["common"],
     "protocol/net": ["common", "protocol"],
     "protocol/relay": ["common", "protocol", "protocol/net"],
