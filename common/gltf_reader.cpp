@@ -59,11 +59,12 @@ bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::stri
   return true;
 }
 
-// Does [offset, offset + (count-1) * stride + elem) fit in size bytes? Overflow-safe; stride >= elem.
+// Does [offset, offset + (count-1) * stride + elem) fit in size bytes? Overflow-safe; stride >= elem
+// (a stride of 0 only with elem 0: every element is the same empty range).
 bool fits(size_t offset, size_t count, size_t stride, size_t elem, size_t size) {
   if (count == 0) return offset <= size;
   if (offset > size || elem > size - offset) return false;
-  return count - 1 <= (size - offset - elem) / stride;
+  return stride == 0 || count - 1 <= (size - offset - elem) / stride;
 }
 
 // count elements, stride bytes apart, all inside their buffer.
