@@ -13,7 +13,6 @@
 #include "common/cpu_time.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
-#include "common/gl/geometry_query.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
@@ -110,8 +109,7 @@ class SwitchNode {
   }
 
   // Everything that belongs to one render client starts afresh: connections, cameras, sets and
-  // diff streams, the query history of adaptive queries, the measured query budget, the
-  // visibility hold, statistics.
+  // diff streams, the query history of adaptive queries, the visibility hold, statistics.
   void reset_client_state() {
     cameras_in_.reset();
     set_peer(nullptr);
@@ -123,19 +121,13 @@ class SwitchNode {
     dropped_.clear();
     cameras_.emplace();
     skipper_.reset();
-    budget_.reset();
     hold_.reset();
     if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
-    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
     if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
     step_.emplace(*g_.renderables, o_.config, o_.height);
-    geometry_.reset();
     querier_.reset();
     // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
     querier_ = std::make_unique<HcQuerier>(*g_.ctx, o_.hc.test, o_.config.visible_pixel_lod && o_.config.lod());
-    if (o_.hc.leaf_test == LeafTest::geometry)  // after a batch's geometry: the box queries' state again
-      geometry_ = std::make_unique<GeometryQuerier>(*g_.ctx, *querier_, *g_.renderer, *g_.renderables,
-                                                    [this] { querier_->begin(hc_camera_); });
     visible_ = VisibleSet(g_.renderables->count());
     stream_ = DiffReceiver{};
     last_camera_.reset();
@@ -145,12 +137,9 @@ class SwitchNode {
     peer_epoch_wait_ = peer_resync_seen_ = 0;
     next_poll_ = Clock::time_point{};
     peer_sent_bytes_ = resyncs_ = single_frames_ = 0;
-    or_triangles_ = 0;
-    ms_per_query_ = ms_per_triangle_ = 0;
     tail_cpu0_ = hc_cpu0_ = 0;
     or_us_ = or_cpu_us_ = or_tail_cpu_us_ = or_tail_us_ = 0;
-    geometry_queries_ = geometry_occluded_ = 0;
-    whole_ = frames_ = queries_ = skipped_ = pixel_stops_ = hlods_ = assumed_visible_ = held_ = 0;
+    frames_ = queries_ = skipped_ = pixel_stops_ = hlods_ = assumed_visible_ = held_ = 0;
   }
 
   net::PeerExpectation expect(std::optional<wire::Role> role, std::optional<uint8_t> node_id) const {
@@ -453,46 +442,34 @@ class SwitchNode {
     if (auto err = peer_->send(m)) peer_lost_ = "cannot be sent to: " + *err;
   }
 
-  // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera,
-  // the occluders that cover enough pixels (occluder selection; stricter where the camera asks for
-  // selected occluders). A frame without occlusion (the render client's OcclusionGate) draws nothing.
+  // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera.
+  // A frame without occlusion (the render client's OcclusionGate) draws nothing.
   void draw_occluders(const Camera& cam) {
-    or_triangles_ = 0;
     drawn_.assign(g_.renderables->count(), 0);
     if (!occlusion_) return;
     g_.renderer->begin_frame(cam, false);
     std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
     std::sort(ids.begin(), ids.end());
     for (uint32_t id : ids) drawn_[id] = 1;
-    or_camera_ = cam;
-    selection().filter(ids, *g_.renderables, or_camera_, o_.height);
-    or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
+    g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly);
     // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
     // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for
-    // finish_or() and lengthened the OR's tail, which HC(frame) waits for. Duplex orbit 512^2:
-    // OR tail 2.0-2.4 -> 0.3-0.4 ms wall (docs/results.md).
+    // finish_or() and lengthened the OR's tail, which HC(frame) waits for.
     g_.ctx->gl().Flush();
   }
 
-  // Draws, depth only, those of `ids` that are not in this frame's depth buffer yet and that the
-  // occluder selection keeps as seen from `cam` (the OR's streamed additions, occluder fusion);
-  // all of `ids` count as drawn from now on.
-  struct NewOccluders {
-    std::vector<uint32_t> ids;  // the renderables drawn
-    uint64_t triangles = 0;
-  };
-  NewOccluders draw_new_occluders(std::span<const uint32_t> ids, const Camera& cam) {
+  // Draws, depth only, those of `ids` that are not in this frame's depth buffer yet (the OR's
+  // streamed additions, occluder fusion); all of `ids` count as drawn from now on. Returns the
+  // renderables drawn.
+  std::vector<uint32_t> draw_new_occluders(std::span<const uint32_t> ids) {
     std::vector<uint32_t> fresh;
     for (uint32_t id : ids)
       if (!drawn_[id]) {
         drawn_[id] = 1;
         fresh.push_back(id);
       }
-    selection().filter(fresh, *g_.renderables, cam, o_.height);
-    if (fresh.empty()) return {};
-    const uint64_t triangles =
-        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
-    return {std::move(fresh), triangles};
+    if (!fresh.empty()) g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly);
+    return fresh;
   }
 
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
@@ -524,7 +501,7 @@ class SwitchNode {
       }
       std::optional<NumberedCamera> cam = take_camera(frame, min_camera);
       if (!cam) return;
-      take_mode(*cam);
+      occlusion_ = cam->occlusion;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
@@ -535,7 +512,7 @@ class SwitchNode {
       // ---- HC(frame): camera to the render client and the other node first (both coarsen
       // their V_{frame-1} with it), then cull and stream the diff.
       try {
-        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
+        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, uint8_t(cam->occlusion ? 1 : 0)));
       } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
@@ -552,14 +529,14 @@ class SwitchNode {
       poll_for_peer();
       std::optional<NumberedCamera> cam = take_camera(frame, last_camera_ ? *last_camera_ + 1 : 0);
       if (!cam) return;
-      take_mode(*cam);
+      occlusion_ = cam->occlusion;
       const Clock::time_point or_start = Clock::now();
       const uint64_t or_cpu0 = process_cpu_us();
       tail_cpu0_ = 0;
       tail_t0_ = or_start;
       draw_occluders(cam->camera);
       finish_or(or_start, or_cpu0, Clock::duration{0});
-      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
+      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, uint8_t(cam->occlusion ? 1 : 0)));
       hc_frame(frame, cam->camera);
       ++single_frames_;
     }
@@ -673,11 +650,7 @@ class SwitchNode {
           for (uint32_t id : d->added)
             if (!o_.config.full_sets || !std::binary_search(before.begin(), before.end(), id))
               hold_->seen(g_.renderables->node_of(id), frame);
-        if (occlusion_) {
-          const NewOccluders drawn = draw_new_occluders(d->added, or_camera_);
-          or_triangles_ += drawn.triangles;
-          if (!drawn.ids.empty()) g_.ctx->gl().Flush();  // as in draw_occluders
-        }
+        if (occlusion_ && !draw_new_occluders(d->added).empty()) g_.ctx->gl().Flush();  // as in draw_occluders
       } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
         if (!have_camera) return lost(f + "sent its diff before its camera");
         start_frame();
@@ -698,7 +671,6 @@ class SwitchNode {
     const Clock::time_point hc_start = Clock::now();
     hc_cpu0_ = process_cpu_us();
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
-    hc_camera_ = cam;
     if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
       FrustumOnlyQueries all;
       HcFrame hc = step_->hc(frame, visible_, cam, all, HcLocal{.order = o_.hc.order}, out);
@@ -707,26 +679,21 @@ class SwitchNode {
       ++frustum_frames_;
       return;
     }
-    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
-                  hold_ ? &*hold_ : nullptr};
-    local.leaf_test = o_.hc.leaf_test;
-    local.geometry_below = o_.hc.geometry_below;
+    HcLocal local{skipper_ ? &*skipper_ : nullptr, o_.hc.order, nullptr, hold_ ? &*hold_ : nullptr};
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         // Restores the GL state the queries need; the pyramid is stale where they were drawn.
-        const NewOccluders drawn = draw_new_occluders(found, cam);
-        if (drawn.ids.empty()) return;
+        const std::vector<uint32_t> drawn = draw_new_occluders(found);
+        if (drawn.empty()) return;
         std::vector<Aabb> boxes;
-        boxes.reserve(drawn.ids.size());
-        for (uint32_t id : drawn.ids) boxes.push_back(g_.renderables->hierarchy().node(g_.renderables->node_of(id)).box);
+        boxes.reserve(drawn.size());
+        for (uint32_t id : drawn) boxes.push_back(g_.renderables->hierarchy().node(g_.renderables->node_of(id)).box);
         querier_->depth_added(boxes);
       };
     querier_->begin(cam);
-    OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;
-    HcFrame hc = step_->hc(frame, visible_, cam, queries, local, out);
+    HcFrame hc = step_->hc(frame, visible_, cam, *querier_, local, out);
     querier_->end();
     end_hc(hc, hc_start, out);
-    if (budget_) update_costs(hc.eof);
   }
 
   // HC's EndOfFrame, with this frame's times, to the render client and the other node.
@@ -740,27 +707,11 @@ class SwitchNode {
     out.send(hc.eof);
     ++frames_;
     queries_ += hc.stats.queries;
-    geometry_queries_ += hc.stats.geometry_queries;
-    geometry_occluded_ += hc.stats.geometry_occluded;
     assumed_visible_ += hc.stats.skipped;
     pixel_stops_ += hc.stats.pixel_stops;
     hlods_ += hc.stats.hlods;
     skipped_ += hc.tests_above_fronts;
-    whole_ += hc.stats.whole;
     held_ += hc.held;
-  }
-
-  // The query budget's prices, measured on this node (moving averages): a query = HC time per
-  // query; a triangle = OR time per triangle drawn, twice (the OR and the render client draw it).
-  void update_costs(const wire::EndOfFrame& eof) {
-    constexpr double a = 0.2;
-    if (eof.queries >= 16) ms_per_query_ = ms_per_query_ == 0 ? eof.hc_us / 1e3 / eof.queries
-                                                              : (1 - a) * ms_per_query_ + a * eof.hc_us / 1e3 / eof.queries;
-    if (or_triangles_ >= 10000) {
-      const double t = 2.0 * eof.or_us / 1e3 / double(or_triangles_);
-      ms_per_triangle_ = ms_per_triangle_ == 0 ? t : (1 - a) * ms_per_triangle_ + a * t;
-    }
-    budget_->set_costs(ms_per_query_, ms_per_triangle_);
   }
 
   void mark_tail() {
@@ -773,21 +724,15 @@ class SwitchNode {
     auto r = rvg_->stats();
     const uint64_t peer_bytes = peer_sent_bytes_ + (peer_ ? peer_->stats().sent.bytes : 0);
     std::cerr << who_ << ": " << frames_ << " HC frames, " << queries_ << " queries (" << assumed_visible_
-              << " more skipped by adaptive queries; " << whole_ << " subtrees accepted whole by the query budget, "
-              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << held_
-              << " renderables kept by the visibility hold; leaf test " << (o_.hc.leaf_test == LeafTest::geometry ? "geometry: " : "box")
-              << (o_.hc.leaf_test == LeafTest::geometry
-                      ? std::to_string(geometry_queries_) + " geometry queries, " + std::to_string(geometry_occluded_) + " leaves rejected"
-                      : std::string())
-              << "); " << frustum_frames_ << " frames without occlusion and " << selected_frames_
-              << " with selected occluders (the render client's gate), sent " << r.sent.bytes
+              << " more skipped by adaptive queries; " << held_ << " renderables kept by the visibility hold); "
+              << frustum_frames_ << " frames without occlusion (the render client's gate), sent " << r.sent.bytes
               << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     if (resyncs_)
       std::cerr << who_ << ": " << resyncs_ << " resyncs from the render client, " << single_frames_
                 << " HC frames served alone\n";
     if (querier_) {
       const HcQuerier::Stats& q = querier_->stats();
-      static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch", "cpu-pyramid"};
+      static constexpr const char* kTest[] = {"queries", "pyramid", "cpu-pyramid"};
       std::fprintf(stderr,
                    "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
                    "batch draws, %llu proven occluded by the depth pyramid (%.2f M pixels of their rectangles) and %llu shown; of %llu "
@@ -812,9 +757,6 @@ class SwitchNode {
   wire::Hello mine_;
   std::optional<net::Listener> listener_;  // the whole run; during a session only the Door uses it
   std::unique_ptr<HcQuerier> querier_;
-  std::unique_ptr<GeometryQuerier> geometry_;  // --leaf-test geometry: wraps querier_
-  Camera hc_camera_;                           // the current HC's camera (geometry_'s restore)
-  uint64_t geometry_queries_ = 0, geometry_occluded_ = 0;
   std::unique_ptr<net::Connection> peer_, rvg_;
   // peer_ (the pointer; the session thread writes it, the Door reads it) and rejoined_peer_ (a
   // restarted node 1 the Door let in, for the session to take).
@@ -839,26 +781,10 @@ class SwitchNode {
   std::optional<CameraReceiver> cameras_in_;
   std::optional<SwitchStep> step_;
   std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
-  OccluderSelection select_{o_.hc.occluder_pixels_per_triangle};
-  // Camera.occlusion 2: at least wire::kSelectedOccluderPixelsPerTriangle px per triangle.
-  OccluderSelection select_strict_{std::max(o_.hc.occluder_pixels_per_triangle, wire::kSelectedOccluderPixelsPerTriangle)};
-  const OccluderSelection& selection() const { return selected_ ? select_strict_ : select_; }
-  // This frame's camera: with or without occlusion, with which occluders.
-  void take_mode(const NumberedCamera& cam) {
-    occlusion_ = cam.occlusion;
-    selected_ = cam.selected_occluders;
-    selected_frames_ += occlusion_ && selected_;
-  }
-  bool selected_ = false;        // this frame's camera asks for selected occluders
-  uint64_t selected_frames_ = 0;  // frames (OR) with selected occluders
-  Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)
-  std::optional<QueryBudget> budget_;
-  uint64_t or_triangles_ = 0;  // drawn by the current OR
-  double ms_per_query_ = 0, ms_per_triangle_ = 0;
   uint64_t tail_cpu0_ = 0, hc_cpu0_ = 0;  // process CPU time (us) at the OR tail's / HC's start
   uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0, or_tail_us_ = 0;
   Clock::time_point tail_t0_;
-  uint64_t whole_ = 0, frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
+  uint64_t frames_ = 0, queries_ = 0, skipped_ = 0, pixel_stops_ = 0, hlods_ = 0, assumed_visible_ = 0;
   std::optional<QuerySkipper> skipper_;
   std::optional<VisibilityHold> hold_;
   uint64_t held_ = 0;  // renderables kept in V by the hold (summed over HC frames)

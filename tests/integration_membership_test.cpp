@@ -202,8 +202,7 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   const std::string key = write_key(dir / "cluster.key", 'c');
   ClusterOptions o(kCity, "walk:60", kView);
   o.all = {"--cluster-key-file", key};
-  // The query budget's measured costs (timings) would make the visible sets of two runs differ.
-  o.node0 = o.node1 = {"--serve", "--sessions", "3", "--query-budget", "off"};
+  o.node0 = o.node1 = {"--serve", "--sessions", "3"};
   HeldCluster h(dir / "first", o);
   Cluster& c = h.c;
   ASSERT_TRUE(h.start()) << c.logs();

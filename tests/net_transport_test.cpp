@@ -375,10 +375,10 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   peer.join();
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(),
-                       "hello: unsupported protocol version 1 (this build speaks 6)"))
+                       "hello: unsupported protocol version 1 (this build speaks 7)"))
       << result.error();
   EXPECT_EQ(bye_reason(peer_saw),
-            "protocol error: hello: unsupported protocol version 1 (this build speaks 6)");
+            "protocol error: hello: unsupported protocol version 1 (this build speaks 7)");
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 

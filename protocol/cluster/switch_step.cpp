@@ -51,13 +51,10 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
                         {.visible_pixel_lod = lod_.visible_pixel_lod,
                          .start = start,
                          .skipper = local.skipper,
-                         .budget = local.budget,
                          .on_visible = [&](uint32_t id) { out.visible(id); },
                          .stats = &result.stats,
                          .order = local.order,
-                         .occluders = local.occluders,
-                         .leaf_test = local.leaf_test,
-                         .geometry_below = local.geometry_below});
+                         .occluders = local.occluders});
   VisibleSet cur(visible.id_limit());
   for (uint32_t id : found) cur.insert(id);
   std::vector<uint32_t> held;

@@ -25,16 +25,12 @@ namespace occ {
 // conservative superset of the visible one). They need not agree between processes.
 struct HcLocal {
   QuerySkipper* skipper = nullptr;  // adaptive queries
-  QueryBudget* budget = nullptr;    // accept subtrees whole where queries do not pay
   HcOrder order = HcOrder::levels;
   // Occluder fusion (HcOptions::occluders): draws the renderables a batch accepted, depth only.
   std::function<void(std::span<const uint32_t>)> occluders = nullptr;
   // Hysteresis (culling.hpp VisibilityHold): hc() records what it found and keeps recently seen
   // renderables of V_{f-1} in V_f. The caller records the other node's additions.
   VisibilityHold* hold = nullptr;
-  // Leaves whose box passed are tested with their geometry (needs q.geometry_queries()).
-  LeafTest leaf_test = LeafTest::box;
-  double geometry_below = 0.1;  // HcOptions::geometry_below
 };
 
 struct HcFrame {

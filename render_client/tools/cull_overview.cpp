@@ -22,7 +22,6 @@
 #include "common/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/box_query.hpp"
-#include "common/gl/geometry_query.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -65,9 +64,6 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
   HcQuerier querier(*ctx, o.hc.test, false);  // tau = 0: no sample counts needed
   const Renderables renderables(h, nullptr);
-  Camera current;  // HC's camera (the geometry querier's restore)
-  GeometryQuerier geometry(*ctx, querier, renderer, renderables, [&] { querier.begin(current); });
-  OcclusionQueries& queries = o.hc.leaf_test == LeafTest::geometry ? static_cast<OcclusionQueries&>(geometry) : querier;
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
   const SwitchStep step(renderables, config, o.height);
@@ -85,25 +81,18 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     // HC(f), with the node's choices (occluder fusion draws what it finds that OR did not).
     std::vector<uint8_t> drawn(h.size(), 0);
     for (uint32_t id : occluders) drawn[id] = 1;
-    const OccluderSelection select{o.hc.occluder_pixels_per_triangle};
-    select.filter(occluders, renderables, path[f], o.height);
     renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
-    // (No query budget: its choices follow the nodes' measured timings, which a replay cannot.)
-    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], nullptr, o.hc.order, nullptr};
-    local.leaf_test = o.hc.leaf_test;
-    local.geometry_below = o.hc.geometry_below;
-    current = path[f];
+    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], o.hc.order, nullptr};
     if (o.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
         for (uint32_t id : found)
           if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
-        select.filter(fresh, renderables, path[f], o.height);
         renderer.draw_items(items_of_nodes(h, fresh), SceneRenderer::Mode::DepthOnly);
         querier.depth_added();
       };
     querier.begin(path[f]);
-    HcFrame hc = step.hc(f, visible, path[f], queries, local, nowhere);
+    HcFrame hc = step.hc(f, visible, path[f], querier, local, nowhere);
     querier.end();
     before = std::move(prev);
     last_stats = hc.stats;
