@@ -56,7 +56,8 @@ std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, Occ
   // With tau = 0 every accepted node is a leaf at full detail (LOD data, if any, is never used):
   // the LOD traversal from the root is exactly Algorithm 4.1.
   const LodSelector sel(r, cam, 1.0, 0.0);
-  return hardware_cull_lod(r.hierarchy(), cam, q, sel, {.on_visible = on_visible, .stats = stats});
+  return hardware_cull_lod(r.hierarchy(), cam, q, sel,
+                           {.choices = {.order = HcOrder::levels}, .on_visible = on_visible, .stats = stats});
 }
 
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
@@ -68,7 +69,8 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
                                         const LodSelector& sel, const HcOptions& o) {
   CullStats local;
   CullStats& st = o.stats ? *o.stats : local;
-  QuerySkipper* const skipper = o.skipper;
+  QuerySkipper* const skipper = o.choices.adaptive_queries ? o.skipper : nullptr;
+  const std::function<void(std::span<const uint32_t>)> occluders = o.choices.occluder_fusion ? o.occluders : nullptr;
   const Frustum fr = cam.frustum();
   const double tau = sel.tau();
   const bool pixel_lod = o.visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
@@ -77,7 +79,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
   std::vector<uint32_t> next;
   using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  const bool near_first = o.order == HcOrder::near_first;
+  const bool near_first = o.choices.order == HcOrder::near_first;
   auto push = [&](uint32_t id) {
     if (near_first)
       queue.emplace(h.node(id).box.distance2(cam.eye), id);
@@ -173,7 +175,7 @@ std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, O
         for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
       }
     }
-    if (o.occluders && !accepted.empty()) o.occluders(accepted);
+    if (occluders && !accepted.empty()) occluders(accepted);
   }
   std::sort(out.begin(), out.end());
   return out;

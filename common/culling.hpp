@@ -157,7 +157,7 @@ enum class HcOrder {
   levels,      // breadth-first: a whole level of the hierarchy per batch (paper 4.7.1)
   near_first,  // nearest boxes first: shells from a distance-ordered queue (the nearest box at d
                // and all within 2d), so the near occluders found (and drawn, HcOptions::occluders)
-               // hide what the next shell holds
+               // hide what the next shell holds (the default)
 };
 
 // How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each (queries: what
@@ -167,16 +167,32 @@ enum class HcOrder {
 // the same: only what they cost differs.
 enum class HcTest { queries, pyramid, cpu_pyramid };
 
+// How HC searches: the one option set, node-local (not in the config hash: the processes need not
+// agree, the visible set stays a conservative superset either way). The CLI fills it
+// (add_hc_options, protocol/cluster); the switch node's cull frame builds what each choice needs
+// (switch_node/cull_frame.hpp); SwitchStep::hc and hardware_cull_lod read it through HcOptions.
+struct HcChoices {
+  HcOrder order = HcOrder::near_first;
+  bool adaptive_queries = true;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
+  bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
+  int visibility_hold = 2;       // frames a node found visible stays in V (VisibilityHold; 0 off)
+  // How each box is tested (common/gl/hzb_query.hpp): cpu_pyramid on llvmpipe (the default);
+  // queries or pyramid on a hardware GPU (no per-frame read-back).
+  HcTest test = HcTest::cpu_pyramid;
+};
+
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {
+  // The traversal reads choices.order; adaptive queries and occluder fusion act through `skipper`
+  // and `occluders` (state the caller keeps across frames), each only when its choice is on.
+  HcChoices choices = {};
   bool visible_pixel_lod = false;
   std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
-  QuerySkipper* skipper = nullptr;       // adaptive queries (null: query every node)
+  QuerySkipper* skipper = nullptr;       // choices.adaptive_queries' state (null: query every node)
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
-  HcOrder order = HcOrder::levels;
   uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
-  // Occluder fusion: called after each batch with the renderables it accepted, before the next
+  // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it accepted, before the next
   // batch is issued; the caller draws them (depth only) into the buffer the queries test, so what
   // was just found visible hides what lies behind it in the same frame. Real geometry only adds
   // depth that is really there: the traversal stays conservative.

@@ -673,13 +673,13 @@ class SwitchNode {
     DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
     if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
       FrustumOnlyQueries all;
-      HcFrame hc = step_->hc(frame, visible_, cam, all, HcLocal{.order = o_.hc.order}, out);
+      HcFrame hc = step_->hc(frame, visible_, cam, all, {.choices = o_.hc}, out);
       hc.stats.queries = hc.eof.queries = 0;
       end_hc(hc, hc_start, out);
       ++frustum_frames_;
       return;
     }
-    HcLocal local{skipper_ ? &*skipper_ : nullptr, o_.hc.order, nullptr, hold_ ? &*hold_ : nullptr};
+    HcOptions local{.choices = o_.hc, .skipper = skipper_ ? &*skipper_ : nullptr};
     if (o_.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         // Restores the GL state the queries need; the pyramid is stale where they were drawn.
@@ -691,7 +691,7 @@ class SwitchNode {
         querier_->depth_added(boxes);
       };
     querier_->begin(cam);
-    HcFrame hc = step_->hc(frame, visible_, cam, *querier_, local, out);
+    HcFrame hc = step_->hc(frame, visible_, cam, *querier_, local, out, hold_ ? &*hold_ : nullptr);
     querier_->end();
     end_hc(hc, hc_start, out);
   }

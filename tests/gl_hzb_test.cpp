@@ -283,8 +283,8 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       for (uint32_t id : occluders) drawn[id] = 1;
       p.renderer->begin_frame(cam, false);
       p.renderer->draw_renderables(renderables, occluders, SceneRenderer::Mode::DepthOnly);
-      HcLocal local{&skipper, HcOrder::near_first, nullptr, &hold};
-      local.occluders = [&](std::span<const uint32_t> found) {
+      HcOptions o{.choices = {.order = HcOrder::near_first}, .skipper = &skipper};
+      o.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
         for (uint32_t id : found)
           if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
@@ -294,7 +294,7 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
         querier.depth_added(boxes);
       };
       querier.begin(cam);
-      step.hc(uint32_t(f), visible, cam, querier, local, nowhere);
+      step.hc(uint32_t(f), visible, cam, querier, o, nowhere, &hold);
       querier.end();
       std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
       std::sort(v.begin(), v.end());

@@ -53,16 +53,7 @@ struct ClusterConfig {
   uint64_t hash() const;
 };
 
-// How a culling node runs HC (switch_step.hpp HcLocal): node-local, not in the config hash.
-struct HcChoices {
-  bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
-  HcOrder order = HcOrder::near_first;
-  bool occluder_fusion = true;     // draw what each batch found visible before the next batch
-  int visibility_hold = 2;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
-  // How each box is tested (common/gl/hzb_query.hpp): cpu_pyramid on llvmpipe (the default);
-  // queries or pyramid on a hardware GPU (no per-frame read-back).
-  HcTest test = HcTest::cpu_pyramid;
-};
+// The one HC option set (common/culling.hpp HcChoices), from the command line:
 // --adaptive-queries, --hc-order, --occluder-fusion, --visibility-hold, --hc-test.
 void add_hc_options(Cli& cli, HcChoices& c);
 

@@ -82,7 +82,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     std::vector<uint8_t> drawn(h.size(), 0);
     for (uint32_t id : occluders) drawn[id] = 1;
     renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
-    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], o.hc.order, nullptr};
+    HcOptions local{.choices = o.hc, .skipper = skippers.empty() ? nullptr : &skippers[f % 2]};
     if (o.hc.occluder_fusion)
       local.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
