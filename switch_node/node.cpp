@@ -210,7 +210,7 @@ class SwitchNode {
       auto p = listener_->accept_peer(mine_, e, Millis(o_.timeout_ms));
       if (p) return std::move(*p);
       if (!o_.serve) throw std::runtime_error(who_ + ": " + what + ": " + p.error());
-      if (p.error().find("no valid peer") == std::string::npos) {  // not a timeout: do not spin
+      if (p.error_kind() != ErrorKind::timeout) {  // not a timeout: do not spin
         std::cerr << who_ << ": " << what << ": " << p.error() << "\n";
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
       }
@@ -234,7 +234,7 @@ class SwitchNode {
         peer_addr_ = peer_->peer();
         return;
       }
-      if (hello.error().find(wire::kByeBusy) == std::string::npos || Clock::now() > deadline)
+      if (hello.error_kind() != ErrorKind::busy || Clock::now() > deadline)
         throw std::runtime_error(who_ + ": " + hello.error());
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
@@ -732,12 +732,11 @@ class SwitchNode {
                 << " HC frames served alone\n";
     if (querier_) {
       const HcQuerier::Stats& q = querier_->stats();
-      static constexpr const char* kTest[] = {"queries", "pyramid", "cpu-pyramid"};
       std::fprintf(stderr,
                    "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
                    "batch draws, %llu proven occluded by the depth pyramid (%.2f M pixels of their rectangles) and %llu shown; of %llu "
                    "tested against it in %llu dispatches; %llu pyramid builds, %llu refreshes after occluder fusion)\n",
-                   who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
+                   who_.c_str(), hc_test_name(querier_->mode()), (unsigned long long)q.tests, (unsigned long long)q.occluded,
                    (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
                    (unsigned long long)q.pyramid_occluded, double(q.pyramid_pixels) / 1e6, (unsigned long long)q.shown,
                    (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds,

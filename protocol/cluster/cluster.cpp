@@ -2,6 +2,8 @@
 
 #include <iostream>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "common/cli.hpp"
 #include "common/error.hpp"
@@ -88,6 +90,18 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
              "HC starts from the previous frame's fronts (paper 4.6) instead of the root");
 }
 
+namespace {
+// The --hc-test words: one table for the flag and for hc_test_name().
+const std::vector<std::pair<std::string, HcTest>> kHcTests = {
+    {"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"cpu-pyramid", HcTest::cpu_pyramid}};
+}  // namespace
+
+const char* hc_test_name(HcTest t) {
+  for (const auto& [word, test] : kHcTests)
+    if (test == t) return word.c_str();
+  return "?";
+}
+
 void add_hc_options(Cli& cli, HcChoices& c) {
   cli.choice<HcOrder>("hc-order", &c.order, {{"levels", HcOrder::levels}, {"near-first", HcOrder::near_first}},
                       "HC query batches: a hierarchy level each, or nearest boxes first in shells");
@@ -98,8 +112,7 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "HC draws (depth only) what each batch found visible before the next batch's queries"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
-  cli.choice<HcTest>("hc-test", &c.test,
-                     {{"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"cpu-pyramid", HcTest::cpu_pyramid}},
+  cli.choice<HcTest>("hc-test", &c.test, kHcTests,
                      "how HC tests a box: queries = an occlusion query each (a hardware GPU); pyramid = a depth "
                      "pyramid built on the GPU from HC's depth buffer first proves boxes occluded (one compute "
                      "dispatch per batch, no read-back), queries only for the rest; cpu-pyramid = a depth pyramid "
