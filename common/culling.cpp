@@ -65,120 +65,172 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
   return hardware_cull(Renderables(h, nullptr), cam, q, on_visible, stats);
 }
 
-std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
-                                        const LodSelector& sel, const HcOptions& o) {
-  CullStats local;
-  CullStats& st = o.stats ? *o.stats : local;
-  QuerySkipper* const skipper = o.choices.adaptive_queries ? o.skipper : nullptr;
-  const std::function<void(std::span<const uint32_t>)> occluders = o.choices.occluder_fusion ? o.occluders : nullptr;
-  const Frustum fr = cam.frustum();
-  const double tau = sel.tau();
-  const bool pixel_lod = o.visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
-  std::vector<uint32_t> out, accepted, batch;
-  // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
-  std::vector<uint32_t> next;
-  using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  const bool near_first = o.choices.order == HcOrder::near_first;
-  auto push = [&](uint32_t id) {
-    if (near_first)
-      queue.emplace(h.node(id).box.distance2(cam.eye), id);
+namespace {
+
+// hardware_cull_lod, batch by batch: take a batch from the frontier (a level, or a near-first
+// shell), test its nodes (frustum, near the eye, skipped by adaptive queries, or a query: all
+// queries of the batch in flight at once), read the results, then accept or refine each visible
+// node; occluder fusion draws what the batch accepted before the next one is tested.
+class LodTraversal {
+ public:
+  LodTraversal(const Hierarchy& h, const Camera& cam, OcclusionQueries& q, const LodSelector& sel, const HcOptions& o)
+      : h_(h),
+        cam_(cam),
+        q_(q),
+        sel_(sel),
+        o_(o),
+        st_(o.stats ? *o.stats : local_),
+        skipper_(o.choices.adaptive_queries ? o.skipper : nullptr),
+        occluders_(o.choices.occluder_fusion ? o.occluders : nullptr),
+        fr_(cam.frustum()),
+        tau_(sel.tau()),
+        pixel_lod_(o.visible_pixel_lod && tau_ > 0 && sel.renderables().lod() != nullptr),
+        near_first_(o.choices.order == HcOrder::near_first) {}
+
+  std::vector<uint32_t> run() {
+    if (o_.start.empty())
+      push(0);
     else
-      next.push_back(id);
-  };
-  if (o.start.empty())
-    push(0);
-  else
-    for (uint32_t id : o.start) push(id);
-  auto take_batch = [&] {
-    batch.clear();
-    if (!near_first) {
-      batch.swap(next);
-      return !batch.empty();
+      for (uint32_t id : o_.start) push(id);
+    while (take_batch()) {
+      test_batch();
+      read_results();
+      accept_visible();
+      if (occluders_ && !accepted_.empty()) occluders_(accepted_);
+    }
+    std::sort(out_.begin(), out_.end());
+    return out_;
+  }
+
+ private:
+  static constexpr uint64_t kNoQuery = ~uint64_t(0);
+
+  void push(uint32_t id) {
+    if (near_first_)
+      queue_.emplace(h_.node(id).box.distance2(cam_.eye), id);
+    else
+      next_.push_back(id);
+  }
+
+  bool take_batch() {
+    batch_.clear();
+    if (!near_first_) {
+      batch_.swap(next_);
+      return !batch_.empty();
     }
     // A shell: the nearest box, at distance d0, and every box within 2 d0 (at least first_batch,
     // at most max_batch), so each batch reaches twice as far as the one before and what it finds
     // is drawn before farther boxes are tested.
-    const double limit2 = queue.empty() ? 0 : 4.0 * queue.top().first;
-    while (!queue.empty() && batch.size() < std::max<uint32_t>(o.max_batch, 1) &&
-           (batch.size() < o.first_batch || queue.top().first <= limit2)) {
-      batch.push_back(queue.top().second);
-      queue.pop();
+    const double limit2 = queue_.empty() ? 0 : 4.0 * queue_.top().first;
+    while (!queue_.empty() && batch_.size() < std::max<uint32_t>(o_.max_batch, 1) &&
+           (batch_.size() < o_.first_batch || queue_.top().first <= limit2)) {
+      batch_.push_back(queue_.top().second);
+      queue_.pop();
     }
-    return !batch.empty();
-  };
-  constexpr uint64_t kNoQuery = ~uint64_t(0);
-  std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
-  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples)
-  // What a visible leaf is drawn as: its coarsest representation where its query saw fewer than
-  // tau samples (4.7.2), else what the selector chooses.
-  auto leaf_renderable = [&](uint32_t id, uint64_t samples) {
-    const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
-    return few_pixels ? sel.coarsest(id) : sel.renderable(id);
-  };
-  while (take_batch()) {
-    pending.clear();
-    visible.clear();
-    for (uint32_t id : batch) {
-      const HNode& n = h.node(id);
-      ++st.nodes_visited;
-      if (n.item_count == 0) continue;
-      if (fr.classify(n.box) == Containment::Outside) {
-        ++st.frustum_culled;
-      } else if (visible_without_query(n.box, cam)) {
-        ++st.near_visible;
-        visible.emplace_back(id, kNoQuery);
-      } else if (skipper && QuerySkipper::may_skip(n) && skipper->skip(id)) {
-        ++st.skipped;
-        visible.emplace_back(id, kNoQuery);
-      } else {
-        pending.emplace_back(id, q.issue(n.box));
-        ++st.queries;
-      }
-    }
-    if (!pending.empty()) ++st.levels;
-    for (auto [id, handle] : pending) {
-      const uint64_t samples = q.result(handle);
-      if (skipper) skipper->record(id, samples > 0);
-      if (samples > 0) {
-        visible.emplace_back(id, samples);
-      } else {
-        ++st.occluded;
-      }
-    }
-    q.end_batch();
-    accepted.clear();
-    std::sort(visible.begin(), visible.end());
-    for (auto [id, samples] : visible) {
-      const HNode& n = h.node(id);
-      const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
-      uint32_t r = kNoNode;
-      if (n.leaf()) {
-        r = leaf_renderable(id, samples);
-        if (few_pixels && r != sel.renderable(id)) ++st.pixel_stops;
-      } else if (sel.satisfies(id)) {
-        r = id;
-        ++st.hlods;
-      } else if (few_pixels && sel.hlod_allowed(id)) {
-        r = id;
-        ++st.hlods;
-        ++st.pixel_stops;
-      }
-      auto accept = [&](uint32_t r) {
-        out.push_back(r);
-        accepted.push_back(r);
-        if (o.on_visible) o.on_visible(r);
-      };
-      if (r != kNoNode) {
-        accept(r);
-      } else {
-        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
-      }
-    }
-    if (occluders && !accepted.empty()) occluders(accepted);
+    return !batch_.empty();
   }
-  std::sort(out.begin(), out.end());
-  return out;
+
+  // Every node of the batch: culled, visible without a query, or queried (issued, not read).
+  void test_batch() {
+    pending_.clear();
+    visible_.clear();
+    for (uint32_t id : batch_) {
+      const HNode& n = h_.node(id);
+      ++st_.nodes_visited;
+      if (n.item_count == 0) continue;
+      if (fr_.classify(n.box) == Containment::Outside) {
+        ++st_.frustum_culled;
+      } else if (visible_without_query(n.box, cam_)) {
+        ++st_.near_visible;
+        visible_.emplace_back(id, kNoQuery);
+      } else if (skipper_ && QuerySkipper::may_skip(n) && skipper_->skip(id)) {
+        ++st_.skipped;
+        visible_.emplace_back(id, kNoQuery);
+      } else {
+        pending_.emplace_back(id, q_.issue(n.box));
+        ++st_.queries;
+      }
+    }
+    if (!pending_.empty()) ++st_.levels;
+  }
+
+  void read_results() {
+    for (auto [id, handle] : pending_) {
+      const uint64_t samples = q_.result(handle);
+      if (skipper_) skipper_->record(id, samples > 0);
+      if (samples > 0)
+        visible_.emplace_back(id, samples);
+      else
+        ++st_.occluded;
+    }
+    q_.end_batch();
+  }
+
+  // What a visible node is drawn as, or kNoNode to refine it. A leaf: its coarsest
+  // representation where its query saw fewer than tau samples (4.7.2), else what the selector
+  // chooses; an interior node: its HLOD where that meets tau, or where few pixels showed.
+  uint32_t representation(uint32_t id, uint64_t samples) {
+    const bool few_pixels = pixel_lod_ && samples != kNoQuery && double(samples) < tau_;
+    if (h_.node(id).leaf()) {
+      const uint32_t r = few_pixels ? sel_.coarsest(id) : sel_.renderable(id);
+      if (few_pixels && r != sel_.renderable(id)) ++st_.pixel_stops;
+      return r;
+    }
+    if (sel_.satisfies(id)) {
+      ++st_.hlods;
+      return id;
+    }
+    if (few_pixels && sel_.hlod_allowed(id)) {
+      ++st_.hlods;
+      ++st_.pixel_stops;
+      return id;
+    }
+    return kNoNode;
+  }
+
+  // Accepts the batch's visible nodes in id order (streamed as they are) or queues their children.
+  void accept_visible() {
+    accepted_.clear();
+    std::sort(visible_.begin(), visible_.end());
+    for (auto [id, samples] : visible_) {
+      const uint32_t r = representation(id, samples);
+      if (r == kNoNode) {
+        const HNode& n = h_.node(id);
+        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
+        continue;
+      }
+      out_.push_back(r);
+      accepted_.push_back(r);
+      if (o_.on_visible) o_.on_visible(r);
+    }
+  }
+
+  const Hierarchy& h_;
+  const Camera& cam_;
+  OcclusionQueries& q_;
+  const LodSelector& sel_;
+  const HcOptions& o_;
+  CullStats local_;
+  CullStats& st_;
+  QuerySkipper* const skipper_;
+  const std::function<void(std::span<const uint32_t>)> occluders_;
+  const Frustum fr_;
+  const double tau_;
+  const bool pixel_lod_, near_first_;
+  // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
+  std::vector<uint32_t> next_;
+  using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue_;
+  std::vector<uint32_t> batch_, out_, accepted_;
+  std::vector<std::pair<uint32_t, uint32_t>> pending_;  // (node, query handle)
+  std::vector<std::pair<uint32_t, uint64_t>> visible_;  // (node, samples; kNoQuery: none)
+};
+
+}  // namespace
+
+std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                        const LodSelector& sel, const HcOptions& o) {
+  return LodTraversal(h, cam, q, sel, o).run();
 }
 
 std::vector<uint32_t> VisibilityHold::held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,

@@ -37,6 +37,22 @@ namespace occ {
 // from gl_VertexID, no attributes; also the culling overlay's (box_overlay.hpp).
 extern const char* const kBoxVertexShader;
 
+// What BoxQuerier and BoxBatchCounter share: a box program (each links its own), its vertex array,
+// and the state its boxes are drawn with from one camera (begin()).
+struct BoxDrawState {
+  GLuint program = 0, vao = 0;
+  GLint view_projection_loc = -1;
+  double subpixel_step = 0;  // the rasteriser's sub-pixel step in pixels
+  glm::dvec3 eye{0.0};
+  double reach = 0;      // eye to the near rectangle's corners, with slack
+  double pixel_pad = 0;  // pad per unit of distance from the eye (BoxQuerier::kPadSubpixels)
+  // Takes `linked_program` (it must have u_view_projection) and makes the vertex array.
+  void create(const GlApi& gl, GLuint linked_program);
+  void destroy(const GlApi& gl);
+  // Sets the camera's uniforms and the query state (no colour or depth writes), binds the program.
+  void begin(const GlApi& gl, const Camera& cam);
+};
+
 class BoxQuerier final : public OcclusionQueries {
  public:
   static constexpr double kRelativePad = 1e-5;
@@ -70,14 +86,10 @@ class BoxQuerier final : public OcclusionQueries {
 
  private:
   const GlApi& gl_;
-  double subpixel_step_;  // the rasteriser's sub-pixel step in pixels
-  GLuint program_ = 0, vao_ = 0;
-  GLint view_projection_loc_ = -1, min_loc_ = -1, max_loc_ = -1;
+  BoxDrawState box_;
+  GLint min_loc_ = -1, max_loc_ = -1;
   std::vector<GLuint> pool_;  // GL_SAMPLES_PASSED query objects
   uint32_t next_ = 0;         // first unused query of the pool in this batch
-  glm::dvec3 eye_{0.0};
-  double reach_ = 0;  // eye to the near rectangle's corners, with slack
-  double pixel_pad_ = 0;  // pad per unit of distance from the eye (kPadSubpixels)
   uint64_t queries_issued_ = 0;
 };
 
@@ -116,13 +128,10 @@ class BoxBatchCounter final : public OcclusionQueries {
  private:
   const GlApi& gl_;
   bool exact_;
-  double subpixel_step_;  // the rasteriser's sub-pixel step in pixels
-  GLuint program_ = 0, vao_ = 0, boxes_buf_ = 0, counts_buf_ = 0;
-  GLint view_projection_loc_ = -1, first_loc_ = -1;
+  BoxDrawState box_;
+  GLuint boxes_buf_ = 0, counts_buf_ = 0;
+  GLint first_loc_ = -1;
   size_t capacity_ = 0;
-  glm::dvec3 eye_{0.0};
-  double reach_ = 0;
-  double pixel_pad_ = 0;
   std::vector<Aabb> boxes_;
   std::vector<uint32_t> slot_;
   std::vector<uint64_t> counts_;

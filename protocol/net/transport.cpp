@@ -4,14 +4,10 @@
 
 #include "common/hash.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <charconv>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
-#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <thread>
@@ -679,44 +675,6 @@ Result<Peer> Listener::accept_peer(const wire::Hello& mine, const PeerExpectatio
   return Error{"no valid peer on " + impl_->where() + " within " + std::to_string(overall_timeout.count()) + " ms (" +
                    std::to_string(impl_->rejected) + " rejected" + (last.empty() ? "" : "; last: " + last) + ")",
                ErrorKind::timeout};
-}
-
-// ---------------------------------------------------------------------------------------------
-// Port files
-
-std::optional<std::string> write_port_file(const std::string& path, uint16_t port) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << port << '\n';
-    out.flush();
-    if (!out) return "cannot write port file " + tmp;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    return "cannot rename " + tmp + " to " + path;
-  }
-  return std::nullopt;
-}
-
-Result<uint16_t> read_port_file(const std::string& path, Millis timeout) {
-  const auto deadline = deadline_after(timeout);
-  for (;;) {
-    std::ifstream in(path);
-    if (in) {
-      std::string text;
-      std::getline(in, text);
-      unsigned value = 0;
-      auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-      if (ec != std::errc() || end != text.data() + text.size() || value == 0 || value > 65535)
-        return Error{"port file " + path + ": invalid content '" + text.substr(0, 32) + "'"};
-      return static_cast<uint16_t>(value);
-    }
-    if (remaining_until(deadline) == Millis(0))
-      return Error{"port file " + path + " did not appear within " +
-                   std::to_string(timeout.count()) + " ms"};
-    std::this_thread::sleep_for(std::min(remaining_until(deadline), Millis(10)));
-  }
 }
 
 }  // namespace occ::net
