@@ -25,6 +25,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using net::Millis;
 
+std::string fixed(double v, int digits) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", digits, v);
+  return text;
+}
+
 uint32_t micros_since(Clock::time_point t0) {
   return uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count());
 }
@@ -376,22 +382,20 @@ class Session {
     if (stats_.resyncs)
       std::cerr << who_ << ": " << stats_.resyncs << " resyncs from the render client, " << stats_.single_frames
                 << " HC frames served alone\n";
+    // Each figure beside its name (tests and scripts read these lines).
     const HcQuerier::Stats& q = cull_.querier().stats();
-    std::fprintf(stderr,
-                 "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
-                 "batch draws, %llu proven occluded by the depth pyramid (%.2f M pixels of their rectangles) and %llu shown; of %llu "
-                 "tested against it in %llu dispatches; %llu pyramid builds, %llu refreshes after occluder fusion)\n",
-                 who_.c_str(), hc_test_name(cull_.querier().mode()), (unsigned long long)q.tests, (unsigned long long)q.occluded,
-                 (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
-                 (unsigned long long)q.pyramid_occluded, double(q.pyramid_pixels) / 1e6, (unsigned long long)q.shown,
-                 (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds,
-                 (unsigned long long)q.refreshes);
-    std::fprintf(stderr,
-                 "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
-                 "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
-                 who_.c_str(), o_.config.pixel_error, o_.config.visible_pixel_lod ? "on" : "off",
-                 o_.config.front_tracking ? "on" : "off", (unsigned long long)t.hlods, (unsigned long long)t.pixel_stops,
-                 (unsigned long long)t.tests_above_fronts, t.frames ? double(t.tests_above_fronts) / double(t.frames) : 0.0);
+    std::cerr << who_ << ": HC test " << hc_test_name(cull_.querier().mode()) << ": " << q.tests << " boxes tested ("
+              << q.occluded << " occluded): " << q.queries << " occlusion queries issued, " << q.batched << " boxes in "
+              << q.draws << " batch draws, " << q.pyramid_occluded << " proven occluded by the depth pyramid ("
+              << fixed(double(q.pyramid_pixels) / 1e6, 2) << " M pixels of their rectangles) and " << q.shown
+              << " shown; of " << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
+              << q.builds << " pyramid builds, " << q.refreshes << " refreshes after occluder fusion)\n";
+    std::cerr << who_ << ": LOD: tau " << o_.config.pixel_error << " px, visible-pixel LOD "
+              << (o_.config.visible_pixel_lod ? "on" : "off") << ", front tracking "
+              << (o_.config.front_tracking ? "on" : "off") << ": " << t.hlods << " HLODs and " << t.pixel_stops
+              << " visible-pixel stops chosen; front tracking skipped " << t.tests_above_fronts
+              << " node tests above the fronts ("
+              << fixed(t.frames ? double(t.tests_above_fronts) / double(t.frames) : 0.0, 1) << " per HC frame)\n";
   }
 
   const NodeOptions& o_;

@@ -12,13 +12,10 @@
 #include <mutex>
 #include <thread>
 
-#include <boost/asio.hpp>
+#include "protocol/net/asio_names.hpp"
 
 namespace occ::net {
-namespace asio = boost::asio;
-using tcp = asio::ip::tcp;
-using boost::system::error_code;
-using Clock = std::chrono::steady_clock;
+using namespace asio_names;
 
 namespace {
 
