@@ -175,7 +175,7 @@ struct Camera {
   double far_dist = 1000.0;
   uint32_t viewport_width_px = 1;
   uint32_t viewport_height_px = 1;
-  uint8_t occlusion = 1;  // 0, 1 or 2 (selected occluders)
+  uint8_t occlusion = 1;  // 0 or 1
   bool operator==(const Camera&) const = default;
 };
 
