@@ -192,10 +192,10 @@ struct HcOptions {
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
   uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
-  // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it accepted, before the next
-  // batch is issued; the caller draws them (depth only) into the buffer the queries test, so what
-  // was just found visible hides what lies behind it in the same frame. Real geometry only adds
-  // depth that is really there: the traversal stays conservative.
+  // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it
+  // accepted, before the next batch is issued; the caller draws them (depth only) into the buffer
+  // the queries test, so what was just found visible hides what lies behind it in the same frame.
+  // Real geometry only adds depth that is really there: the traversal stays conservative.
   std::function<void(std::span<const uint32_t>)> occluders = nullptr;
 };
 
