@@ -151,18 +151,24 @@ void BoxDrawState::begin(const GlApi& gl, const Camera& cam) {
   query_state(gl, program, vao);
 }
 
-BoxQuerier::BoxQuerier(GlContext& ctx) : gl_(ctx.gl()) {
-  box_.create(gl_, link_program(gl_, kBoxVertexShader, kBoxFragment));
+BoxTester::BoxTester(GlContext& ctx, GLuint linked_program) : gl_(ctx.gl()) { box_.create(gl_, linked_program); }
+
+BoxTester::~BoxTester() { box_.destroy(gl_); }
+
+void BoxTester::end() {
+  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Disable(GL_CULL_FACE);
+}
+
+BoxQuerier::BoxQuerier(GlContext& ctx) : BoxTester(ctx, link_program(ctx.gl(), kBoxVertexShader, kBoxFragment)) {
   min_loc_ = gl_.GetUniformLocation(box_.program, "u_min");
   max_loc_ = gl_.GetUniformLocation(box_.program, "u_max");
 }
 
 BoxQuerier::~BoxQuerier() {
   if (!pool_.empty()) gl_.DeleteQueries(GLsizei(pool_.size()), pool_.data());
-  box_.destroy(gl_);
 }
-
-void BoxQuerier::begin(const Camera& cam) { box_.begin(gl_, cam); }
 
 uint32_t BoxQuerier::issue(const Aabb& box) {
   if (next_ == pool_.size()) {
@@ -205,15 +211,10 @@ bool BoxQuerier::ready(uint32_t handle) const {
 
 void BoxQuerier::reset() { next_ = 0; }
 
-void BoxQuerier::end() {
-  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  gl_.DepthMask(GL_TRUE);
-  gl_.Disable(GL_CULL_FACE);
-}
-
-BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact) : gl_(ctx.gl()), exact_(exact) {
-  box_.create(gl_, link_program(gl_, kBatchVertex,
-                                std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment));
+BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact)
+    : BoxTester(ctx, link_program(ctx.gl(), kBatchVertex,
+                                  std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment)),
+      exact_(exact) {
   first_loc_ = gl_.GetUniformLocation(box_.program, "u_first");
   gl_.CreateBuffers(1, &boxes_buf_);
   gl_.CreateBuffers(1, &counts_buf_);
@@ -222,10 +223,7 @@ BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact) : gl_(ctx.gl()), ex
 BoxBatchCounter::~BoxBatchCounter() {
   gl_.DeleteBuffers(1, &boxes_buf_);
   gl_.DeleteBuffers(1, &counts_buf_);
-  box_.destroy(gl_);
 }
-
-void BoxBatchCounter::begin(const Camera& cam) { box_.begin(gl_, cam); }
 
 uint32_t BoxBatchCounter::issue(const Aabb& box) {
   if (drawn_) throw std::logic_error("BoxBatchCounter: issue() after result() in one batch (call reset() first)");
@@ -304,12 +302,6 @@ uint64_t BoxBatchCounter::result(uint32_t handle) {
 void BoxBatchCounter::reset() {
   boxes_.clear();
   drawn_ = false;
-}
-
-void BoxBatchCounter::end() {
-  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  gl_.DepthMask(GL_TRUE);
-  gl_.Disable(GL_CULL_FACE);
 }
 
 }  // namespace occ
