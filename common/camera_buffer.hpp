@@ -23,9 +23,6 @@ struct NumberedCamera {
   uint32_t number = 0;
   Camera camera;
   bool occlusion = true;  // wire.hpp Camera.occlusion: cull this frame with occlusion (OR, queries)
-  bool selected_occluders = false;  // ... with selected occluders (Camera.occlusion 2)
-  // Camera.occlusion again: 0, 1 or 2.
-  uint8_t wire_occlusion() const { return occlusion ? (selected_occluders ? 2 : 1) : 0; }
 };
 
 class CameraBuffer {

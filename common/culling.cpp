@@ -14,39 +14,6 @@ bool visible_without_query(const Aabb& box, const Camera& cam) {
   return box.distance2(cam.eye) <= reach * reach;
 }
 
-double projected_box_area_px(const Aabb& box, const Camera& cam, double viewport_height_px) {
-  const glm::dmat4 to_clip = cam.projection() * cam.view_rotation();
-  const double half_h = 0.5 * viewport_height_px, half_w = half_h * cam.aspect;
-  glm::dvec2 p[8];
-  for (int c = 0; c < 8; ++c) {
-    const glm::dvec3 corner((c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
-                            (c & 4) ? box.max.z : box.min.z);
-    const glm::dvec4 q = to_clip * glm::dvec4(corner - cam.eye, 1.0);
-    if (!(q.w > 0)) return std::numeric_limits<double>::infinity();
-    p[c] = {q.x / q.w * half_w, q.y / q.w * half_h};
-  }
-  // Convex hull (monotone chain), then its area (shoelace).
-  std::sort(std::begin(p), std::end(p), [](const glm::dvec2& a, const glm::dvec2& b) {
-    return a.x < b.x || (a.x == b.x && a.y < b.y);
-  });
-  auto cross = [](const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
-    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
-  };
-  glm::dvec2 hull[17];
-  int k = 0;
-  for (int i = 0; i < 8; ++i) {
-    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  for (int i = 6, lower = k + 1; i >= 0; --i) {
-    while (k >= lower && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-    hull[k++] = p[i];
-  }
-  double area2 = 0;
-  for (int i = 0; i + 1 < k; ++i) area2 += hull[i].x * hull[i + 1].y - hull[i + 1].x * hull[i].y;
-  return 0.5 * std::abs(area2);
-}
-
 std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats) {
   CullStats local;
   CullStats& st = stats ? *stats : local;
@@ -89,7 +56,8 @@ std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, Occ
   // With tau = 0 every accepted node is a leaf at full detail (LOD data, if any, is never used):
   // the LOD traversal from the root is exactly Algorithm 4.1.
   const LodSelector sel(r, cam, 1.0, 0.0);
-  return hardware_cull_lod(r.hierarchy(), cam, q, sel, {.on_visible = on_visible, .stats = stats});
+  return hardware_cull_lod(r.hierarchy(), cam, q, sel,
+                           {.choices = {.order = HcOrder::levels}, .on_visible = on_visible, .stats = stats});
 }
 
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
@@ -97,166 +65,172 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
   return hardware_cull(Renderables(h, nullptr), cam, q, on_visible, stats);
 }
 
-std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
-                                        const LodSelector& sel, const HcOptions& o) {
-  CullStats local;
-  CullStats& st = o.stats ? *o.stats : local;
-  QuerySkipper* const skipper = o.skipper;
-  const Frustum fr = cam.frustum();
-  const double tau = sel.tau();
-  const bool pixel_lod = o.visible_pixel_lod && tau > 0 && sel.renderables().lod() != nullptr;
-  std::vector<uint32_t> out, accepted, batch, whole;
-  // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
-  std::vector<uint32_t> next;
-  using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  const bool near_first = o.order == HcOrder::near_first;
-  auto push = [&](uint32_t id) {
-    if (near_first)
-      queue.emplace(h.node(id).box.distance2(cam.eye), id);
+namespace {
+
+// hardware_cull_lod, batch by batch: take a batch from the frontier (a level, or a near-first
+// shell), test its nodes (frustum, near the eye, skipped by adaptive queries, or a query: all
+// queries of the batch in flight at once), read the results, then accept or refine each visible
+// node; occluder fusion draws what the batch accepted before the next one is tested.
+class LodTraversal {
+ public:
+  LodTraversal(const Hierarchy& h, const Camera& cam, OcclusionQueries& q, const LodSelector& sel, const HcOptions& o)
+      : h_(h),
+        cam_(cam),
+        q_(q),
+        sel_(sel),
+        o_(o),
+        st_(o.stats ? *o.stats : local_),
+        skipper_(o.choices.adaptive_queries ? o.skipper : nullptr),
+        occluders_(o.choices.occluder_fusion ? o.occluders : nullptr),
+        fr_(cam.frustum()),
+        tau_(sel.tau()),
+        pixel_lod_(o.visible_pixel_lod && tau_ > 0 && sel.renderables().lod() != nullptr),
+        near_first_(o.choices.order == HcOrder::near_first) {}
+
+  std::vector<uint32_t> run() {
+    if (o_.start.empty())
+      push(0);
     else
-      next.push_back(id);
-  };
-  if (o.start.empty())
-    push(0);
-  else
-    for (uint32_t id : o.start) push(id);
-  auto take_batch = [&] {
-    batch.clear();
-    if (!near_first) {
-      batch.swap(next);
-      return !batch.empty();
+      for (uint32_t id : o_.start) push(id);
+    while (take_batch()) {
+      test_batch();
+      read_results();
+      accept_visible();
+      if (occluders_ && !accepted_.empty()) occluders_(accepted_);
+    }
+    std::sort(out_.begin(), out_.end());
+    return out_;
+  }
+
+ private:
+  static constexpr uint64_t kNoQuery = ~uint64_t(0);
+
+  void push(uint32_t id) {
+    if (near_first_)
+      queue_.emplace(h_.node(id).box.distance2(cam_.eye), id);
+    else
+      next_.push_back(id);
+  }
+
+  bool take_batch() {
+    batch_.clear();
+    if (!near_first_) {
+      batch_.swap(next_);
+      return !batch_.empty();
     }
     // A shell: the nearest box, at distance d0, and every box within 2 d0 (at least first_batch,
     // at most max_batch), so each batch reaches twice as far as the one before and what it finds
     // is drawn before farther boxes are tested.
-    const double limit2 = queue.empty() ? 0 : 4.0 * queue.top().first;
-    while (!queue.empty() && batch.size() < std::max<uint32_t>(o.max_batch, 1) &&
-           (batch.size() < o.first_batch || queue.top().first <= limit2)) {
-      batch.push_back(queue.top().second);
-      queue.pop();
+    const double limit2 = queue_.empty() ? 0 : 4.0 * queue_.top().first;
+    while (!queue_.empty() && batch_.size() < std::max<uint32_t>(o_.max_batch, 1) &&
+           (batch_.size() < o_.first_batch || queue_.top().first <= limit2)) {
+      batch_.push_back(queue_.top().second);
+      queue_.pop();
     }
-    return !batch.empty();
-  };
-  constexpr uint64_t kNoQuery = ~uint64_t(0);
-  std::vector<std::pair<uint32_t, uint32_t>> pending;  // (node, query handle)
-  std::vector<std::pair<uint32_t, uint64_t>> visible;  // (node, samples; 0: rejected by its geometry)
-  std::vector<std::pair<size_t, uint32_t>> geometry_pending;  // (index in visible, query handle)
-  const bool geometry = o.leaf_test == LeafTest::geometry && q.geometry_queries();
-  // What a visible leaf is drawn as: its coarsest representation where its query saw fewer than
-  // tau samples (4.7.2), else what the selector chooses.
-  auto leaf_renderable = [&](uint32_t id, uint64_t samples) {
-    const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
-    return few_pixels ? sel.coarsest(id) : sel.renderable(id);
-  };
-  while (take_batch()) {
-    pending.clear();
-    visible.clear();
-    for (uint32_t id : batch) {
-      const HNode& n = h.node(id);
-      ++st.nodes_visited;
-      if (o.budget) o.budget->visited(id);
-      if (n.item_count == 0) continue;
-      if (fr.classify(n.box) == Containment::Outside) {
-        ++st.frustum_culled;
-      } else if (visible_without_query(n.box, cam)) {
-        ++st.near_visible;
-        visible.emplace_back(id, kNoQuery);
-      } else if (skipper && QuerySkipper::may_skip(n) && skipper->skip(id)) {
-        ++st.skipped;
-        visible.emplace_back(id, kNoQuery);
-      } else {
-        pending.emplace_back(id, q.issue(n.box));
-        ++st.queries;
-      }
-    }
-    if (!pending.empty()) ++st.levels;
-    auto learn = [&](uint32_t id, bool shows) {
-      if (skipper) skipper->record(id, shows);
-      if (o.budget) o.budget->queried(id, shows);
-    };
-    const size_t first_queried = visible.size();
-    for (auto [id, handle] : pending) {
-      const uint64_t samples = q.result(handle);
-      if (samples > 0) {
-        visible.emplace_back(id, samples);
-      } else {
-        ++st.occluded;
-        learn(id, false);
-      }
-    }
-    if (geometry) {
-      // Leaves whose box passed: their own geometry, all issued before any result is read.
-      geometry_pending.clear();
-      for (size_t k = first_queried; k < visible.size(); ++k) {
-        const auto [id, samples] = visible[k];
-        if (!h.node(id).leaf()) continue;
-        if (o.geometry_below < 1 &&
-            double(samples) >= o.geometry_below * projected_box_area_px(h.node(id).box, cam, sel.viewport_height_px()))
-          continue;  // most of its box shows: its geometry almost surely does
-        const uint32_t handle = q.issue_geometry(leaf_renderable(id, samples));
-        if (handle == OcclusionQueries::kNoGeometryQuery) continue;  // BLEND: keep the box's answer
-        ++st.geometry_queries;
-        geometry_pending.emplace_back(k, handle);
-      }
-      for (auto [k, handle] : geometry_pending)
-        if (q.result(handle) == 0) {
-          visible[k].second = 0;  // rejected
-          ++st.geometry_occluded;
-        }
-    }
-    for (size_t k = first_queried; k < visible.size(); ++k) learn(visible[k].first, visible[k].second > 0);
-    std::erase_if(visible, [](const auto& v) { return v.second == 0; });
-    q.end_batch();
-    accepted.clear();
-    std::sort(visible.begin(), visible.end());
-    for (auto [id, samples] : visible) {
-      const HNode& n = h.node(id);
-      const bool few_pixels = pixel_lod && samples != kNoQuery && double(samples) < tau;
-      uint32_t r = kNoNode;
-      if (n.leaf()) {
-        r = leaf_renderable(id, samples);
-        if (few_pixels && r != sel.renderable(id)) ++st.pixel_stops;
-      } else if (sel.satisfies(id)) {
-        r = id;
-        ++st.hlods;
-      } else if (few_pixels && sel.hlod_allowed(id)) {
-        r = id;
-        ++st.hlods;
-        ++st.pixel_stops;
-      }
-      auto accept = [&](uint32_t r) {
-        out.push_back(r);
-        accepted.push_back(r);
-        if (o.on_visible) o.on_visible(r);
-      };
-      if (r != kNoNode) {
-        accept(r);
-      } else if (o.budget && o.budget->accept_whole(id)) {
-        // Queries do not pay here: the subtree's leaves in the frustum, as the selector draws them.
-        ++st.whole;
-        whole.assign(1, id);
-        while (!whole.empty()) {
-          const uint32_t w = whole.back();
-          whole.pop_back();
-          const HNode& wn = h.node(w);
-          if (wn.item_count == 0 || fr.classify(wn.box) == Containment::Outside) continue;
-          if (wn.leaf())
-            accept(sel.renderable(w));
-          else if (w != id && sel.satisfies(w))
-            accept(w);
-          else
-            for (uint32_t ch = wn.first_child; ch < wn.first_child + wn.child_count; ++ch) whole.push_back(ch);
-        }
-      } else {
-        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
-      }
-    }
-    if (o.occluders && !accepted.empty()) o.occluders(accepted);
+    return !batch_.empty();
   }
-  if (o.budget) o.budget->end_traversal();
-  std::sort(out.begin(), out.end());
-  return out;
+
+  // Every node of the batch: culled, visible without a query, or queried (issued, not read).
+  void test_batch() {
+    pending_.clear();
+    visible_.clear();
+    for (uint32_t id : batch_) {
+      const HNode& n = h_.node(id);
+      ++st_.nodes_visited;
+      if (n.item_count == 0) continue;
+      if (fr_.classify(n.box) == Containment::Outside) {
+        ++st_.frustum_culled;
+      } else if (visible_without_query(n.box, cam_)) {
+        ++st_.near_visible;
+        visible_.emplace_back(id, kNoQuery);
+      } else if (skipper_ && QuerySkipper::may_skip(n) && skipper_->skip(id)) {
+        ++st_.skipped;
+        visible_.emplace_back(id, kNoQuery);
+      } else {
+        pending_.emplace_back(id, q_.issue(n.box));
+        ++st_.queries;
+      }
+    }
+    if (!pending_.empty()) ++st_.levels;
+  }
+
+  void read_results() {
+    for (auto [id, handle] : pending_) {
+      const uint64_t samples = q_.result(handle);
+      if (skipper_) skipper_->record(id, samples > 0);
+      if (samples > 0)
+        visible_.emplace_back(id, samples);
+      else
+        ++st_.occluded;
+    }
+    q_.end_batch();
+  }
+
+  // What a visible node is drawn as, or kNoNode to refine it. A leaf: its coarsest
+  // representation where its query saw fewer than tau samples (4.7.2), else what the selector
+  // chooses; an interior node: its HLOD where that meets tau, or where few pixels showed.
+  uint32_t representation(uint32_t id, uint64_t samples) {
+    const bool few_pixels = pixel_lod_ && samples != kNoQuery && double(samples) < tau_;
+    if (h_.node(id).leaf()) {
+      const uint32_t r = few_pixels ? sel_.coarsest(id) : sel_.renderable(id);
+      if (few_pixels && r != sel_.renderable(id)) ++st_.pixel_stops;
+      return r;
+    }
+    if (sel_.satisfies(id)) {
+      ++st_.hlods;
+      return id;
+    }
+    if (few_pixels && sel_.hlod_allowed(id)) {
+      ++st_.hlods;
+      ++st_.pixel_stops;
+      return id;
+    }
+    return kNoNode;
+  }
+
+  // Accepts the batch's visible nodes in id order (streamed as they are) or queues their children.
+  void accept_visible() {
+    accepted_.clear();
+    std::sort(visible_.begin(), visible_.end());
+    for (auto [id, samples] : visible_) {
+      const uint32_t r = representation(id, samples);
+      if (r == kNoNode) {
+        const HNode& n = h_.node(id);
+        for (uint32_t ch = n.first_child; ch < n.first_child + n.child_count; ++ch) push(ch);
+        continue;
+      }
+      out_.push_back(r);
+      accepted_.push_back(r);
+      if (o_.on_visible) o_.on_visible(r);
+    }
+  }
+
+  const Hierarchy& h_;
+  const Camera& cam_;
+  OcclusionQueries& q_;
+  const LodSelector& sel_;
+  const HcOptions& o_;
+  CullStats local_;
+  CullStats& st_;
+  QuerySkipper* const skipper_;
+  const std::function<void(std::span<const uint32_t>)> occluders_;
+  const Frustum fr_;
+  const double tau_;
+  const bool pixel_lod_, near_first_;
+  // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
+  std::vector<uint32_t> next_;
+  using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue_;
+  std::vector<uint32_t> batch_, out_, accepted_;
+  std::vector<std::pair<uint32_t, uint32_t>> pending_;  // (node, query handle)
+  std::vector<std::pair<uint32_t, uint64_t>> visible_;  // (node, samples; kNoQuery: none)
+};
+
+}  // namespace
+
+std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                        const LodSelector& sel, const HcOptions& o) {
+  return LodTraversal(h, cam, q, sel, o).run();
 }
 
 std::vector<uint32_t> VisibilityHold::held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
@@ -279,65 +253,6 @@ std::vector<uint32_t> VisibilityHold::held(const Renderables& r, const Camera& c
   }
   std::sort(out.begin(), out.end());
   return out;
-}
-
-QueryBudget::QueryBudget(const Hierarchy& h) : h_(h), state_(h.size()) {}
-
-void QueryBudget::set_costs(double ms_per_query, double ms_per_triangle) {
-  ms_per_query_ = ms_per_query;
-  ms_per_triangle_ = ms_per_triangle;
-}
-
-bool QueryBudget::accept_whole(uint32_t node) {
-  State& s = state_.at(node);
-  auto whole = [&] {
-    s.probe = s.remaining == 0;
-    s.whole_now = true;
-    return true;
-  };
-  if (s.remaining > 0) {
-    --s.remaining;
-    return whole();
-  }
-  if (s.probe) {
-    s.probe = false;
-    return false;
-  }
-  if (ms_per_query_ <= 0 || ms_per_triangle_ <= 0 || s.queries == 0) return false;
-  if (double(s.queries) * ms_per_query_ <= double(s.saved) * ms_per_triangle_) {
-    s.wait = 0;  // the queries paid: keep testing
-    return false;
-  }
-  s.wait = s.wait == 0 ? kFirstWait : uint8_t(std::min<int>(kMaxWait, 2 * s.wait));
-  s.remaining = uint8_t(s.wait - 1);
-  return whole();
-}
-
-void QueryBudget::queried(uint32_t node, bool visible) { state_.at(node).result = visible ? 1 : 0; }
-
-void QueryBudget::end_traversal() {
-  // Children have larger ids than their parents: fold from the deepest visited nodes upward.
-  std::sort(touched_.begin(), touched_.end(), std::greater<uint32_t>());
-  touched_.erase(std::unique(touched_.begin(), touched_.end()), touched_.end());
-  for (uint32_t id : touched_) {
-    State& s = state_[id];
-    const uint32_t q = s.q_now + (s.result >= 0 ? 1 : 0);
-    const uint64_t saved = s.result == 0 ? h_.node(id).triangles : s.s_now;
-    if (!s.whole_now) {  // a subtree accepted whole keeps its last tested figures
-      s.queries = q;
-      s.saved = saved;
-    }
-    s.whole_now = false;
-    s.q_now = 0;
-    s.s_now = 0;
-    s.result = -1;
-    const uint32_t p = h_.node(id).parent;
-    if (p != kNoNode) {
-      state_[p].q_now += q;
-      state_[p].s_now += saved;
-    }
-  }
-  touched_.clear();
 }
 
 bool QuerySkipper::skip(uint32_t node) {
@@ -368,26 +283,6 @@ std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_
   std::sort(items.begin(), items.end());
   items.erase(std::unique(items.begin(), items.end()), items.end());
   return items;
-}
-
-bool OccluderSelection::worth(const Aabb& box, uint64_t triangles, const Camera& cam,
-                              double viewport_height_px) const {
-  if (!(min_pixels_per_triangle > 0) || triangles == 0) return true;
-  const double radius_px =
-      projected_error_px(0.5 * box.diagonal(), std::sqrt(box.distance2(cam.eye)), viewport_height_px, cam.fovy_rad);
-  if (!std::isfinite(radius_px)) return true;  // eye in or on the box
-  const double viewport_px = viewport_height_px * viewport_height_px * cam.aspect;
-  const double area_px = std::min(3.14159265358979 * radius_px * radius_px, viewport_px);
-  return area_px >= min_pixels_per_triangle * double(triangles);
-}
-
-void OccluderSelection::filter(std::vector<uint32_t>& ids, const Renderables& r, const Camera& cam,
-                               double viewport_height_px) const {
-  if (!(min_pixels_per_triangle > 0)) return;
-  const Hierarchy& h = r.hierarchy();
-  std::erase_if(ids, [&](uint32_t id) {
-    return !worth(h.node(r.node_of(id)).box, r.triangles(id), cam, viewport_height_px);
-  });
 }
 
 }  // namespace occ

@@ -1,7 +1,7 @@
 // Culling logic, independent of GL: hierarchical frustum culling and the HC traversal of the
 // occlusion switch (paper Algorithm 4.1, breadth-first with a level of queries in flight at once,
 // 4.7.1). The occlusion test itself sits behind OcclusionQueries: the GL implementation renders
-// boxes (and, optionally, a leaf's own geometry) against the depth buffer; tests use a CPU fake.
+// boxes against the depth buffer; tests use a CPU fake.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -23,18 +23,6 @@ class OcclusionQueries {
   virtual uint64_t result(uint32_t handle) = 0;
   // Every result of the batch was read: handles may be recycled.
   virtual void end_batch() {}
-
-  // Geometry queries (HcOptions::leaf_test == LeafTest::geometry): a leaf whose box query passed
-  // is tested again with its own geometry, the renderable exactly as the OR draws it depth only
-  // (same vertices, programs, face culling and alpha test), with the depth test GL_GEQUAL
-  // (reverse-Z: ties pass) and no depth writes. Its handle's result() is the samples that passed.
-  // Implementations without them return false here (the traversal then keeps box results).
-  virtual bool geometry_queries() const { return false; }
-  static constexpr uint32_t kNoGeometryQuery = ~uint32_t(0);
-  // Starts a geometry query for renderable `renderable` (lod_select.hpp ids) in the current
-  // batch; kNoGeometryQuery when it cannot be tested (it holds BLEND items, which depth-only
-  // draws leave out although they show): the caller then keeps the box's answer.
-  virtual uint32_t issue_geometry(uint32_t /*renderable*/) { return kNoGeometryQuery; }
 };
 
 // Every box passes: with it HC's traversal returns the frustum set at the chosen LODs (a frame the
@@ -51,10 +39,6 @@ class FrustumOnlyQueries final : public OcclusionQueries {
 // such boxes are visible without a query.
 bool visible_without_query(const Aabb& box, const Camera& cam);
 
-// The pixels `box` covers on screen (the area of the convex hull of its projected corners, not
-// clipped to the viewport); +inf when a corner lies at or behind the plane of the eye.
-double projected_box_area_px(const Aabb& box, const Camera& cam, double viewport_height_px);
-
 struct CullStats {
   uint32_t nodes_visited = 0;
   uint32_t frustum_culled = 0;     // nodes rejected by the frustum test
@@ -65,9 +49,6 @@ struct CullStats {
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
   uint32_t hlods = 0;              // interior nodes accepted at their HLOD
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
-  uint32_t whole = 0;              // subtrees accepted whole by a QueryBudget (no queries)
-  uint32_t geometry_queries = 0;   // leaves whose box passed, tested with their geometry
-  uint32_t geometry_occluded = 0;  // of those, leaves whose geometry showed no sample (rejected)
 };
 
 // Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
@@ -101,46 +82,6 @@ class QuerySkipper {
     uint8_t streak = 0, wait = 0, remaining = 0;
   };
   std::vector<State> state_;
-};
-
-// Occlusion only where it pays (cost model): for every subtree, what its queries cost the last
-// time HC tested it (queries issued x measured time per query) against what they saved (the
-// triangles they found occluded x measured time to draw a triangle, in OR and RVG). A visible
-// interior node whose subtree's queries cost more than they saved is accepted whole — every
-// non-empty leaf of it in the frustum, without queries (interior nodes at their HLOD where the
-// selector allows) — for its next `wait` visits (4, doubling up to 32), then tested again to
-// refresh the figures. Accepting more than is visible is conservative: frames never change, only
-// what is drawn. Until costs are set (set_costs) every subtree is tested.
-class QueryBudget {
- public:
-  static constexpr uint8_t kFirstWait = 4, kMaxWait = 32;
-  explicit QueryBudget(const Hierarchy& h);
-  void set_costs(double ms_per_query, double ms_per_triangle);
-  // True when the visible interior `node` is to be accepted whole this visit (consumes a visit).
-  bool accept_whole(uint32_t node);
-  // The traversal reports what it tested; end_traversal() folds it into per-subtree figures.
-  void visited(uint32_t node) { touched_.push_back(node); }
-  void queried(uint32_t node, bool visible);
-  void end_traversal();
-  // Figures of the last test of `node`'s subtree (for tests and logs).
-  uint32_t subtree_queries(uint32_t node) const { return state_.at(node).queries; }
-  uint64_t subtree_saved_triangles(uint32_t node) const { return state_.at(node).saved; }
-
- private:
-  struct State {
-    uint32_t queries = 0;  // last test: queries in the subtree
-    uint64_t saved = 0;    // last test: triangles found occluded in the subtree
-    uint8_t wait = 0, remaining = 0;
-    bool probe = false;      // the wait is over: test the subtree once to refresh the figures
-    bool whole_now = false;  // accepted whole in this traversal (its figures stay)
-    uint32_t q_now = 0;    // this traversal (folded by end_traversal)
-    uint64_t s_now = 0;
-    int8_t result = -1;    // this traversal: -1 not queried, 0 occluded, 1 visible
-  };
-  const Hierarchy& h_;
-  std::vector<State> state_;
-  std::vector<uint32_t> touched_;
-  double ms_per_query_ = 0, ms_per_triangle_ = 0;
 };
 
 // Hysteresis for the visible set (issue 15): a node HC found visible (in two frames, see recent())
@@ -216,49 +157,46 @@ enum class HcOrder {
   levels,      // breadth-first: a whole level of the hierarchy per batch (paper 4.7.1)
   near_first,  // nearest boxes first: shells from a distance-ordered queue (the nearest box at d
                // and all within 2d), so the near occluders found (and drawn, HcOptions::occluders)
-               // hide what the next shell holds
+               // hide what the next shell holds (the default)
 };
 
-// How a leaf whose box query passed is decided.
-enum class LeafTest {
-  box,       // accepted on its box
-  geometry,  // tested again with its own geometry (OcclusionQueries::issue_geometry): accepted
-             // only if samples pass. Conservative, and exact at tau 0: the depth buffer holds
-             // real geometry only, pushed back by the OR's polygon offset, so every pixel where
-             // the leaf is the nearest surface passes. HLODs keep box queries; leaves decided
-             // without a query (near, skipped, held, accepted whole) are accepted as before.
-};
-// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each; a GPU depth
-// pyramid first with queries for the boxes it cannot prove occluded (every batch, or where it pays:
-// automatic); or a whole batch in one draw counting samples in a buffer (batch). The answers are
+// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each (queries: what
+// a hardware GPU would choose); a GPU depth pyramid first, with queries for the boxes it cannot
+// prove occluded (pyramid: no per-frame read-back); or a depth pyramid read back to the CPU once
+// a frame in front of batch-counted boxes (cpu_pyramid: the llvmpipe default). The answers are
 // the same: only what they cost differs.
-enum class HcTest { queries, pyramid, automatic, batch, cpu_pyramid };
+enum class HcTest { queries, pyramid, cpu_pyramid };
+
+// How HC searches: the one option set, node-local (not in the config hash: the processes need not
+// agree, the visible set stays a conservative superset either way). The CLI fills it
+// (add_hc_options, protocol/cluster); the switch node's cull frame builds what each choice needs
+// (switch_node/cull_frame.hpp); SwitchStep::hc and hardware_cull_lod read it through HcOptions.
+struct HcChoices {
+  HcOrder order = HcOrder::near_first;
+  bool adaptive_queries = true;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
+  bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
+  int visibility_hold = 2;       // frames a node found visible stays in V (VisibilityHold; 0 off)
+  // How each box is tested (common/gl/hzb_query.hpp): cpu_pyramid on llvmpipe (the default);
+  // queries or pyramid on a hardware GPU (no per-frame read-back).
+  HcTest test = HcTest::cpu_pyramid;
+};
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {
+  // The traversal reads choices.order; adaptive queries and occluder fusion act through `skipper`
+  // and `occluders` (state the caller keeps across frames), each only when its choice is on.
+  HcChoices choices = {};
   bool visible_pixel_lod = false;
   std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
-  QuerySkipper* skipper = nullptr;       // adaptive queries (null: query every node)
-  QueryBudget* budget = nullptr;         // accept subtrees whole where queries do not pay
+  QuerySkipper* skipper = nullptr;       // choices.adaptive_queries' state (null: query every node)
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
-  HcOrder order = HcOrder::levels;
   uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
-  // Occluder fusion: called after each batch with the renderables it accepted, before the next
-  // batch is issued; the caller draws them (depth only) into the buffer the queries test, so what
-  // was just found visible hides what lies behind it in the same frame. Real geometry only adds
-  // depth that is really there: the traversal stays conservative.
+  // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it
+  // accepted, before the next batch is issued; the caller draws them (depth only) into the buffer
+  // the queries test, so what was just found visible hides what lies behind it in the same frame.
+  // Real geometry only adds depth that is really there: the traversal stays conservative.
   std::function<void(std::span<const uint32_t>)> occluders = nullptr;
-  // geometry: a batch's geometry queries are issued after its box results are read (one more
-  // wait per batch), when q.geometry_queries(). The skipper and the budget learn the final
-  // answer (box and geometry), so a leaf hidden behind its box's window is not trusted.
-  LeafTest leaf_test = LeafTest::box;
-  // geometry: only leaves whose box query saw fewer samples than this fraction of the box's
-  // projected area (projected_box_area_px) are tested; the others are accepted on their box. A
-  // box that shows mostly has geometry that shows (saw orbit: 7 % of the leaves tested above 0.2
-  // were rejected, 60 % below 0.1), and a geometry query costs about what drawing the leaf does.
-  // 1 tests every leaf whose box passed (and more: boxes may show more than their hull's area).
-  double geometry_below = 0.1;
 };
 
 // HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like
@@ -270,20 +208,6 @@ struct HcOptions {
 // returns exactly hardware_cull's leaves.
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, const HcOptions& o = {});
-
-// Occluder selection, for the OR pass and occluder fusion: drawing an object as an occluder costs
-// its triangles, and what it can hide is bounded by the pixels it covers. An object is drawn as
-// an occluder when its projected bounding sphere (radius: half the box diagonal, at the box's
-// nearest point) covers at least min_pixels_per_triangle pixels per triangle; dense small
-// geometry (bolts, pipe runs far away) costs the OR more than it can hide. The eye in or on the
-// box always keeps it. Drawing fewer occluders leaves depth farther, so queries find more
-// visible, never less: conservative. 0 keeps every object.
-struct OccluderSelection {
-  double min_pixels_per_triangle = 0;
-  bool worth(const Aabb& box, uint64_t triangles, const Camera& cam, double viewport_height_px) const;
-  // Removes from `ids` (renderable ids) the objects not worth drawing as occluders.
-  void filter(std::vector<uint32_t>& ids, const Renderables& r, const Camera& cam, double viewport_height_px) const;
-};
 
 // The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
 // identically in every renderer).

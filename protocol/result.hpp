@@ -1,7 +1,9 @@
-// Result<T>: a value or an error reason (a C++20 stand-in for std::expected<T, std::string>).
-// Used wherever bad external input (bytes, peers) must come back as a value, never as a crash
-// or an escaping exception. Checks that produce no value return std::optional<std::string>
-// (nullopt = fine, else the reason), like Camera::invalid_reason().
+// Result<T>: a value or an error (a C++20 stand-in for std::expected<T, Error>). Used wherever bad
+// external input (bytes, peers) must come back as a value, never as a crash or an escaping
+// exception. Checks that produce no value return std::optional<std::string> (nullopt = fine, else
+// the reason), like Camera::invalid_reason().
+// An error's reason is for people; a caller that must act on what went wrong reads its kind,
+// never the reason's text.
 #pragma once
 #include <string>
 #include <utility>
@@ -9,8 +11,15 @@
 
 namespace occ {
 
+enum class ErrorKind {
+  other,    // anything else: the reason says what
+  timeout,  // nothing (valid) came within the time given: waiting again may help
+  busy,     // the peer refused us because it already serves our slot (wire.hpp kByeBusy): try later
+};
+
 struct Error {
   std::string reason;
+  ErrorKind kind = ErrorKind::other;
 };
 
 template <class T>
@@ -31,6 +40,7 @@ class [[nodiscard]] Result {
   T& operator*() & { return value(); }
   const T& operator*() const& { return value(); }
   const std::string& error() const { return std::get<1>(v_).reason; }
+  ErrorKind error_kind() const { return std::get<1>(v_).kind; }
 
  private:
   std::variant<T, Error> v_;

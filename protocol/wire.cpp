@@ -277,7 +277,7 @@ std::optional<std::string> check(const Camera& m) {
     return "fovy " + num(m.fovy_rad) + " rad outside (0, pi)";
   if (!(m.aspect > 0)) return "aspect " + num(m.aspect) + " <= 0";
   if (!(m.near_dist > 0)) return "near " + num(m.near_dist) + " <= 0";
-  if (m.occlusion > 2) return "occlusion " + num(m.occlusion) + " is not 0, 1 or 2";
+  if (m.occlusion > 1) return "occlusion " + num(m.occlusion) + " is not 0 or 1";
   if (!(m.far_dist > m.near_dist))
     return "far " + num(m.far_dist) + " <= near " + num(m.near_dist);
   return viewport_error(m.viewport_width_px, m.viewport_height_px, 1);

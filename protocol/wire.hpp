@@ -41,11 +41,9 @@
 //    92  u32  viewport_width_px        1..16384
 //    96  u32  viewport_height_px       1..16384
 //   100  u8   occlusion                1: the switch culls this camera's frame with occlusion (OR,
-//                                      HC's queries); 2: the same with selected occluders (the OR
-//                                      and occluder fusion draw only objects covering at least
-//                                      kSelectedOccluderPixelsPerTriangle px per triangle); 0: its
-//                                      HC node sends the frustum set (no OR, no queries). The render
-//                                      client's OcclusionGate chooses (common/occlusion_gate.hpp)
+//                                      HC's queries); 0: its HC node sends the frustum set (no OR,
+//                                      no queries). The render client's OcclusionGate chooses
+//                                      (common/occlusion_gate.hpp)
 //
 // NodeDiff (12 + 4 * (added_count + removed_count)) — one chunk of δ(f,f-1) and δ(f-1,f)
 //     0  u32  frame
@@ -122,16 +120,17 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 6;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
-                                          // 5: Camera.occlusion; 6: Camera.occlusion 2 (selected occluders)
+constexpr uint16_t kProtocolVersion = 7;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
+                                          // 5: Camera.occlusion; 6: Camera.occlusion 2 (selected occluders);
+                                          // 7: Camera.occlusion 0 or 1 again (selected occluders retired)
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
 constexpr size_t kMaxReasonBytes = 1024;
 constexpr uint32_t kMaxViewportPx = 16384;
 constexpr uint32_t kDefaultDiffChunkIds = 100;  // the paper's buffer size b
-// Camera.occlusion 2: the OR and occluder fusion draw only objects whose projected bounding sphere
-// covers at least this many pixels per triangle (common/culling.hpp OccluderSelection).
+// RETIRED with Camera.occlusion 2 (version 7): no process reads it any more; only
+// render_client/main.cpp's --occlusion-gate help still names it. Delete with that help text.
 constexpr double kSelectedOccluderPixelsPerTriangle = 4.0;
 constexpr uint32_t kMaxDiffIds = (kMaxPayloadBytes - 12) / 4;  // ids in one NodeDiff
 constexpr size_t kNonceBytes = 32;
@@ -176,7 +175,7 @@ struct Camera {
   double far_dist = 1000.0;
   uint32_t viewport_width_px = 1;
   uint32_t viewport_height_px = 1;
-  uint8_t occlusion = 1;  // 0, 1 or 2 (selected occluders)
+  uint8_t occlusion = 1;  // 0 or 1
   bool operator==(const Camera&) const = default;
 };
 

@@ -28,9 +28,8 @@ void NodeLinks::connect(const wire::Hello& mine) {
     net::PeerExpectation expect{wire::Role::switch_node, std::nullopt};
     expect.key = o_.key ? &*o_.key : nullptr;
     auto hello = net::handshake(*conn, mine_, expect, Millis(o_.timeout_ms));
-    if (const size_t busy = hello ? std::string::npos : hello.error().find(wire::kByeBusy); busy != std::string::npos)
-      throw std::runtime_error("the cluster is busy: the switch node at " + text + " says " +
-                               hello.error().substr(busy + std::string_view(wire::kByeBusy).size()));
+    if (!hello && hello.error_kind() == ErrorKind::busy)
+      throw std::runtime_error("the cluster is busy: the switch node at " + text + " refused us: " + hello.error());
     if (!hello) throw std::runtime_error(hello.error());
     NodeLink& slot = nodes_[hello->node_id & 1];
     if (slot.conn) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));

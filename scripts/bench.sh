@@ -23,11 +23,11 @@
 # --keep-frames. Prints figures; asserts nothing about speed.
 #
 #   scripts/bench.sh --scene S [--path P] [--frames N] [--width W --height H] [--out DIR]
-#                    [--model-delay-ms D] [--keep-frames] [--hc-test queries|pyramid|auto|batch|cpu-pyramid]
+#                    [--model-delay-ms D] [--keep-frames] [--hc-test queries|pyramid|cpu-pyramid]
 #
 # --path walk|orbit|fly gets --frames frames (default walk, 200); the viewport defaults to 512x512 as
 # everywhere. --hc-test goes to the switch nodes (how HC tests boxes; switch_node --help); without
-# it they use their default (batch).
+# it they use their default (cpu-pyramid).
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 scene="" path="walk" frames=200 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/bench" model_delay_ms=0 keep_frames=0 hc_test=""

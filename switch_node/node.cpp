@@ -1,28 +1,22 @@
 #include "switch_node/node.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <mutex>
-#include <optional>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <thread>
 
 #include "common/camera_buffer.hpp"
 #include "common/cpu_time.hpp"
-#include "common/culling.hpp"
 #include "common/error.hpp"
-#include "common/gl/geometry_query.hpp"
-#include "common/gl/hzb_query.hpp"
-#include "common/gl/scene_renderer.hpp"
 #include "common/gl/startup.hpp"
-#include "common/hash.hpp"
 #include "common/memory.hpp"
 #include "protocol/cluster/camera_receiver.hpp"
-#include "protocol/cluster/switch_step.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/visible_set.hpp"
+#include "switch_node/cull_frame.hpp"
+#include "switch_node/links.hpp"
 
 namespace occ {
 
@@ -31,352 +25,93 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using net::Millis;
 
+std::string fixed(double v, int digits) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", digits, v);
+  return text;
+}
+
 uint32_t micros_since(Clock::time_point t0) {
   return uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count());
 }
-
-struct NodeFailure : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 // The render client sent a Resync (camera_receiver.hpp): the current run of frames stops where it
 // is waiting and the loop starts over as the Resync says.
 struct Interrupted {};
 
-class SwitchNode {
+// What one OR cost, for the EndOfFrame of the HC that follows it (wire.hpp: or_us ...).
+struct OrTimes {
+  uint32_t us = 0, cpu_us = 0, tail_cpu_us = 0, tail_us = 0;
+};
+
+// Counted over one render client, besides the cull frame's CullTotals.
+struct SessionStats {
+  uint64_t resyncs = 0;        // Resyncs from the render client followed
+  uint64_t single_frames = 0;  // HC frames served alone
+};
+
+// One render client, from the connections to the summary: the frame schedule (the switch, or
+// alone after a resync), with its links and its cull frame. Created fresh for every client, so
+// nothing of the last one carries over.
+class Session {
  public:
-  explicit SwitchNode(const NodeOptions& o)
-      : o_(o), who_("switch_node " + std::to_string(o.id)), other_("switch node " + std::to_string(1 - o.id)) {}
+  Session(const NodeOptions& o, SceneGl& g, const wire::Hello& mine, net::Listener& listener)
+      : o_(o),
+        who_("switch_node " + std::to_string(o.id)),
+        other_("switch node " + std::to_string(1 - o.id)),
+        g_(g),
+        links_(o, mine, listener),
+        cull_(*g.ctx, *g.renderer, *g.renderables, o.config, o.hc, {o.width, o.height}, other_) {}
 
+  // Returns 0 after the client's Bye.
   int run() {
-    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
-    g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
-    mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
-                       g_.hierarchy().params(), o_.config, who_);
-    // Both nodes keep their listener for the whole run: node 0 takes a restarted node 1 through it
-    // (the Door hands it over), and it tells a second render client the cluster is busy.
-    listener_.emplace(open_listener(who_, o_.listen));
-    if (!o_.serve) return session();
-    // --serve: one render client after the other, each in a session of its own (both nodes
-    // start it from scratch: new connections, including the link between the nodes, and fresh
-    // per-client state), until --sessions clients have been served (0: forever).
-    int failed = 0;
-    for (int n = 1;; ++n) {
-      const int code = session();
-      failed += code != 0;
-      if (o_.sessions > 0 && n >= o_.sessions) {
-        std::cerr << who_ << ": served " << n << " render clients (" << failed << " failed), as --sessions asked\n";
-        return failed ? 1 : 0;
-      }
-      std::cerr << who_ << ": render client " << n << (code ? " failed" : " done")
-                << "; waiting for the next one (--serve)\n";
-    }
-  }
-
- private:
-  // One render client, from the connections to the summary. Returns 0 after the client's Bye.
-  int session() {
-    reset_client_state();
-    connect();
-    door_.start(*this);  // from now on, a second render client is told the cluster is busy
-    cameras_in_.emplace(*rvg_, *cameras_, Viewport{o_.width, o_.height});
+    links_.connect();
+    cameras_in_.emplace(links_.rvg(), cameras_, Viewport{o_.width, o_.height});
     int code = 0;
     try {
       loop();
     } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
       // A frame in flight when the render client finished (latest mode) is not a failure: wait
       // for its goodbye a little before calling it one.
-      for (int i = 0; i < 300 && !rvg_->is_open() && !cameras_in_->done(); ++i)
+      for (int i = 0; i < 300 && !links_.rvg().is_open() && !cameras_in_->done(); ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
       if (!cameras_in_->client_said_bye()) {
         std::cerr << "error: " << who_ << ": " << e.what() << "\n";
         code = 1;
-        if (peer_) peer_->close_with_error(who_ + " failed: " + e.what());
-        rvg_->close_with_error(who_ + " failed: " + e.what());
+        links_.fail(who_ + " failed: " + e.what());
       } else {
         std::cerr << who_ << ": stopped: " << e.what() << " (after the " << cameras_in_->end_reason() << ")\n";
       }
     }
-    if (code == 0 && peer_) peer_->close(wire::kByeDone);
-    rvg_->close(code ? "failed" : wire::kByeDone);
+    links_.close(code != 0);
     cameras_in_->join();
-    door_.stop();
-    {
-      std::lock_guard<std::mutex> lock(link_mu_);
-      if (rejoined_peer_) rejoined_peer_->close_with_error(who_ + ": the render client is gone");
-    }
+    links_.close_door();
     print_summary();
     return code;
   }
 
-  // Everything that belongs to one render client starts afresh: connections, cameras, sets and
-  // diff streams, the query history of adaptive queries, the measured query budget, the
-  // visibility hold, statistics.
-  void reset_client_state() {
-    cameras_in_.reset();
-    set_peer(nullptr);
-    rvg_.reset();
-    {
-      std::lock_guard<std::mutex> lock(link_mu_);
-      rejoined_peer_.reset();
-    }
-    dropped_.clear();
-    cameras_.emplace();
-    skipper_.reset();
-    budget_.reset();
-    hold_.reset();
-    if (o_.hc.adaptive_queries) skipper_.emplace(g_.hierarchy().size());
-    if (o_.hc.query_budget) budget_.emplace(g_.hierarchy());
-    if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
-    step_.emplace(*g_.renderables, o_.config, o_.height);
-    geometry_.reset();
-    querier_.reset();
-    // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
-    querier_ = std::make_unique<HcQuerier>(*g_.ctx, o_.hc.test, o_.config.visible_pixel_lod && o_.config.lod());
-    if (o_.hc.leaf_test == LeafTest::geometry)  // after a batch's geometry: the box queries' state again
-      geometry_ = std::make_unique<GeometryQuerier>(*g_.ctx, *querier_, *g_.renderer, *g_.renderables,
-                                                    [this] { querier_->begin(hc_camera_); });
-    visible_ = VisibleSet(g_.renderables->count());
-    stream_ = DiffReceiver{};
-    last_camera_.reset();
-    peer_addr_.clear();
-    peer_fresh_ = single_ = false;
-    peer_lost_.clear();
-    peer_epoch_wait_ = peer_resync_seen_ = 0;
-    next_poll_ = Clock::time_point{};
-    totals_ = {};  // a fresh set of the summary's counts
-    or_triangles_ = 0;
-    ms_per_query_ = ms_per_triangle_ = 0;
-    tail_cpu0_ = hc_cpu0_ = 0;
-    or_us_ = or_cpu_us_ = or_tail_cpu_us_ = or_tail_us_ = 0;
-  }
-
-  net::PeerExpectation expect(std::optional<wire::Role> role, std::optional<uint8_t> node_id) const {
-    net::PeerExpectation e{role, node_id};
-    e.key = o_.key ? &*o_.key : nullptr;
-    return e;
-  }
-
-  // Why this node turns away a connector whose slot is taken (nullopt: it may have the slot).
-  std::optional<std::string> busy_reason(const wire::Hello& h) {
-    const bool is_node1 = o_.id == 0 && h.role == wire::Role::switch_node && h.node_id == 1;
-    const bool is_rvg = h.role == wire::Role::render_client;
-    if (!is_node1 && !is_rvg)
-      return "unexpected peer: " + std::string(wire::role_name(h.role)) + " " + std::to_string(h.node_id);
-    std::lock_guard<std::mutex> lock(link_mu_);  // peer_ changes during a session (rejoin)
-    const auto& slot = is_node1 ? peer_ : rvg_;
-    if (!slot || !slot->is_open()) return std::nullopt;
-    return std::string(wire::kByeBusy) + who_ + " is serving " +
-           (is_rvg ? "another render client (" + rvg_->peer() + ")" : "switch node 1 (" + peer_->peer() + ")") +
-           "; try again when it has finished";
-  }
-
-  // What the Door says to a connector during a session; nullopt only for a switch node 1 coming
-  // back (restarted) to node 0 while node 0's link to its peer is down: the session takes it over
-  // (poll_for_peer, follow) and the render client's Resync puts it back into the switch.
-  std::optional<std::string> door_reason(const wire::Hello& h) {
-    if (o_.id == 0 && h.role == wire::Role::switch_node && h.node_id == 1) {
-      std::lock_guard<std::mutex> lock(link_mu_);
-      if (!peer_ || !peer_->is_open()) {
-        if (!rejoined_peer_ || !rejoined_peer_->is_open()) return std::nullopt;
-        return std::string(wire::kByeBusy) + who_ + ": a restarted switch node 1 (" + rejoined_peer_->peer() +
-               ") is already waiting to rejoin";
-      }
-    }
-    auto why = busy_reason(h);
-    return why ? why
-               : std::optional<std::string>(std::string(wire::kByeBusy) + who_ +
-                                            " is serving a render client; try again when it has finished");
-  }
-
-  // The Door's handshake passed: a restarted switch node 1 (door_reason); the session takes it.
-  void hand_over_peer(net::Connection conn) {
-    auto c = std::make_unique<net::Connection>(std::move(conn));
-    std::cerr << who_ << ": " << other_ << " (" << c->peer() << ") is back; waiting for the render client's resync\n";
-    std::unique_ptr<net::Connection> stale;
-    std::lock_guard<std::mutex> lock(link_mu_);
-    stale = std::move(rejoined_peer_);  // closed (door_reason): destroyed after the lock
-    rejoined_peer_ = std::move(c);
-  }
-
-  std::unique_ptr<net::Connection> take_rejoined_peer() {
-    std::lock_guard<std::mutex> lock(link_mu_);
-    return std::move(rejoined_peer_);
-  }
-
-  // peer_ is written only by the session thread; the Door reads it under link_mu_.
-  void set_peer(std::unique_ptr<net::Connection> c) {
-    std::unique_ptr<net::Connection> old;
-    std::lock_guard<std::mutex> lock(link_mu_);
-    old = std::move(peer_);
-    peer_ = std::move(c);
-    if (old) dropped_.push_back(std::move(old));  // destroyed at the end: closing lingers up to 1.5 s
-  }
-
-  // Waits for a peer on the listener: for --timeout-ms, or (--serve) as long as it takes.
-  net::Peer accept(const net::PeerExpectation& e, const std::string& what) {
-    for (;;) {
-      auto p = listener_->accept_peer(mine_, e, Millis(o_.timeout_ms));
-      if (p) return std::move(*p);
-      if (!o_.serve) throw std::runtime_error(who_ + ": " + what + ": " + p.error());
-      if (p.error().find("no valid peer") == std::string::npos) {  // not a timeout: do not spin
-        std::cerr << who_ << ": " << what << ": " << p.error() << "\n";
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      }
-    }
-  }
-
-  // Node 1: the link to node 0 (at start, and when a resync asks for the switch again). Node 0
-  // may still be finishing its last client (--serve), or not have noticed yet that its old link is
-  // gone: it says "busy" until then, and this retries for --timeout-ms.
-  void connect_peer() {
-    const Millis timeout(o_.timeout_ms);
-    const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
-    const auto deadline = Clock::now() + timeout;
-    for (;;) {
-      auto conn = net::Connection::connect(pe.host, pe.port, timeout);
-      if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
-      auto hello = net::handshake(*conn, mine_, expect(wire::Role::switch_node, uint8_t(0)), timeout);
-      if (hello) {
-        set_peer(std::make_unique<net::Connection>(std::move(*conn)));
-        peer_fresh_ = true;
-        peer_addr_ = peer_->peer();
-        return;
-      }
-      if (hello.error().find(wire::kByeBusy) == std::string::npos || Clock::now() > deadline)
-        throw std::runtime_error(who_ + ": " + hello.error());
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-  }
-
-  void connect() {
-    if (o_.id == 1) {
-      connect_peer();
-      net::Peer rvg = accept(expect(wire::Role::render_client, std::nullopt), "no render client");
-      rvg_ = std::make_unique<net::Connection>(std::move(rvg.connection));
-      if (!peer_->is_open()) {  // node 0 went away while this node waited for the client (--serve)
-        std::cerr << who_ << ": the link to switch node 0 ended while waiting for the render client; reconnecting\n";
-        connect_peer();
-      }
-    } else {
-      // Node 0 accepts both the render client and switch node 1, in whatever order they come; a
-      // second of either (while the first is connected) is refused in the handshake.
-      net::PeerExpectation e = expect(std::nullopt, std::nullopt);
-      e.refuse = [this](const wire::Hello& h) { return busy_reason(h); };
-      while (!peer_ || !rvg_ || !peer_->is_open() || !rvg_->is_open()) {
-        net::Peer p = accept(e, "waiting for peers");
-        auto c = std::make_unique<net::Connection>(std::move(p.connection));
-        if (p.hello.role == wire::Role::switch_node)
-          set_peer(std::move(c));
-        else
-          rvg_ = std::move(c);
-      }
-      peer_fresh_ = true;
-    }
-    peer_addr_ = peer_->peer();
-    std::cerr << who_ << ": connected: peer " << peer_->peer() << ", render client " << rvg_->peer() << "\n";
-  }
-
-  // While a client is served, the listener stays open and every connector gets Bye("busy: ...")
-  // in its handshake (after its hello and key were checked): a second render client learns at
-  // once that the cluster is busy, node 1 coming back early for the next client retries. The one
-  // exception (door_reason): node 0 whose link to node 1 is down takes a restarted node 1.
-  class Door {
-   public:
-    ~Door() { stop(); }
-    void start(SwitchNode& node) {
-      stop();
-      stop_ = false;
-      thread_ = std::thread([this, &node] {
-        net::PeerExpectation e = node.expect(std::nullopt, std::nullopt);
-        e.refuse = [&node](const wire::Hello& h) { return node.door_reason(h); };
-        while (!stop_) {
-          auto conn = node.listener_->accept(Millis(100));
-          if (!conn) continue;
-          // Refused (and logged) unless door_reason let a restarted node 1 in.
-          if (auto hello = net::handshake(*conn, node.mine_, e, Millis(2000)))
-            node.hand_over_peer(std::move(*conn));
-        }
-      });
-    }
-    void stop() {
-      stop_ = true;
-      if (thread_.joinable()) thread_.join();
-    }
-
-   private:
-    std::atomic<bool> stop_{false};
-    std::thread thread_;
-  };
-
-  // Node 0 without a working peer: takes a switch node 1 that came back through the Door (a
-  // restarted node 1 connects to node 0 before it accepts the render client), at most every
-  // 100 ms. It serves once the render client's Resync says so.
-  void poll_for_peer() {
-    if (o_.id != 0 || (peer_ && peer_->is_open())) return;
-    const Clock::time_point now = Clock::now();
-    if (now < next_poll_) return;
-    next_poll_ = now + std::chrono::milliseconds(100);
-    std::unique_ptr<net::Connection> c = take_rejoined_peer();
-    if (!c) return;
-    drop_peer("replaced");
-    set_peer(std::move(c));
-    peer_fresh_ = true;
-    peer_addr_ = peer_->peer();
-  }
-
-  void drop_peer(const std::string& why) {
-    if (!peer_) return;
-    const auto st = peer_->stats();
-    totals_.peer_sent_bytes += st.sent.bytes;
-    peer_->close_with_error(why);
-    set_peer(nullptr);
-  }
-
+ private:
   // The render client's instruction: start over at r.frame with empty sets, as the switch (2) or
   // alone (1). Answers with the same Resync once ready.
   wire::Resync follow(const wire::Resync& r) {
-    ++totals_.resyncs;
-    visible_.clear();
-    stream_ = DiffReceiver{};
+    ++stats_.resyncs;
+    cull_.restart();
     last_camera_.reset();
     peer_lost_.clear();
-    // The visibility hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
-    if (o_.hc.visibility_hold > 0) hold_.emplace(g_.hierarchy().size(), uint32_t(o_.hc.visibility_hold));
-    if (r.nodes == 1) {
-      drop_peer("the render client dropped " + other_ + " (" + who_ + " serves alone from frame " +
-                std::to_string(r.frame) + ")");
-    } else if (!peer_ || !peer_->is_open() || !peer_fresh_) {
-      drop_peer("resync at frame " + std::to_string(r.frame) + ": a new connection to " + other_);
-      if (o_.id == 1) {
-        connect_peer();
-      } else {  // the Door hands over the node 1 that connects
-        const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
-        std::unique_ptr<net::Connection> c;
-        while (!(c = take_rejoined_peer())) {
-          if (Clock::now() >= deadline)
-            throw NodeFailure("resync at frame " + std::to_string(r.frame) + ": no " + other_ + " within " +
-                              std::to_string(o_.timeout_ms) + " ms");
-          std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        }
-        set_peer(std::move(c));
-        peer_addr_ = peer_->peer();
-      }
-    }
-    peer_fresh_ = false;
+    links_.relink(r);
     // The switch again: the same Resync on the link marks where this node's new run starts (the
     // other node skips what came before it, next_from_peer), and this node skips what the other
     // sent before its own marker (unless that marker was already read).
     peer_epoch_wait_ = 0;
     if (r.nodes == 2) {
       peer_epoch_wait_ = peer_resync_seen_ == r.epoch ? 0 : r.epoch;
-      if (auto err = peer_->send(r)) peer_lost_ = "frame " + std::to_string(r.frame) + ": the resync marker: " + *err;
+      if (auto err = links_.peer()->send(r)) peer_lost_ = "frame " + std::to_string(r.frame) + ": the resync marker: " + *err;
     }
     peer_resync_seen_ = 0;
     std::cerr << who_ << ": resync at frame " << r.frame << " (render client's resync " << r.epoch << "): "
-              << (r.nodes == 2 ? "the switch with " + other_ + " (" + peer_addr_ + ")" : std::string("serving alone"))
+              << (r.nodes == 2 ? "the switch with " + other_ + " (" + links_.peer_addr() + ")" : std::string("serving alone"))
               << ", from empty visible sets\n";
-    if (auto err = rvg_->send(r)) throw NodeFailure("resync at frame " + std::to_string(r.frame) + ": " + *err);
+    if (auto err = links_.rvg().send(r)) throw NodeFailure("resync at frame " + std::to_string(r.frame) + ": " + *err);
     return r;
   }
 
@@ -403,8 +138,8 @@ class SwitchNode {
     for (;;) {
       std::string why;
       std::optional<NumberedCamera> cam = o_.config.camera_mode == CameraMode::lockstep
-                                              ? cameras_->take(frame, timeout, &why)
-                                              : cameras_->take_latest(min_camera, timeout, &why);
+                                              ? cameras_.take(frame, timeout, &why)
+                                              : cameras_.take_latest(min_camera, timeout, &why);
       if (cam) {
         last_camera_ = cam->number;
         return cam;
@@ -424,8 +159,8 @@ class SwitchNode {
   // The other node is gone (or misbehaved): drop it and wait for the render client, which
   // notices on its own connection and sends a Resync (Interrupted), or finishes (return).
   void await_instruction(uint32_t frame, const std::string& what) {
-    const std::string lost = "frame " + std::to_string(frame) + ": " + other_ + " (" + peer_addr_ + ") " + what;
-    drop_peer(who_ + ": " + lost);
+    const std::string lost = "frame " + std::to_string(frame) + ": " + other_ + " (" + links_.peer_addr() + ") " + what;
+    links_.drop_peer(who_ + ": " + lost);
     std::cerr << who_ << ": " << lost << "; waiting for the render client\n";
     const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
     while (Clock::now() < deadline) {
@@ -437,60 +172,67 @@ class SwitchNode {
         }
         throw NodeFailure(lost + "; then the " + cameras_in_->end_reason());
       }
-      poll_for_peer();
+      links_.poll_for_peer();
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     throw NodeFailure(lost + ", and no word from the render client within " + std::to_string(o_.timeout_ms) + " ms");
   }
 
   void send_out(const wire::Message& m) {
-    if (auto err = rvg_->send(m)) throw NodeFailure("sending to the render client: " + *err);
+    if (auto err = links_.rvg().send(m)) throw NodeFailure("sending to the render client: " + *err);
     if (single_ || !peer_lost_.empty()) return;
     // The render client gets the whole frame even when the other node is gone (it then notices
     // the loss itself); the loss is handled after the frame.
-    if (auto err = peer_->send(m)) peer_lost_ = "cannot be sent to: " + *err;
+    if (auto err = links_.peer()->send(m)) peer_lost_ = "cannot be sent to: " + *err;
   }
 
-  // OR(frame), depth only: V (V_{frame-2} in the switch, V_{frame-1} alone) for the new camera,
-  // the occluders that cover enough pixels (occluder selection; stricter where the camera asks for
-  // selected occluders). A frame without occlusion (the render client's OcclusionGate) draws nothing.
-  void draw_occluders(const Camera& cam) {
-    or_triangles_ = 0;
-    drawn_.assign(g_.renderables->count(), 0);
-    if (!occlusion_) return;
-    g_.renderer->begin_frame(cam, false);
-    std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
-    std::sort(ids.begin(), ids.end());
-    for (uint32_t id : ids) drawn_[id] = 1;
-    or_camera_ = cam;
-    selection().filter(ids, *g_.renderables, or_camera_, o_.height);
-    or_triangles_ = g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::DepthOnly).triangles;
-    // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
-    // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for
-    // finish_or() and lengthened the OR's tail, which HC(frame) waits for. Duplex orbit 512^2:
-    // OR tail 2.0-2.4 -> 0.3-0.4 ms wall (docs/results.md).
-    g_.ctx->gl().Flush();
+  // OR(frame) starts: V depth only for the new camera (the cull frame), the clocks of its times.
+  void start_or(const NumberedCamera& cam) {
+    or_start_ = Clock::now();
+    or_cpu0_ = process_cpu_us();
+    tail_cpu0_ = 0;
+    tail_t0_ = or_start_;
+    cull_.begin_or(cam.camera, cam.occlusion);
   }
 
-  // Draws, depth only, those of `ids` that are not in this frame's depth buffer yet and that the
-  // occluder selection keeps as seen from `cam` (the OR's streamed additions, occluder fusion);
-  // all of `ids` count as drawn from now on.
-  struct NewOccluders {
-    std::vector<uint32_t> ids;  // the renderables drawn
-    uint64_t triangles = 0;
-  };
-  NewOccluders draw_new_occluders(std::span<const uint32_t> ids, const Camera& cam) {
-    std::vector<uint32_t> fresh;
-    for (uint32_t id : ids)
-      if (!drawn_[id]) {
-        drawn_[id] = 1;
-        fresh.push_back(id);
-      }
-    selection().filter(fresh, *g_.renderables, cam, o_.height);
-    if (fresh.empty()) return {};
-    const uint64_t triangles =
-        g_.renderer->draw_renderables(*g_.renderables, fresh, SceneRenderer::Mode::DepthOnly).triangles;
-    return {std::move(fresh), triangles};
+  // The OR's stream part is done: from the last diff chunk with additions on, its time is the tail.
+  void mark_tail() {
+    tail_cpu0_ = process_cpu_us();
+    tail_t0_ = Clock::now();
+  }
+
+  // The OR ends (its rasterisation belongs to the OR, not to HC's first query); `waited`: for
+  // the other node's stream, not OR work.
+  void finish_or(Clock::duration waited) {
+    g_.ctx->gl().Finish();
+    const uint64_t or_cpu1 = process_cpu_us();
+    or_.cpu_us = uint32_t(or_cpu1 - or_cpu0_);
+    or_.tail_cpu_us = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0_));
+    or_.tail_us = micros_since(tail_t0_);
+    const uint32_t or_elapsed = micros_since(or_start_),
+                   or_waited = uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
+    or_.us = or_elapsed > or_waited ? or_elapsed - or_waited : 0;
+  }
+
+  // The camera HC(frame) uses, to the render client and the other node before the diff (both
+  // coarsen their V_{frame-1} with it).
+  void send_camera(const NumberedCamera& cam) {
+    send_out(to_wire(cam.number, cam.camera, {o_.width, o_.height}, uint8_t(cam.occlusion ? 1 : 0)));
+  }
+
+  // HC(frame) after its camera: cull, stream the diff and send the EndOfFrame with this frame's times.
+  void hc_frame(uint32_t frame, const NumberedCamera& cam) {
+    const Clock::time_point hc_start = Clock::now();
+    const uint64_t hc_cpu0 = process_cpu_us();
+    DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
+    HcFrame hc = cull_.hc(frame, cam.camera, out);
+    hc.eof.or_us = or_.us;
+    hc.eof.hc_us = micros_since(hc_start);
+    hc.eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0);
+    hc.eof.or_cpu_us = or_.cpu_us;
+    hc.eof.or_tail_cpu_us = or_.tail_cpu_us;
+    hc.eof.or_tail_us = or_.tail_us;
+    out.send(hc.eof);
   }
 
   // The switch from frame `first` (empty sets there): node first % 2 does HC(first).
@@ -506,8 +248,8 @@ class SwitchNode {
       std::optional<wire::Camera> peer_camera;
       uint32_t min_camera = last_camera_ ? *last_camera_ + 1 : 0;
       if (latest && frame > first) {
-        // Before or_start: this wait is not inside the OR's time window, so it is not in `waited`
-        // (subtracting it from the OR's time made or_us wrap round to ~4e9 in latest mode).
+        // Before the OR starts: this wait is not inside the OR's time window, so it is not in
+        // `waited` (subtracting it from the OR's time made or_us wrap round to ~4e9 in latest mode).
         Clock::duration before_or{0};
         const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
         std::optional<net::Received> r = next_from_peer(frame - 1, deadline, before_or);
@@ -522,22 +264,16 @@ class SwitchNode {
       }
       std::optional<NumberedCamera> cam = take_camera(frame, min_camera);
       if (!cam) return;
-      take_mode(*cam);
-      const Clock::time_point or_start = Clock::now();
-      const uint64_t or_cpu0 = process_cpu_us();
-      tail_cpu0_ = 0;
-      tail_t0_ = or_start;
-      draw_occluders(cam->camera);
+      start_or(*cam);
       if (frame > first && !receive_stream(frame - 1, waited, peer_camera)) return await_instruction(frame, peer_lost_);
-      finish_or(or_start, or_cpu0, waited);
-      // ---- HC(frame): camera to the render client and the other node first (both coarsen
-      // their V_{frame-1} with it), then cull and stream the diff.
+      finish_or(waited);
+      // ---- HC(frame).
       try {
-        send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
+        send_camera(*cam);
       } catch (const std::exception& e) {  // NodeFailure, or a bug/resource error: same clean shutdown
         throw NodeFailure("frame " + std::to_string(frame) + ": sending the camera: " + e.what());
       }
-      hc_frame(frame, cam->camera);
+      hc_frame(frame, *cam);
       if (!peer_lost_.empty()) return await_instruction(frame, peer_lost_);
     }
   }
@@ -547,31 +283,15 @@ class SwitchNode {
   void run_single(uint32_t first) {
     single_ = true;
     for (uint32_t frame = first;; ++frame) {
-      poll_for_peer();
+      links_.poll_for_peer();
       std::optional<NumberedCamera> cam = take_camera(frame, last_camera_ ? *last_camera_ + 1 : 0);
       if (!cam) return;
-      take_mode(*cam);
-      const Clock::time_point or_start = Clock::now();
-      const uint64_t or_cpu0 = process_cpu_us();
-      tail_cpu0_ = 0;
-      tail_t0_ = or_start;
-      draw_occluders(cam->camera);
-      finish_or(or_start, or_cpu0, Clock::duration{0});
-      send_out(to_wire(cam->number, cam->camera, {o_.width, o_.height}, cam->wire_occlusion()));
-      hc_frame(frame, cam->camera);
-      ++totals_.single_frames;
+      start_or(*cam);
+      finish_or(Clock::duration{0});
+      send_camera(*cam);
+      hc_frame(frame, *cam);
+      ++stats_.single_frames;
     }
-  }
-
-  void finish_or(Clock::time_point or_start, uint64_t or_cpu0, Clock::duration waited) {
-    g_.ctx->gl().Finish();  // the OR's rasterisation belongs to the OR, not to HC's first query
-    const uint64_t or_cpu1 = process_cpu_us();
-    or_cpu_us_ = uint32_t(or_cpu1 - or_cpu0);
-    or_tail_cpu_us_ = uint32_t(or_cpu1 - (tail_cpu0_ ? tail_cpu0_ : or_cpu0));
-    or_tail_us_ = micros_since(tail_t0_);
-    const uint32_t or_elapsed = micros_since(or_start),
-                   or_waited = uint32_t(std::chrono::duration_cast<std::chrono::microseconds>(waited).count());
-    or_us_ = or_elapsed > or_waited ? or_elapsed - or_waited : 0;
   }
 
   // The next message of the other node's stream of `frame`, waiting until `deadline`. nullopt,
@@ -600,7 +320,7 @@ class SwitchNode {
         }
         continue;
       }
-      net::Received r = peer_->receive(Millis(50));
+      net::Received r = links_.peer()->receive(Millis(50));
       waited += Clock::now() - t0;
       if (r.ok()) {
         if (const auto* rs = std::get_if<wire::Resync>(&r.message)) {
@@ -624,249 +344,117 @@ class SwitchNode {
     }
   }
 
-  // Applies and draws the other node's diff of `frame` until its EndOfFrame. Returns false, with
-  // peer_lost_ saying why, when the other node is gone, stalls or misbehaves, or the render
+  // The other node's stream of `frame`, into the cull frame, until its EndOfFrame. Returns false,
+  // with peer_lost_ saying why, when the other node is gone, stalls or misbehaves, or the render
   // client finished meanwhile; throws Interrupted when the render client sent a Resync.
   // `early`: the stream's camera, already received (latest mode: it chose this node's camera).
   bool receive_stream(uint32_t frame, Clock::duration& waited, const std::optional<wire::Camera>& early) {
-    bool cleared = false;  // full-sets mode: the frame's first message replaces the set
-    std::vector<uint32_t> before;  // full-sets mode with a hold: V' (sorted)
-    bool have_camera = false;
-    uint64_t expected_front = 0;
-    const std::string f = "frame " + std::to_string(frame) + ": ";
-    auto lost = [&](const std::string& why) {
-      peer_lost_ = why;
-      return false;
-    };
-    auto start_frame = [&] {
-      if (o_.config.full_sets && !cleared) {
-        // Full sets resend every id: only those not in V' were found visible (for the hold).
-        if (hold_) before.assign(visible_.ids().begin(), visible_.ids().end()), std::sort(before.begin(), before.end());
-        visible_.clear();
-      }
-      cleared = true;
-    };
     const Clock::time_point deadline = Clock::now() + Millis(o_.timeout_ms);
+    cull_.begin_stream(frame);
     for (bool first = true;; first = false) {
-      net::Received r;
+      wire::Message m;
       if (first && early) {
-        r.status = net::Received::Status::message;
-        r.message = *early;
+        m = *early;
       } else {
         std::optional<net::Received> got = next_from_peer(frame, deadline, waited);
         if (!got) return false;
-        r = std::move(*got);
+        m = std::move(got->message);
       }
-      if (auto* c = std::get_if<wire::Camera>(&r.message)) {
-        if (have_camera) return lost(f + "sent two cameras");
-        have_camera = true;
-        if (auto err = viewport_mismatch(*c, {o_.width, o_.height})) return lost(f + "sent " + *err);
-        expected_front = step_->coarsen(visible_, from_wire(*c));
-      } else if (auto* d = std::get_if<wire::NodeDiff>(&r.message)) {
-        if (!have_camera) return lost(f + "sent its diff before its camera");
-        start_frame();
-        if (!d->added.empty()) mark_tail();  // the last chunk with additions starts the OR tail
-        if (auto err = stream_.on_diff(visible_, *d)) return lost("desync: " + *err);
-        if (hold_)  // the other node found these visible in `frame` (added to V')
-          for (uint32_t id : d->added)
-            if (!o_.config.full_sets || !std::binary_search(before.begin(), before.end(), id))
-              hold_->seen(g_.renderables->node_of(id), frame);
-        if (occlusion_) {
-          const NewOccluders drawn = draw_new_occluders(d->added, or_camera_);
-          or_triangles_ += drawn.triangles;
-          if (!drawn.ids.empty()) g_.ctx->gl().Flush();  // as in draw_occluders
-        }
-      } else if (auto* e = std::get_if<wire::EndOfFrame>(&r.message)) {
-        if (!have_camera) return lost(f + "sent its diff before its camera");
-        start_frame();
-        if (!tail_cpu0_) mark_tail();
-        if (e->frame != frame) return lost("ended frame " + std::to_string(e->frame) + ", expected " + std::to_string(frame));
-        if (auto err = stream_.on_end_of_frame(visible_, *e)) return lost("desync: " + *err);
-        if (e->front_hash != expected_front)
-          return lost("desync: " + f + "front hash " + hex(e->front_hash) + " from " + other_ + ", " +
-                      hex(expected_front) + " here");
-        return true;
-      } else {
-        return lost(f + "sent an unexpected " + std::string(wire::type_name(wire::type_of(r.message))));
+      // The last chunk with additions starts the OR's tail (or the EndOfFrame, if none has).
+      if (const auto* d = std::get_if<wire::NodeDiff>(&m); d && !d->added.empty()) mark_tail();
+      if (std::holds_alternative<wire::EndOfFrame>(m) && !tail_cpu0_) mark_tail();
+      Result<CullFrame::Stream> step = cull_.take(m);
+      if (!step) {
+        peer_lost_ = step.error();
+        return false;
       }
+      if (*step == CullFrame::Stream::done) return true;
     }
-  }
-
-  void hc_frame(uint32_t frame, const Camera& cam) {
-    const Clock::time_point hc_start = Clock::now();
-    hc_cpu0_ = process_cpu_us();
-    DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
-    hc_camera_ = cam;
-    if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
-      FrustumOnlyQueries all;
-      HcFrame hc = step_->hc(frame, visible_, cam, all, HcLocal{.order = o_.hc.order}, out);
-      hc.stats.queries = hc.eof.queries = 0;
-      end_hc(hc, hc_start, out);
-      ++totals_.frustum_frames;
-      return;
-    }
-    HcLocal local{skipper_ ? &*skipper_ : nullptr, budget_ ? &*budget_ : nullptr, o_.hc.order, nullptr,
-                  hold_ ? &*hold_ : nullptr};
-    local.leaf_test = o_.hc.leaf_test;
-    local.geometry_below = o_.hc.geometry_below;
-    if (o_.hc.occluder_fusion)
-      local.occluders = [&](std::span<const uint32_t> found) {
-        // Restores the GL state the queries need; the pyramid is stale where they were drawn.
-        const NewOccluders drawn = draw_new_occluders(found, cam);
-        if (drawn.ids.empty()) return;
-        std::vector<Aabb> boxes;
-        boxes.reserve(drawn.ids.size());
-        for (uint32_t id : drawn.ids) boxes.push_back(g_.renderables->hierarchy().node(g_.renderables->node_of(id)).box);
-        querier_->depth_added(boxes);
-      };
-    querier_->begin(cam);
-    OcclusionQueries& queries = geometry_ ? static_cast<OcclusionQueries&>(*geometry_) : *querier_;
-    HcFrame hc = step_->hc(frame, visible_, cam, queries, local, out);
-    querier_->end();
-    end_hc(hc, hc_start, out);
-    if (budget_) update_costs(hc.eof);
-  }
-
-  // HC's EndOfFrame, with this frame's times, to the render client and the other node.
-  void end_hc(HcFrame& hc, Clock::time_point hc_start, DiffSender& out) {
-    hc.eof.or_us = or_us_;
-    hc.eof.hc_us = micros_since(hc_start);
-    hc.eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0_);
-    hc.eof.or_cpu_us = or_cpu_us_;
-    hc.eof.or_tail_cpu_us = or_tail_cpu_us_;
-    hc.eof.or_tail_us = or_tail_us_;
-    out.send(hc.eof);
-    ++totals_.frames;
-    totals_.queries += hc.stats.queries;
-    totals_.geometry_queries += hc.stats.geometry_queries;
-    totals_.geometry_occluded += hc.stats.geometry_occluded;
-    totals_.assumed_visible += hc.stats.skipped;
-    totals_.pixel_stops += hc.stats.pixel_stops;
-    totals_.hlods += hc.stats.hlods;
-    totals_.skipped += hc.tests_above_fronts;
-    totals_.whole += hc.stats.whole;
-    totals_.held += hc.held;
-  }
-
-  // The query budget's prices, measured on this node (moving averages): a query = HC time per
-  // query; a triangle = OR time per triangle drawn, twice (the OR and the render client draw it).
-  void update_costs(const wire::EndOfFrame& eof) {
-    constexpr double a = 0.2;
-    if (eof.queries >= 16) ms_per_query_ = ms_per_query_ == 0 ? eof.hc_us / 1e3 / eof.queries
-                                                              : (1 - a) * ms_per_query_ + a * eof.hc_us / 1e3 / eof.queries;
-    if (or_triangles_ >= 10000) {
-      const double t = 2.0 * eof.or_us / 1e3 / double(or_triangles_);
-      ms_per_triangle_ = ms_per_triangle_ == 0 ? t : (1 - a) * ms_per_triangle_ + a * t;
-    }
-    budget_->set_costs(ms_per_query_, ms_per_triangle_);
-  }
-
-  void mark_tail() {
-    tail_cpu0_ = process_cpu_us();
-    tail_t0_ = Clock::now();
   }
 
   void print_summary() const {
-    if (!rvg_) return;
-    auto r = rvg_->stats();
-    const uint64_t peer_bytes = totals_.peer_sent_bytes + (peer_ ? peer_->stats().sent.bytes : 0);
-    std::cerr << who_ << ": " << totals_.frames << " HC frames, " << totals_.queries << " queries (" << totals_.assumed_visible
-              << " more skipped by adaptive queries; " << totals_.whole << " subtrees accepted whole by the query budget, "
-              << "a query " << ms_per_query_ << " ms, a triangle " << ms_per_triangle_ * 1e3 << " us; " << totals_.held
-              << " renderables kept by the visibility hold; leaf test " << (o_.hc.leaf_test == LeafTest::geometry ? "geometry: " : "box")
-              << (o_.hc.leaf_test == LeafTest::geometry
-                      ? std::to_string(totals_.geometry_queries) + " geometry queries, " + std::to_string(totals_.geometry_occluded) + " leaves rejected"
-                      : std::string())
-              << "); " << totals_.frustum_frames << " frames without occlusion and " << totals_.selected_frames
-              << " with selected occluders (the render client's gate), sent " << r.sent.bytes
-              << " B to the render client and " << peer_bytes << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
-    if (totals_.resyncs)
-      std::cerr << who_ << ": " << totals_.resyncs << " resyncs from the render client, " << totals_.single_frames
+    const CullTotals& t = cull_.totals();
+    std::cerr << who_ << ": " << t.frames << " HC frames, " << t.queries << " queries (" << t.assumed_visible
+              << " more skipped by adaptive queries; " << t.held << " renderables kept by the visibility hold); "
+              << t.frustum_frames << " frames without occlusion (the render client's gate), sent "
+              << links_.rvg().stats().sent.bytes << " B to the render client and " << links_.peer_sent_bytes()
+              << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
+    if (stats_.resyncs)
+      std::cerr << who_ << ": " << stats_.resyncs << " resyncs from the render client, " << stats_.single_frames
                 << " HC frames served alone\n";
-    if (querier_) {
-      const HcQuerier::Stats& q = querier_->stats();
-      static constexpr const char* kTest[] = {"queries", "pyramid", "auto", "batch", "cpu-pyramid"};
-      std::fprintf(stderr,
-                   "%s: HC test %s: %llu boxes tested (%llu occluded): %llu occlusion queries issued, %llu boxes in %llu "
-                   "batch draws, %llu proven occluded by the depth pyramid (%.2f M pixels of their rectangles) and %llu shown; of %llu "
-                   "tested against it in %llu dispatches; %llu pyramid builds, %llu refreshes after occluder fusion)\n",
-                   who_.c_str(), kTest[int(querier_->mode())], (unsigned long long)q.tests, (unsigned long long)q.occluded,
-                   (unsigned long long)q.queries, (unsigned long long)q.batched, (unsigned long long)q.draws,
-                   (unsigned long long)q.pyramid_occluded, double(q.pyramid_pixels) / 1e6, (unsigned long long)q.shown,
-                   (unsigned long long)q.pyramid_tested, (unsigned long long)q.dispatches, (unsigned long long)q.builds,
-                   (unsigned long long)q.refreshes);
-    }
-    std::fprintf(stderr,
-                 "%s: LOD: tau %g px, visible-pixel LOD %s, front tracking %s: %llu HLODs and %llu visible-pixel stops "
-                 "chosen; front tracking skipped %llu node tests above the fronts (%.1f per HC frame)\n",
-                 who_.c_str(), o_.config.pixel_error, o_.config.visible_pixel_lod ? "on" : "off",
-                 o_.config.front_tracking ? "on" : "off", (unsigned long long)totals_.hlods, (unsigned long long)totals_.pixel_stops,
-                 (unsigned long long)totals_.skipped, totals_.frames ? double(totals_.skipped) / double(totals_.frames) : 0.0);
+    // Each figure beside its name (tests and scripts read these lines).
+    const HcQuerier::Stats& q = cull_.querier().stats();
+    std::cerr << who_ << ": HC test " << hc_test_name(cull_.querier().mode()) << ": " << q.tests << " boxes tested ("
+              << q.occluded << " occluded): " << q.queries << " occlusion queries issued, " << q.batched << " boxes in "
+              << q.draws << " batch draws, " << q.pyramid_occluded << " proven occluded by the depth pyramid ("
+              << fixed(double(q.pyramid_pixels) / 1e6, 2) << " M pixels of their rectangles) and " << q.shown
+              << " shown; of " << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
+              << q.builds << " pyramid builds, " << q.refreshes << " refreshes after occluder fusion)\n";
+    std::cerr << who_ << ": LOD: tau " << o_.config.pixel_error << " px, visible-pixel LOD "
+              << (o_.config.visible_pixel_lod ? "on" : "off") << ", front tracking "
+              << (o_.config.front_tracking ? "on" : "off") << ": " << t.hlods << " HLODs and " << t.pixel_stops
+              << " visible-pixel stops chosen; front tracking skipped " << t.tests_above_fronts
+              << " node tests above the fronts ("
+              << fixed(t.frames ? double(t.tests_above_fronts) / double(t.frames) : 0.0, 1) << " per HC frame)\n";
   }
 
   const NodeOptions& o_;
-  std::string who_, other_;
+  const std::string who_, other_;
+  SceneGl& g_;
+  Links links_;
+  CameraBuffer cameras_;
+  std::optional<CameraReceiver> cameras_in_;  // after links_ and cameras_: stopped first
+  CullFrame cull_;
+  // The schedule's state.
+  bool single_ = false;              // serving alone (no peer)
+  std::optional<uint32_t> last_camera_;
+  std::string peer_lost_;            // why the other node is gone (this run of frames)
+  uint32_t peer_epoch_wait_ = 0;     // the other node's messages are stale until its marker of this resync
+  uint32_t peer_resync_seen_ = 0;    // the other node's marker of a resync this node has not followed yet
+  // The OR's clocks (start_or, mark_tail) and its times (finish_or).
+  Clock::time_point or_start_, tail_t0_;
+  uint64_t or_cpu0_ = 0, tail_cpu0_ = 0;  // process CPU time (us) at the OR's / its tail's start
+  OrTimes or_;
+  SessionStats stats_;
+};
+
+class SwitchNode {
+ public:
+  explicit SwitchNode(const NodeOptions& o) : o_(o), who_("switch_node " + std::to_string(o.id)) {}
+
+  int run() {
+    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
+    g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
+    mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
+                       g_.hierarchy().params(), o_.config, who_);
+    // Both nodes keep their listener for the whole run: node 0 takes a restarted node 1 through it
+    // (the door hands it over), and it tells a second render client the cluster is busy.
+    listener_.emplace(open_listener(who_, o_.listen));
+    if (!o_.serve) return serve_one();
+    // --serve: one render client after the other, each in a session of its own (both nodes
+    // start it from scratch: new connections, including the link between the nodes, and fresh
+    // per-client state), until --sessions clients have been served (0: forever).
+    int failed = 0;
+    for (int n = 1;; ++n) {
+      const int code = serve_one();
+      failed += code != 0;
+      if (o_.sessions > 0 && n >= o_.sessions) {
+        std::cerr << who_ << ": served " << n << " render clients (" << failed << " failed), as --sessions asked\n";
+        return failed ? 1 : 0;
+      }
+      std::cerr << who_ << ": render client " << n << (code ? " failed" : " done")
+                << "; waiting for the next one (--serve)\n";
+    }
+  }
+
+ private:
+  int serve_one() { return Session(o_, g_, mine_, *listener_).run(); }
+
+  const NodeOptions& o_;
+  std::string who_;
   SceneGl g_;
   wire::Hello mine_;
-  std::optional<net::Listener> listener_;  // the whole run; during a session only the Door uses it
-  std::unique_ptr<HcQuerier> querier_;
-  std::unique_ptr<GeometryQuerier> geometry_;  // --leaf-test geometry: wraps querier_
-  Camera hc_camera_;                           // the current HC's camera (geometry_'s restore)
-  std::unique_ptr<net::Connection> peer_, rvg_;
-  // peer_ (the pointer; the session thread writes it, the Door reads it) and rejoined_peer_ (a
-  // restarted node 1 the Door let in, for the session to take).
-  std::mutex link_mu_;
-  std::unique_ptr<net::Connection> rejoined_peer_;
-  std::vector<std::unique_ptr<net::Connection>> dropped_;
-  std::string peer_addr_;
-  bool peer_fresh_ = false;  // peer_ connected since the last resync
-  std::string peer_lost_;    // why the other node is gone (this run of frames)
-  uint32_t peer_epoch_wait_ = 0;   // the other node's messages are stale until its marker of this resync
-  uint32_t peer_resync_seen_ = 0;  // the other node's marker of a resync this node has not followed yet
-  bool single_ = false;      // serving alone (no peer)
-  bool occlusion_ = true;    // this frame's camera asks for occlusion (else: the frustum set)
-  Clock::time_point next_poll_;
-  VisibleSet visible_;
-  DiffReceiver stream_;  // diffs of the other node's HC frames
-  std::optional<uint32_t> last_camera_;
-  uint32_t or_us_ = 0;
-  std::optional<CameraBuffer> cameras_;
-  std::optional<CameraReceiver> cameras_in_;
-  std::optional<SwitchStep> step_;
-  std::vector<uint8_t> drawn_;  // renderables in the depth buffer of the current OR/HC frame
-  OccluderSelection select_{o_.hc.occluder_pixels_per_triangle};
-  // Camera.occlusion 2: at least wire::kSelectedOccluderPixelsPerTriangle px per triangle.
-  OccluderSelection select_strict_{std::max(o_.hc.occluder_pixels_per_triangle, wire::kSelectedOccluderPixelsPerTriangle)};
-  const OccluderSelection& selection() const { return selected_ ? select_strict_ : select_; }
-  // This frame's camera: with or without occlusion, with which occluders.
-  void take_mode(const NumberedCamera& cam) {
-    occlusion_ = cam.occlusion;
-    selected_ = cam.selected_occluders;
-    totals_.selected_frames += occlusion_ && selected_;
-  }
-  bool selected_ = false;        // this frame's camera asks for selected occluders
-  Camera or_camera_;            // the current OR's camera (occluder selection of streamed additions)
-  std::optional<QueryBudget> budget_;
-  uint64_t or_triangles_ = 0;  // drawn by the current OR
-  double ms_per_query_ = 0, ms_per_triangle_ = 0;
-  uint64_t tail_cpu0_ = 0, hc_cpu0_ = 0;  // process CPU time (us) at the OR tail's / HC's start
-  uint32_t or_cpu_us_ = 0, or_tail_cpu_us_ = 0, or_tail_us_ = 0;
-  Clock::time_point tail_t0_;
-  std::optional<QuerySkipper> skipper_;
-  std::optional<VisibilityHold> hold_;
-  // What the session's summary counts (print_summary): one client's, made fresh for each.
-  struct SessionTotals {
-    uint64_t frames = 0, queries = 0;       // HC frames; their occlusion queries
-    uint64_t assumed_visible = 0, whole = 0;  // skipped by adaptive queries; accepted whole by the budget
-    uint64_t held = 0;                      // renderables kept in V by the hold (summed over HC frames)
-    uint64_t geometry_queries = 0, geometry_occluded = 0;
-    uint64_t frustum_frames = 0;   // HC frames sent as frustum sets (OcclusionGate)
-    uint64_t selected_frames = 0;  // frames (OR) with selected occluders
-    uint64_t skipped = 0, pixel_stops = 0, hlods = 0;
-    uint64_t peer_sent_bytes = 0, resyncs = 0, single_frames = 0;
-  };
-  SessionTotals totals_;
-  Door door_;  // last: stopped first (it reads the connections above)
+  std::optional<net::Listener> listener_;
 };
 
 }  // namespace

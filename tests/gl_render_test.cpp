@@ -8,7 +8,6 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/gl/box_query.hpp"
-#include "common/gl/geometry_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/hierarchy.hpp"
@@ -254,116 +253,6 @@ TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
   EXPECT_EQ(q.result(q.issue(around_eye)), 0u);
   EXPECT_TRUE(visible_without_query(around_eye, f.cam));
   q.end();
-}
-
-namespace {
-
-// A wall 5 m in front of the eye (4 x 4 m, four quads around a 1 x 1 m window) and, behind it:
-// "posts", one object of two small quads at (-2.5, -2.5) and (2.5, 2.5), 8 m away, hidden by the
-// wall although its box shows through the window (8.8 % of the box's area: (1.6 / 5.4)^2);
-// "through", seen through the window, 9 m away; "hidden", wholly behind the wall, box and all.
-Scene window_scene() {
-  Scene s;
-  s.meshes.push_back(quad_mesh());
-  auto quad = [&](glm::dvec3 at, glm::dvec3 size, const char* name) {
-    s.objects.push_back({0, glm::scale(glm::translate(glm::dmat4(1.0), at), size), name});
-  };
-  quad({-1.25, 0, -5}, {1.5, 4, 1}, "wall left");
-  quad({1.25, 0, -5}, {1.5, 4, 1}, "wall right");
-  quad({0, 1.25, -5}, {1, 1.5, 1}, "wall top");
-  quad({0, -1.25, -5}, {1, 1.5, 1}, "wall bottom");
-  Mesh posts;
-  for (double x : {-2.5, 2.5}) {
-    const uint32_t base = uint32_t(posts.positions.size());
-    for (glm::vec3 c : {glm::vec3(-0.2f, -0.2f, 0), glm::vec3(0.2f, -0.2f, 0), glm::vec3(0.2f, 0.2f, 0), glm::vec3(-0.2f, 0.2f, 0)})
-      posts.positions.push_back(c + glm::vec3(float(x), float(x), -8));
-    posts.indices.insert(posts.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-  }
-  compute_normals(posts);
-  s.meshes.push_back(posts);
-  s.objects.push_back({1, glm::dmat4(1.0), "posts"});
-  quad({0, 0, -9}, {0.6, 0.6, 1}, "through");
-  quad({-1.5, 1.5, -9}, {0.6, 0.6, 1}, "hidden");
-  return s;
-}
-
-std::vector<std::string> object_names(const Scene& s, const Hierarchy& h, std::span<const uint32_t> nodes) {
-  std::vector<std::string> names;
-  for (uint32_t item : items_of_nodes(h, nodes)) names.push_back(s.objects[h.items()[item].object].name);
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
-}  // namespace
-
-// Geometry queries (--leaf-test geometry): a leaf whose box shows through a window while its
-// geometry is behind the wall is rejected; what shows through the window is kept; the result is
-// exactly the item buffer's objects. Only leaves whose box showed in less than geometry_below of
-// its area are tested; with 1, every leaf whose box passed is, and the occluders' own geometry
-// passes its query, with the OR's polygon offset and without it (GL_GEQUAL: equal depth passes).
-TEST(GeometryQuerier, LeafWhoseBoxShowsThroughAWindowButNotItsGeometryIsRejected) {
-  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
-  Scene scene = window_scene();
-  const Hierarchy h = Hierarchy::build(scene, {});
-  ASSERT_EQ(h.items().size(), scene.objects.size());
-  SceneRenderer r(*ctx, scene, h);
-  const Renderables rs(h, nullptr);
-  const Camera cam = camera_at({0, 0, 0});
-  const LodSelector sel(rs, cam, kSize, 0.0);
-  // Exactly visible: the item buffer of the whole scene.
-  r.begin_id_frame(cam);
-  r.draw_items(all_items(h), SceneRenderer::Mode::ItemIds);
-  std::vector<std::string> exact;
-  for (uint32_t item : ids_in_image(ctx->read_rgba())) exact.push_back(scene.objects[h.items()[item].object].name);
-  std::sort(exact.begin(), exact.end());
-  ASSERT_EQ(exact, (std::vector<std::string>{"through", "wall bottom", "wall left", "wall right", "wall top"}));
-
-  std::vector<uint32_t> walls;
-  for (uint32_t id = 0; id < h.size(); ++id)
-    if (h.node(id).leaf() && scene.objects[h.items()[h.node(id).first_item].object].name.starts_with("wall"))
-      walls.push_back(id);
-  ASSERT_EQ(walls.size(), 4u);
-  for (bool offset : {true, false}) {
-    SCOPED_TRACE(offset ? "occluder offset" : "no offset");
-    r.set_occluder_offset(offset);
-    r.begin_frame(cam, false);
-    r.draw_renderables(rs, walls, SceneRenderer::Mode::DepthOnly);  // the OR: the walls, depth only
-    const Image before = ctx->read_rgba();
-    BoxQuerier boxes(*ctx);
-    GeometryQuerier q(*ctx, boxes, r, rs, [&] { boxes.begin(cam); });
-    boxes.begin(cam);
-    CullStats box_st, geo_st, all_st, few_st;
-    const auto by_box = hardware_cull_lod(h, cam, q, sel, {.stats = &box_st});
-    const auto by_geometry = hardware_cull_lod(h, cam, q, sel, {.stats = &geo_st, .leaf_test = LeafTest::geometry});
-    const auto all_tested = hardware_cull_lod(h, cam, q, sel,
-                                              {.stats = &all_st, .leaf_test = LeafTest::geometry, .geometry_below = 1});
-    const auto few_tested = hardware_cull_lod(h, cam, q, sel,
-                                              {.stats = &few_st, .leaf_test = LeafTest::geometry, .geometry_below = 0.05});
-    boxes.end();
-    EXPECT_EQ(object_names(scene, h, by_box),
-              (std::vector<std::string>{"posts", "through", "wall bottom", "wall left", "wall right", "wall top"}));
-    EXPECT_EQ(object_names(scene, h, by_geometry), exact);
-    EXPECT_EQ(box_st.geometry_queries, 0u);
-    EXPECT_EQ(geo_st.geometry_queries, 1u) << "the other boxes show whole";
-    EXPECT_EQ(geo_st.geometry_occluded, 1u);
-    EXPECT_EQ(object_names(scene, h, all_tested), exact);
-    EXPECT_EQ(all_st.geometry_queries, 6u);  // every leaf whose box passed
-    EXPECT_EQ(all_st.geometry_occluded, 1u);
-    EXPECT_EQ(few_tested, by_box) << "8.8 % of the posts' box shows: not below 5 %";
-    EXPECT_EQ(few_st.geometry_queries, 0u);
-    EXPECT_EQ(q.geometry_queries_issued(), 7u);
-    EXPECT_EQ(ctx->read_rgba().rgba, before.rgba) << "queries write no colour";
-    EXPECT_EQ(ctx->gl().GetError(), GLenum(GL_NO_ERROR));
-    // Handles of a finished batch are refused.
-    EXPECT_THROW(q.result(GeometryQuerier::kGeometryBit), std::out_of_range);
-  }
-  // Depth writes stay off during the queries: the rejected posts did not change the depth buffer
-  // (a box query where they lie still fails, one through the window still passes).
-  BoxQuerier boxes(*ctx);
-  boxes.begin(cam);
-  EXPECT_EQ(boxes.result(boxes.issue(Aabb{{2.3, 2.3, -8.5}, {2.7, 2.7, -8.4}})), 0u);
-  EXPECT_GT(boxes.result(boxes.issue(Aabb{{-0.1, -0.1, -8.5}, {0.1, 0.1, -8.4}})), 0u);
-  boxes.end();
 }
 
 // Issue 16: the geometry goes to GL in small segments (hundreds here) and, with Upload::release,

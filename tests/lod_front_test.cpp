@@ -268,13 +268,13 @@ TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
   for_random_views(12, 30, 25, [&](int k, const Camera& cam, PointQueries& q) {
     const LodSelector sel(r, cam, 480, k % 3 == 0 ? 2.0 : 0.0);
     CullStats lv, nf;
-    const auto by_level = hardware_cull_lod(w.h, cam, q, sel, {.stats = &lv});
+    const auto by_level = hardware_cull_lod(w.h, cam, q, sel, {.choices = {.order = HcOrder::levels}, .stats = &lv});
     std::vector<uint32_t> offered;
     size_t hook_calls = 0;
     const auto near_first =
         hardware_cull_lod(w.h, cam, q, sel,
-                          {.stats = &nf,
-                           .order = HcOrder::near_first,
+                          {.choices = {.order = HcOrder::near_first},
+                           .stats = &nf,
                            .occluders = [&](std::span<const uint32_t> ids) {
                              ++hook_calls;
                              offered.insert(offered.end(), ids.begin(), ids.end());
@@ -407,10 +407,10 @@ TEST(VisibilityHold, TwoNodesKeepFlickeringNodesConservativelyAndSendFewerIds) {
         stream.clear();
         VisibleSet before = visible;
         step.coarsen(before, cam);
-        const HcFrame hc = step.hc(f, visible, cam, q, {.hold = &holds[k]}, out);
+        const HcFrame hc = step.hc(f, visible, cam, q, {}, out, &holds[k]);
         full_stream.clear();
         VisibleSet full_before = full_visible;
-        const HcFrame full_hc = step.hc(f, full_visible, cam, q, {.hold = &full_holds[k]}, full_out);
+        const HcFrame full_hc = step.hc(f, full_visible, cam, q, {}, full_out, &full_holds[k]);
         VisibleSet full_received(r.count());  // a full-sets receiver starts each frame empty
         DiffReceiver full_in;
         for (const wire::Message& m : full_stream) {

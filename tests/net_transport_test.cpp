@@ -280,6 +280,7 @@ TEST_F(Loopback, ListenerGivesUpAfterTheOverallTimeoutNamingTheLastRejection) {
   EXPECT_LT(elapsed_ms(t0), kPromptMs);
   ASSERT_FALSE(accepted);
   EXPECT_TRUE(contains(accepted.error(), "no valid peer on 127.0.0.1:")) << accepted.error();
+  EXPECT_EQ(accepted.error_kind(), ErrorKind::timeout) << "a kind to act on, not the text";
   EXPECT_TRUE(contains(accepted.error(), "within 600 ms (1 rejected; last: peer 127.0.0.1:"))
       << accepted.error();
   EXPECT_TRUE(contains(accepted.error(), "unknown message type 65535")) << accepted.error();
@@ -375,10 +376,10 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   peer.join();
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(),
-                       "hello: unsupported protocol version 1 (this build speaks 6)"))
+                       "hello: unsupported protocol version 1 (this build speaks 7)"))
       << result.error();
   EXPECT_EQ(bye_reason(peer_saw),
-            "protocol error: hello: unsupported protocol version 1 (this build speaks 6)");
+            "protocol error: hello: unsupported protocol version 1 (this build speaks 7)");
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 
@@ -756,6 +757,8 @@ TEST_F(Handshake, ARefusalTakesThePlaceOfTheAcceptorsLastMessage) {
     EXPECT_EQ(asked_about, "render_client");
     EXPECT_TRUE(contains(o.connector.error(), "peer said bye: busy: node 0 is serving another render client"))
         << o.connector.error();
+    EXPECT_EQ(o.connector.error_kind(), ErrorKind::busy) << "a kind to act on, not the text";
+    EXPECT_EQ(o.acceptor.error_kind(), ErrorKind::other);
     EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::hello), k ? 1u : 0u);
     EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::proof), 0u);
   }

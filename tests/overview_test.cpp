@@ -1,6 +1,7 @@
 // cull_overview: the culling overview image of one frame. Runs the real binary on a small city,
 // checks the PNG (size, the three category colours by hue) and that the printed counts cover
-// every non-empty leaf of the hierarchy; bad flags give one error line.
+// every non-empty leaf of the hierarchy; that its replay holds the cluster's own visible sets;
+// bad flags give one error line.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 
 #include "common/image.hpp"
 #include "common/scene_setup.hpp"
+#include "cluster_run.hpp"
 #include "integration_util.hpp"
 
 using namespace occtest;
@@ -102,4 +104,29 @@ TEST(Overview, BadFlagsGiveOneError) {
   Outcome help = run({bin("cull_overview"), "--help"}, dir, "help");
   EXPECT_EQ(help.code, 0);
   EXPECT_NE(help.log.find("usage:"), std::string::npos) << help.log;
+}
+
+// The replay runs the switch nodes' own cull frames (switch_node/cull_frame.hpp), hold and
+// adaptive queries included: at every frame shown, its visible set and its HC's queries are those
+// of the real cluster on the same path (lockstep, occlusion on every frame: deterministic).
+TEST(Overview, ReplaysTheClustersVisibleSetsAndQueries) {
+  const fs::path dir = fresh_dir("overview_cluster");
+  occtest::ClusterOptions o(kScene, "walk:20", {"--width", "160", "--height", "120"});
+  o.client = {"--no-images"};
+  const occtest::ClusterRun r = occtest::run_cluster(dir / "cluster", o);
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  auto stats = read_csv(dir / "cluster" / "stats.csv");
+  ASSERT_EQ(stats["visible"].size(), 20u);
+  const std::regex line(R"(frame (\d+): visible (\d+), .* queries (\d+))");
+  for (int f : {1, 6, 10, 19}) {
+    Outcome ov = run({bin("cull_overview"), "--scene", kScene, "--path", "walk:20", "--frame", std::to_string(f), "--width",
+                      "160", "--height", "120", "--view-width", "64", "--view-height", "48", "--out",
+                      (dir / ("f" + std::to_string(f) + ".png")).string()},
+                     dir, "frame" + std::to_string(f));
+    ASSERT_EQ(ov.code, 0) << ov.log;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(ov.log, m, line)) << ov.log;
+    EXPECT_EQ(std::stod(m[2]), stats["visible"][size_t(f)]) << "frame " << f << ": |V|";
+    EXPECT_EQ(std::stod(m[3]), stats["queries"][size_t(f)]) << "frame " << f << ": HC's queries";
+  }
 }

@@ -58,9 +58,6 @@ TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
   Camera frustum_only;
   frustum_only.occlusion = 0;
   EXPECT_EQ(encode(frustum_only)[6 + 100], 0);  // occlusion, the last byte
-  Camera selected = frustum_only;
-  selected.occlusion = 2;  // with selected occluders
-  EXPECT_EQ(encode(selected)[6 + 100], 2);
   EXPECT_EQ(encode(Camera{})[6 + 100], 1);
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
   EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
@@ -198,16 +195,19 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 6)");
+            "hello: unsupported protocol version 1 (this build speaks 7)");
   put_u16(bad_version, 10, 3);  // the cluster key without Resync
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 3 (this build speaks 6)");
+            "hello: unsupported protocol version 3 (this build speaks 7)");
   put_u16(bad_version, 10, 4);  // cameras without the occlusion byte
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 4 (this build speaks 6)");
+            "hello: unsupported protocol version 4 (this build speaks 7)");
   put_u16(bad_version, 10, 5);  // cameras whose occlusion byte is 0 or 1 only
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 5 (this build speaks 6)");
+            "hello: unsupported protocol version 5 (this build speaks 7)");
+  put_u16(bad_version, 10, 6);  // cameras whose occlusion byte may be 2 (selected occluders, retired)
+  EXPECT_EQ(decode_error(bad_version),
+            "hello: unsupported protocol version 6 (this build speaks 7)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
@@ -324,7 +324,7 @@ TEST(Wire, CameraRejectsEveryInvalidValue) {
        "camera: viewport 0x1 outside [1, 16384]"},
       {[](Camera& c, double, double) { c.viewport_height_px = 16385; },
        "camera: viewport 1x16385 outside [1, 16384]"},
-      {[](Camera& c, double, double) { c.occlusion = 3; }, "camera: occlusion 3 is not 0, 1 or 2"},
+      {[](Camera& c, double, double) { c.occlusion = 2; }, "camera: occlusion 2 is not 0 or 1"},
   };
   for (const Case& tc : cases) {
     Camera c;

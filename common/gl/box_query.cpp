@@ -130,27 +130,44 @@ void query_state(const GlApi& gl, GLuint program, GLuint vao) {
 
 }  // namespace
 
-BoxQuerier::BoxQuerier(GlContext& ctx) : gl_(ctx.gl()), subpixel_step_(subpixel_step(gl_)) {
-  program_ = link_program(gl_, kBoxVertexShader, kBoxFragment);
-  view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
-  min_loc_ = gl_.GetUniformLocation(program_, "u_min");
-  max_loc_ = gl_.GetUniformLocation(program_, "u_max");
-  gl_.CreateVertexArrays(1, &vao_);  // no attributes: corners come from gl_VertexID
+void BoxDrawState::create(const GlApi& gl, GLuint linked_program) {
+  program = linked_program;
+  view_projection_loc = gl.GetUniformLocation(program, "u_view_projection");
+  gl.CreateVertexArrays(1, &vao);  // no attributes: corners come from gl_VertexID
+  subpixel_step = occ::subpixel_step(gl);
+}
+
+void BoxDrawState::destroy(const GlApi& gl) {
+  gl.DeleteVertexArrays(1, &vao);
+  gl.DeleteProgram(program);
+}
+
+void BoxDrawState::begin(const GlApi& gl, const Camera& cam) {
+  eye = cam.eye;
+  reach = near_reach(cam);
+  pixel_pad = pad_per_unit_distance(gl, cam, subpixel_step);
+  const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
+  gl.ProgramUniformMatrix4fv(program, view_projection_loc, 1, GL_FALSE, glm::value_ptr(view_projection));
+  query_state(gl, program, vao);
+}
+
+BoxTester::BoxTester(GlContext& ctx, GLuint linked_program) : gl_(ctx.gl()) { box_.create(gl_, linked_program); }
+
+BoxTester::~BoxTester() { box_.destroy(gl_); }
+
+void BoxTester::end() {
+  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Disable(GL_CULL_FACE);
+}
+
+BoxQuerier::BoxQuerier(GlContext& ctx) : BoxTester(ctx, link_program(ctx.gl(), kBoxVertexShader, kBoxFragment)) {
+  min_loc_ = gl_.GetUniformLocation(box_.program, "u_min");
+  max_loc_ = gl_.GetUniformLocation(box_.program, "u_max");
 }
 
 BoxQuerier::~BoxQuerier() {
   if (!pool_.empty()) gl_.DeleteQueries(GLsizei(pool_.size()), pool_.data());
-  gl_.DeleteVertexArrays(1, &vao_);
-  gl_.DeleteProgram(program_);
-}
-
-void BoxQuerier::begin(const Camera& cam) {
-  eye_ = cam.eye;
-  reach_ = near_reach(cam);
-  pixel_pad_ = pad_per_unit_distance(gl_, cam, subpixel_step_);
-  const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
-  gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
-  query_state(gl_, program_, vao_);
 }
 
 uint32_t BoxQuerier::issue(const Aabb& box) {
@@ -163,9 +180,9 @@ uint32_t BoxQuerier::issue(const Aabb& box) {
   ++queries_issued_;
   gl_.BeginQuery(GL_SAMPLES_PASSED, pool_[handle]);
   if (!box.empty()) {
-    const DrawnBox b = drawn_box(box, eye_, reach_, pixel_pad_);
-    gl_.ProgramUniform3f(program_, min_loc_, b.lo.x, b.lo.y, b.lo.z);
-    gl_.ProgramUniform3f(program_, max_loc_, b.hi.x, b.hi.y, b.hi.z);
+    const DrawnBox b = drawn_box(box, box_.eye, box_.reach, box_.pixel_pad);
+    gl_.ProgramUniform3f(box_.program, min_loc_, b.lo.x, b.lo.y, b.lo.z);
+    gl_.ProgramUniform3f(box_.program, max_loc_, b.hi.x, b.hi.y, b.hi.z);
     // The padded box within reach of the near rectangle: its front faces may be clipped where
     // the back faces are not (or the eye may be inside it): draw both sides, as without culling.
     if (b.near) gl_.Disable(GL_CULL_FACE);
@@ -194,19 +211,11 @@ bool BoxQuerier::ready(uint32_t handle) const {
 
 void BoxQuerier::reset() { next_ = 0; }
 
-void BoxQuerier::end() {
-  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  gl_.DepthMask(GL_TRUE);
-  gl_.Disable(GL_CULL_FACE);
-}
-
 BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact)
-    : gl_(ctx.gl()), exact_(exact), subpixel_step_(subpixel_step(gl_)) {
-  program_ = link_program(gl_, kBatchVertex,
-                          std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment);
-  view_projection_loc_ = gl_.GetUniformLocation(program_, "u_view_projection");
-  first_loc_ = gl_.GetUniformLocation(program_, "u_first");
-  gl_.CreateVertexArrays(1, &vao_);
+    : BoxTester(ctx, link_program(ctx.gl(), kBatchVertex,
+                                  std::string("#version 450 core\n") + (exact ? "#define EXACT\n" : "") + kBatchFragment)),
+      exact_(exact) {
+  first_loc_ = gl_.GetUniformLocation(box_.program, "u_first");
   gl_.CreateBuffers(1, &boxes_buf_);
   gl_.CreateBuffers(1, &counts_buf_);
 }
@@ -214,17 +223,6 @@ BoxBatchCounter::BoxBatchCounter(GlContext& ctx, bool exact)
 BoxBatchCounter::~BoxBatchCounter() {
   gl_.DeleteBuffers(1, &boxes_buf_);
   gl_.DeleteBuffers(1, &counts_buf_);
-  gl_.DeleteVertexArrays(1, &vao_);
-  gl_.DeleteProgram(program_);
-}
-
-void BoxBatchCounter::begin(const Camera& cam) {
-  eye_ = cam.eye;
-  reach_ = near_reach(cam);
-  pixel_pad_ = pad_per_unit_distance(gl_, cam, subpixel_step_);
-  const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
-  gl_.ProgramUniformMatrix4fv(program_, view_projection_loc_, 1, GL_FALSE, glm::value_ptr(view_projection));
-  query_state(gl_, program_, vao_);
 }
 
 uint32_t BoxBatchCounter::issue(const Aabb& box) {
@@ -246,7 +244,7 @@ void BoxBatchCounter::draw() {
   uint32_t n = 0;
   for (uint32_t i = 0; i < boxes_.size(); ++i) {
     if (boxes_[i].empty()) continue;
-    const DrawnBox b = drawn_box(boxes_[i], eye_, reach_, pixel_pad_);
+    const DrawnBox b = drawn_box(boxes_[i], box_.eye, box_.reach, box_.pixel_pad);
     if (b.near) {
       near.push_back(b);
       near_index.push_back(i);
@@ -271,17 +269,17 @@ void BoxBatchCounter::draw() {
   gl_.NamedBufferSubData(boxes_buf_, 0, GLsizeiptr(data.size() * sizeof(glm::vec4)), data.data());
   const std::vector<uint32_t> zeros(n, 0);
   gl_.NamedBufferSubData(counts_buf_, 0, GLsizeiptr(n * sizeof(uint32_t)), zeros.data());
-  gl_.UseProgram(program_);  // BoxQuerier's may be bound (HcQuerier issues both)
-  gl_.BindVertexArray(vao_);
+  gl_.UseProgram(box_.program);  // BoxQuerier's may be bound (HcQuerier issues both)
+  gl_.BindVertexArray(box_.vao);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, boxes_buf_);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, counts_buf_);
   if (far_count > 0) {
-    gl_.ProgramUniform1i(program_, first_loc_, 0);
+    gl_.ProgramUniform1i(box_.program, first_loc_, 0);
     gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * far_count));
   }
   if (n > far_count) {
     gl_.Disable(GL_CULL_FACE);
-    gl_.ProgramUniform1i(program_, first_loc_, GLint(far_count));
+    gl_.ProgramUniform1i(box_.program, first_loc_, GLint(far_count));
     gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * (n - far_count)));
     gl_.Enable(GL_CULL_FACE);
   }
@@ -304,12 +302,6 @@ uint64_t BoxBatchCounter::result(uint32_t handle) {
 void BoxBatchCounter::reset() {
   boxes_.clear();
   drawn_ = false;
-}
-
-void BoxBatchCounter::end() {
-  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  gl_.DepthMask(GL_TRUE);
-  gl_.Disable(GL_CULL_FACE);
 }
 
 }  // namespace occ

@@ -37,7 +37,43 @@ namespace occ {
 // from gl_VertexID, no attributes; also the culling overlay's (box_overlay.hpp).
 extern const char* const kBoxVertexShader;
 
-class BoxQuerier final : public OcclusionQueries {
+// A box program (BoxQuerier and BoxBatchCounter each link their own), its vertex array, and the
+// state its boxes are drawn with from one camera (begin()).
+struct BoxDrawState {
+  GLuint program = 0, vao = 0;
+  GLint view_projection_loc = -1;
+  double subpixel_step = 0;  // the rasteriser's sub-pixel step in pixels
+  glm::dvec3 eye{0.0};
+  double reach = 0;      // eye to the near rectangle's corners, with slack
+  double pixel_pad = 0;  // pad per unit of distance from the eye (BoxQuerier::kPadSubpixels)
+  // Takes `linked_program` (it must have u_view_projection) and makes the vertex array.
+  void create(const GlApi& gl, GLuint linked_program);
+  void destroy(const GlApi& gl);
+  // Sets the camera's uniforms and the query state (no colour or depth writes), binds the program.
+  void begin(const GlApi& gl, const Camera& cam);
+};
+
+// What BoxQuerier and BoxBatchCounter share: their program's state, begin() and end(), and the
+// count of boxes tested.
+class BoxTester : public OcclusionQueries {
+ public:
+  BoxTester(const BoxTester&) = delete;
+  BoxTester& operator=(const BoxTester&) = delete;
+  // Sets up the state for tests from `cam` (does not clear the depth buffer).
+  void begin(const Camera& cam) { box_.begin(gl_, cam); }
+  // Restores colour and depth writes.
+  void end();
+  uint64_t queries_issued() const { return queries_issued_; }  // boxes tested, since construction
+
+ protected:
+  BoxTester(GlContext& ctx, GLuint linked_program);  // takes the program (BoxDrawState::create)
+  ~BoxTester() override;
+  const GlApi& gl_;
+  BoxDrawState box_;
+  uint64_t queries_issued_ = 0;
+};
+
+class BoxQuerier final : public BoxTester {
  public:
   static constexpr double kRelativePad = 1e-5;
   // Boxes are also enlarged on screen by at least this many steps of the rasteriser's sub-pixel
@@ -48,11 +84,7 @@ class BoxQuerier final : public OcclusionQueries {
 
   explicit BoxQuerier(GlContext& ctx);
   ~BoxQuerier() override;
-  BoxQuerier(const BoxQuerier&) = delete;
-  BoxQuerier& operator=(const BoxQuerier&) = delete;
 
-  // Sets up the state for queries from `cam` (does not clear the depth buffer).
-  void begin(const Camera& cam);
   // Starts a query for `box`, draws it, ends the query. An empty box draws nothing (0 samples).
   uint32_t issue(const Aabb& box) override;
   // Samples that passed the depth test for a handle of the current batch (waits for it).
@@ -63,22 +95,11 @@ class BoxQuerier final : public OcclusionQueries {
   // Recycles every handle of the batch (their results are no longer needed).
   void reset();
   void end_batch() override { reset(); }
-  // Restores colour and depth writes.
-  void end();
-
-  uint64_t queries_issued() const { return queries_issued_; }  // since construction
 
  private:
-  const GlApi& gl_;
-  double subpixel_step_;  // the rasteriser's sub-pixel step in pixels
-  GLuint program_ = 0, vao_ = 0;
-  GLint view_projection_loc_ = -1, min_loc_ = -1, max_loc_ = -1;
+  GLint min_loc_ = -1, max_loc_ = -1;
   std::vector<GLuint> pool_;  // GL_SAMPLES_PASSED query objects
   uint32_t next_ = 0;         // first unused query of the pool in this batch
-  glm::dvec3 eye_{0.0};
-  double reach_ = 0;  // eye to the near rectangle's corners, with slack
-  double pixel_pad_ = 0;  // pad per unit of distance from the eye (kPadSubpixels)
-  uint64_t queries_issued_ = 0;
 };
 
 // The same test for a whole batch in one draw (issue 16, "tighter batching"): issue() records the
@@ -92,42 +113,31 @@ class BoxQuerier final : public OcclusionQueries {
 // unless it needs sample counts (visible-pixel LOD). No query objects: llvmpipe bins the begin and
 // the end of every query into every tile of the framebuffer, at 1024 x 1024 a large part of a
 // query's cost.
-class BoxBatchCounter final : public OcclusionQueries {
+class BoxBatchCounter final : public BoxTester {
  public:
   BoxBatchCounter(GlContext& ctx, bool exact);
   bool exact() const { return exact_; }
   ~BoxBatchCounter() override;
-  BoxBatchCounter(const BoxBatchCounter&) = delete;
-  BoxBatchCounter& operator=(const BoxBatchCounter&) = delete;
 
-  void begin(const Camera& cam);
   uint32_t issue(const Aabb& box) override;
   uint64_t result(uint32_t handle) override;
   void reset();
   void end_batch() override { reset(); }
-  void end();
-
-  uint64_t queries_issued() const { return queries_issued_; }  // boxes, since construction
   uint64_t draws() const { return draws_; }                    // batches drawn
   // Draws the batch (the first result() does it); its counts are then read back.
   void draw();
   bool drawn() const { return drawn_; }
 
  private:
-  const GlApi& gl_;
   bool exact_;
-  double subpixel_step_;  // the rasteriser's sub-pixel step in pixels
-  GLuint program_ = 0, vao_ = 0, boxes_buf_ = 0, counts_buf_ = 0;
-  GLint view_projection_loc_ = -1, first_loc_ = -1;
+  GLuint boxes_buf_ = 0, counts_buf_ = 0;
+  GLint first_loc_ = -1;
   size_t capacity_ = 0;
-  glm::dvec3 eye_{0.0};
-  double reach_ = 0;
-  double pixel_pad_ = 0;
   std::vector<Aabb> boxes_;
   std::vector<uint32_t> slot_;
   std::vector<uint64_t> counts_;
   bool drawn_ = false;
-  uint64_t queries_issued_ = 0, draws_ = 0;
+  uint64_t draws_ = 0;
 };
 
 }  // namespace occ

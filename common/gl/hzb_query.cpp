@@ -215,10 +215,6 @@ std::vector<float> GpuDepthPyramid::read_level(uint32_t level) const {
 
 HcQuerier::Policy HcQuerier::policy(HcTest test) {
   Policy p;
-  if (test == HcTest::automatic) {
-    p.min_probes = 32;
-    p.min_proven_per_frame = 32;
-  }
   if (test == HcTest::cpu_pyramid) p.min_decided_screens = 0.25;
   return p;
 }
@@ -232,18 +228,18 @@ uint64_t probe_pixels(const PyramidProbe& p) {
 
 HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
     : test_(test), sample_counts_(sample_counts), policy_(policy), ctx_(ctx), queries_(ctx) {
-  batched_ = test_ == HcTest::batch || test_ == HcTest::cpu_pyramid;
-  if (test_ == HcTest::cpu_pyramid) cpu_pyramid_ = std::make_unique<DepthPyramid>();
-  if (batched_) counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);
-  if (test_ == HcTest::pyramid || test_ == HcTest::automatic) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
+  if (test_ == HcTest::cpu_pyramid) {
+    cpu_pyramid_ = std::make_unique<DepthPyramid>();
+    counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);
+  }
+  if (test_ == HcTest::pyramid) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
 
 void HcQuerier::begin(const Camera& cam) {
-  // Automatic: the frame just ended proved that many boxes occluded; frames whose pyramid would
-  // not pay are all queries, with a frame with the pyramid every kRetryFrames to look again.
+  // cpu_pyramid: the frame just ended decided boxes covering that many pixels; frames whose
+  // pyramid would not pay do without it, with a frame with the pyramid every kRetryFrames to look again.
   if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
-  const double need = cpu_pyramid_ ? policy_.min_decided_screens * ctx_.width() * ctx_.height()
-                                   : double(policy_.min_proven_per_frame);
+  const double need = cpu_pyramid_ ? policy_.min_decided_screens * ctx_.width() * ctx_.height() : 0.0;
   use_pyramid_ = (pyramid_ || cpu_pyramid_) &&
                  (need == 0 || proven_avg_ < 0 || proven_avg_ >= need || ++frames_off_ % kRetryFrames == 0);
   if (use_pyramid_) frames_off_ = 0;
@@ -324,7 +320,7 @@ void HcQuerier::resolve() {
     }
   }
   if (cpu_pyramid_) cpu_refresh();
-  if (!batch_.empty() && batch_.size() >= policy_.min_probes) {
+  if (!batch_.empty()) {
     if (!cpu_pyramid_ && (!built_ || (stale_ && batch_.size() >= policy_.rebuild_min_probes))) {
       pyramid_->build();
       built_ = true;
@@ -394,11 +390,11 @@ uint64_t HcQuerier::result(uint32_t handle) {
 }
 
 void HcQuerier::q_begin(const Camera& cam) {
-  if (batched_) counter_->begin(cam);
+  if (counter_) counter_->begin(cam);
   queries_.begin(cam);  // last: its program is bound for issue()
 }
 uint32_t HcQuerier::q_issue(const Aabb& box) {
-  if (batched_) {
+  if (counter_) {
     // Boxes covering many pixels (or possibly the whole view) are cheaper as queries: every
     // fragment of the batch draw that passes runs the counting shader.
     const BoxFootprint fp = box_footprint(box, cam_, {ctx_.width(), ctx_.height()});
@@ -415,7 +411,7 @@ uint32_t HcQuerier::q_issue(const Aabb& box) {
 }
 
 uint64_t HcQuerier::q_result(uint32_t h) {
-  if (!batched_) return queries_.result(h & ~kQueryBit);
+  if (!counter_) return queries_.result(h & ~kQueryBit);
   if (h & kQueryBit) {
     if (!counter_->drawn()) counter_->draw();  // the batch draw first: one flush for both
     return queries_.result(h & ~kQueryBit);
@@ -425,7 +421,7 @@ uint64_t HcQuerier::q_result(uint32_t h) {
 
 void HcQuerier::end_batch() {
   queries_.reset();
-  if (batched_) {
+  if (counter_) {
     if (counter_->drawn()) queries_.begin(cam_);  // the batch draw bound its own program
     counter_->reset();
     stats_.draws = counter_->draws();

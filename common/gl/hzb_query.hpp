@@ -9,25 +9,21 @@
 // depth (min is exact), so the CPU DepthPyramid::occludes is the shader's specification.
 //
 // HcQuerier: the OcclusionQueries HC uses (switch nodes, cull_overview), by HcTest:
-//   queries    every box is a real occlusion query (BoxQuerier), as before;
-//   batch      a batch's boxes are counted by one draw (BoxBatchCounter, no query objects), except
-//              those covering more than Policy::batch_max_pixels pixels or within reach of the near
-//              plane, which stay queries (the counting shader runs for every passing fragment);
-//   pyramid    each batch's boxes are first tested against the pyramid in one dispatch; only those
-//              it cannot prove occluded become real queries (issued together, then read);
-//   automatic  the pyramid for batches of at least 32 probe-able boxes (a dispatch and its
-//              read-back cost more than a few queries), and only in frames where it pays: while
-//              the pyramid proved fewer than 32 boxes a frame (a running average), frames are all
-//              queries, with one frame with the pyramid every kRetryFrames to look again;
-//   cpu_pyramid  batch, with the pyramid on the CPU in front (the default, issue 14): HC's depth
-//              read back once a frame (glReadPixels) into a DepthPyramid (common/hzb) that proves
-//              boxes occluded (DepthPyramid::occludes) and, without sample counts and until
-//              occluder fusion draws more, boxes that show (DepthPyramid::shows: answered 1 with
-//              no test); the rest are batch boxes or queries. Frames whose pyramid decides boxes
-//              covering less than Policy::min_decided_screens viewports (a running average) do
-//              without it, retrying every kRetryFrames. On llvmpipe a box's test is the cost of
-//              rasterising it, so this is where HC's time went (duplex orbit: HC CPU per frame
-//              0.64x at 512^2, 0.75x at 1024^2; docs/results.md).
+//   queries      every box is a real occlusion query (BoxQuerier): what a hardware GPU would choose;
+//   pyramid      each batch's boxes are first tested against the GPU pyramid in one dispatch; only
+//                those it cannot prove occluded become real queries (issued together, then read);
+//                nothing is read back but one word per probe;
+//   cpu_pyramid  the llvmpipe default (issue 14): HC's depth read back once a frame (glReadPixels)
+//                into a DepthPyramid (common/hzb) that proves boxes occluded
+//                (DepthPyramid::occludes) and, without sample counts and until occluder fusion
+//                draws more, boxes that show (DepthPyramid::shows: answered 1 with no test); the
+//                rest are counted by one draw per batch (BoxBatchCounter, no query objects), except
+//                those covering more than Policy::batch_max_pixels pixels or within reach of the
+//                near plane, which stay queries (the counting shader runs for every passing
+//                fragment). Frames whose pyramid decides boxes covering less than
+//                Policy::min_decided_screens viewports (a running average) do without it,
+//                retrying every kRetryFrames. On llvmpipe a box's test is the cost of rasterising
+//                it, so this is where HC's time went (docs/results.md).
 // The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"), a box shown
 // on the CPU has a sample its query would count, and the batch draw counts the same samples:
 // the results, and so the visible sets, are those of `queries` (without `sample_counts` a
@@ -90,16 +86,14 @@ class HcQuerier final : public OcclusionQueries {
  public:
   // When the pyramid is used, and how it tests (defaults per HcTest: policy()).
   struct Policy {
-    size_t min_probes = 1;             // batches with fewer probe-able boxes are all queries
-    size_t rebuild_min_probes = 256;   // rebuild a stale pyramid (depth_added) for batches this large
-    size_t min_proven_per_frame = 0;   // > 0: frames whose pyramid proves fewer (average) are all queries
+    size_t rebuild_min_probes = 256;   // pyramid: rebuild a stale pyramid (depth_added) for batches this large
     // cpu_pyramid, > 0: frames whose pyramid decides (proves occluded or showing) boxes whose
     // rectangles cover fewer pixels than this many viewports (average) do without it (batch).
     double min_decided_screens = 0;
     // Probe rectangles span at most span x span texels (hzb.hpp): 2 proved a third of the boxes
     // the queries found occluded on a plant walk, 16 nearly two thirds (docs/scale.md).
     int span = 16;
-    // batch: boxes whose screen rectangle covers more pixels are queries (with the eye or the near
+    // cpu_pyramid: boxes whose screen rectangle covers more pixels are queries (with the eye or the near
     // plane in reach: always), smaller ones are counted by the batch draw.
     double batch_max_pixels = 16384;
   };
@@ -109,7 +103,7 @@ class HcQuerier final : public OcclusionQueries {
   struct Stats {
     uint64_t tests = 0;            // issue() calls: boxes tested
     uint64_t queries = 0;          // real occlusion queries issued (query objects)
-    uint64_t batched = 0;          // boxes counted by batch draws (HcTest::batch) instead
+    uint64_t batched = 0;          // cpu_pyramid: boxes counted by batch draws instead
     uint64_t draws = 0;            // batch draws
     uint64_t pyramid_tested = 0;   // boxes tested against the pyramid
     uint64_t pyramid_occluded = 0; // of those, proven occluded (no query)
@@ -153,9 +147,8 @@ class HcQuerier final : public OcclusionQueries {
   Policy policy_;
   GlContext& ctx_;
   BoxQuerier queries_;
-  std::unique_ptr<BoxBatchCounter> counter_;  // batch only
-  bool batched_ = false;
-  std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid / automatic only
+  std::unique_ptr<BoxBatchCounter> counter_;  // cpu_pyramid only
+  std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid only
   std::unique_ptr<DepthPyramid> cpu_pyramid_;  // cpu_pyramid only
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
@@ -164,8 +157,8 @@ class HcQuerier final : public OcclusionQueries {
   void cpu_refresh();
   bool clean_under(const Aabb& box) const;  // no pixel of its footprint drawn since read back
   void clear_dirty();
-  uint64_t proven_frame_ = 0;   // boxes the pyramid proved occluded in this frame (cpu_pyramid:
-                                // pixels of the rectangles of the boxes it decided)
+  uint64_t proven_frame_ = 0;   // cpu_pyramid: pixels of the rectangles of the boxes the pyramid
+                                // decided in this frame
   double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
   uint32_t frames_off_ = 0;     // frames without the pyramid since it was last used
   std::vector<Aabb> boxes_;             // this batch's boxes

@@ -65,7 +65,7 @@ void CameraReceiver::run() {
       client_.close_with_error(wrong);
       return finish(wrong, false);
     }
-    cameras_.put({c->frame, from_wire(*c), c->occlusion != 0, c->occlusion == 2});
+    cameras_.put({c->frame, from_wire(*c), c->occlusion != 0});
   }
 }
 

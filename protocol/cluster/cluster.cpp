@@ -2,6 +2,8 @@
 
 #include <iostream>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "common/cli.hpp"
 #include "common/error.hpp"
@@ -88,6 +90,18 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
              "HC starts from the previous frame's fronts (paper 4.6) instead of the root");
 }
 
+namespace {
+// The --hc-test words: one table for the flag and for hc_test_name().
+const std::vector<std::pair<std::string, HcTest>> kHcTests = {
+    {"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"cpu-pyramid", HcTest::cpu_pyramid}};
+}  // namespace
+
+const char* hc_test_name(HcTest t) {
+  for (const auto& [word, test] : kHcTests)
+    if (test == t) return word.c_str();
+  return "?";
+}
+
 void add_hc_options(Cli& cli, HcChoices& c) {
   cli.choice<HcOrder>("hc-order", &c.order, {{"levels", HcOrder::levels}, {"near-first", HcOrder::near_first}},
                       "HC query batches: a hierarchy level each, or nearest boxes first in shells");
@@ -96,30 +110,15 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "assume nodes whose queries keep coming back visible visible for a while (no query)"},
       {"occluder-fusion", &c.occluder_fusion,
        "HC draws (depth only) what each batch found visible before the next batch's queries"},
-      {"query-budget", &c.query_budget,
-       "accept a subtree without queries where its queries cost more (measured) than they saved"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
-  cli.option("occluder-pixels-per-triangle", &c.occluder_pixels_per_triangle, 0.0, 1e9,
-             "OR and occluder fusion skip objects whose projected bounding sphere covers fewer pixels per "
-             "triangle than this (dense small parts cost more to draw than they hide; 0: draw every one)");
-  cli.choice<LeafTest>("leaf-test", &c.leaf_test, {{"box", LeafTest::box}, {"geometry", LeafTest::geometry}},
-                       "a leaf whose box query passes: accepted (box), or accepted only if its own geometry, "
-                       "drawn depth-only, shows a sample (geometry: fewer leaves through doors and windows, "
-                       "a second query per such leaf)");
-  cli.option("leaf-test-below", &c.geometry_below, 0.0, 1.0,
-             "--leaf-test geometry tests only leaves whose box query saw less than this fraction of the box's "
-             "projected area (a box that shows mostly has geometry that shows; 1: every leaf whose box passed)");
-  cli.choice<HcTest>("hc-test", &c.test,
-                     {{"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"auto", HcTest::automatic},
-                      {"batch", HcTest::batch}, {"cpu-pyramid", HcTest::cpu_pyramid}},
-                     "how HC tests a box: queries = an occlusion query each; pyramid = a depth pyramid built on the "
-                     "GPU from HC's depth buffer first proves boxes occluded (one compute dispatch per batch), "
-                     "queries only for the rest; auto = the pyramid for batches of 32 boxes or more in frames where "
-                     "it proves enough; batch = each batch's boxes in one draw that counts their samples in a "
-                     "buffer (no query objects; boxes over 16384 pixels stay queries); cpu-pyramid = batch, after a "
-                     "depth pyramid read back to the CPU once a frame proves what it can (boxes occluded and, "
-                     "without --visible-pixel-lod boxes that show; the default). Same results");
+  cli.choice<HcTest>("hc-test", &c.test, kHcTests,
+                     "how HC tests a box: queries = an occlusion query each (a hardware GPU); pyramid = a depth "
+                     "pyramid built on the GPU from HC's depth buffer first proves boxes occluded (one compute "
+                     "dispatch per batch, no read-back), queries only for the rest; cpu-pyramid = a depth pyramid "
+                     "read back to the CPU once a frame proves what it can (boxes occluded and, without "
+                     "--visible-pixel-lod, boxes that show), the rest counted by one draw per batch (boxes over "
+                     "16384 pixels stay queries; the default, for llvmpipe). Same results");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }

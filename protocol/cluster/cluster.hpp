@@ -23,8 +23,8 @@ namespace occ {
 
 class Cli;
 
-// `occlusion`: whether the switch culls this camera's frame with occlusion, and with which
-// occluders (wire.hpp Camera: 0 without, 1 with, 2 with selected occluders).
+// `occlusion`: whether the switch culls this camera's frame with occlusion (wire.hpp Camera: 0
+// without, 1 with).
 wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, uint8_t occlusion = 1);
 Camera from_wire(const wire::Camera& w);
 // Why a camera packet does not fit a process rendering `vp` (nullopt when it does).
@@ -53,33 +53,11 @@ struct ClusterConfig {
   uint64_t hash() const;
 };
 
-// How a culling node runs HC (switch_step.hpp HcLocal): node-local, not in the config hash.
-struct HcChoices {
-  bool adaptive_queries = true;    // assume nodes whose queries keep passing visible for a while
-  HcOrder order = HcOrder::near_first;
-  bool occluder_fusion = true;     // draw what each batch found visible before the next batch
-  // Accept subtrees whole where measured costs say queries do not pay. Off by default (issue 15,
-  // docs/spikes.md): each node's choices follow its own timings, so the two nodes disagree and V
-  // alternates between a subtree's leaves and its visible ones: the main source of id churn.
-  bool query_budget = false;
-  int visibility_hold = 2;         // frames a node found visible stays in V (culling.hpp VisibilityHold; 0 off)
-  // OR and fusion draw an object as an occluder only if it covers at least this many pixels per
-  // triangle (OccluderSelection in common/culling.hpp; 0: every visible object). Off by default:
-  // at 1 the generated city's detailed buildings stopped occluding at tau 0 (13.3 M street walk,
-  // 512^2: |V| 70 -> 314 leaves, frame 11 -> 25 ms), a loss far larger than the saw's OR gain.
-  double occluder_pixels_per_triangle = 0.0;
-  // A leaf whose box query passed: accepted (box), or tested again with its own geometry
-  // (LeafTest in common/culling.hpp; the switch node's GeometryQuerier).
-  LeafTest leaf_test = LeafTest::box;
-  double geometry_below = 0.1;  // only leaves whose box showed less than this of its area (HcOptions)
-  // How each box is tested (common/gl/hzb_query.hpp). batch measured 0.64x the HC CPU of queries
-  // (plant:13, 1024^2, docs/scale.md); cpu_pyramid (the default) 0.64-0.75x that of batch (duplex
-  // orbit, docs/results.md).
-  HcTest test = HcTest::cpu_pyramid;
-};
-// --adaptive-queries, --hc-order, --occluder-fusion, --query-budget, --visibility-hold,
-// --occluder-pixels-per-triangle, --leaf-test, --leaf-test-below, --hc-test.
+// The one HC option set (common/culling.hpp HcChoices), from the command line:
+// --adaptive-queries, --hc-order, --occluder-fusion, --visibility-hold, --hc-test.
 void add_hc_options(Cli& cli, HcChoices& c);
+// The --hc-test word of `t` ("cpu-pyramid"), as logs name it.
+const char* hc_test_name(HcTest t);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
 wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,

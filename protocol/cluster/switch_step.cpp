@@ -29,8 +29,8 @@ uint64_t SwitchStep::coarsen(VisibleSet& visible, const Camera& cam) const {
   return front_hash(prime);
 }
 
-HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q,
-                       const HcLocal& local, DiffSender& out) const {
+HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q, HcOptions o,
+                       DiffSender& out, VisibilityHold* hold) const {
   const Hierarchy& h = r_.hierarchy();
   HcFrame result;
   const uint64_t fhash = coarsen(visible, cam);
@@ -46,24 +46,17 @@ HcFrame SwitchStep::hc(uint32_t frame, VisibleSet& visible, const Camera& cam, O
       if (!fr.culls(h.node(a).box) && !visible_without_query(h.node(a).box, cam)) ++result.tests_above_fronts;
   }
   out.begin(frame, visible);
-  const std::vector<uint32_t> found =
-      hardware_cull_lod(h, cam, q, sel,
-                        {.visible_pixel_lod = lod_.visible_pixel_lod,
-                         .start = start,
-                         .skipper = local.skipper,
-                         .budget = local.budget,
-                         .on_visible = [&](uint32_t id) { out.visible(id); },
-                         .stats = &result.stats,
-                         .order = local.order,
-                         .occluders = local.occluders,
-                         .leaf_test = local.leaf_test,
-                         .geometry_below = local.geometry_below});
+  o.visible_pixel_lod = lod_.visible_pixel_lod;
+  o.start = start;
+  o.on_visible = [&](uint32_t id) { out.visible(id); };
+  o.stats = &result.stats;
+  const std::vector<uint32_t> found = hardware_cull_lod(h, cam, q, sel, o);
   VisibleSet cur(visible.id_limit());
   for (uint32_t id : found) cur.insert(id);
   std::vector<uint32_t> held;
-  if (local.hold) {
-    for (uint32_t id : found) local.hold->seen(r_.node_of(id), frame);
-    held = local.hold->held(r_, cam, sorted(visible), found, frame);
+  if (hold) {
+    for (uint32_t id : found) hold->seen(r_.node_of(id), frame);
+    held = hold->held(r_, cam, sorted(visible), found, frame);
     for (uint32_t id : held) {
       cur.insert(id);
       out.visible(id);  // in V' already: nothing to send, except in full-sets mode (every id)

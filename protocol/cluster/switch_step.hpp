@@ -20,28 +20,11 @@
 
 namespace occ {
 
-// HC's node-local choices: how V_f is found, never what it must contain (adaptive queries and
-// occluder fusion only change which nodes are queried and what the queries see; the set stays a
-// conservative superset of the visible one). They need not agree between processes.
-struct HcLocal {
-  QuerySkipper* skipper = nullptr;  // adaptive queries
-  QueryBudget* budget = nullptr;    // accept subtrees whole where queries do not pay
-  HcOrder order = HcOrder::levels;
-  // Occluder fusion (HcOptions::occluders): draws the renderables a batch accepted, depth only.
-  std::function<void(std::span<const uint32_t>)> occluders = nullptr;
-  // Hysteresis (culling.hpp VisibilityHold): hc() records what it found and keeps recently seen
-  // renderables of V_{f-1} in V_f. The caller records the other node's additions.
-  VisibilityHold* hold = nullptr;
-  // Leaves whose box passed are tested with their geometry (needs q.geometry_queries()).
-  LeafTest leaf_test = LeafTest::box;
-  double geometry_below = 0.1;  // HcOptions::geometry_below
-};
-
 struct HcFrame {
   wire::EndOfFrame eof;  // set fields, front_hash, queries and triangles; the caller adds times
   CullStats stats;
   uint32_t tests_above_fronts = 0;  // interior nodes a root traversal would have queried
-  uint32_t held = 0;                // renderables kept in V_f by HcLocal::hold, not found this frame
+  uint32_t held = 0;                // renderables kept in V_f by the hold, not found this frame
 };
 
 class SwitchStep {
@@ -60,8 +43,13 @@ class SwitchStep {
 
   // HC(f) on V_{f-1}: coarsens it (above), starts from its fronts (or the root), queries, streams
   // the diff through `out` and leaves V_f in `visible`. Returns EndOfFrame(f), not yet sent.
-  HcFrame hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q, const HcLocal& local,
-             DiffSender& out) const;
+  // `o`: the node's choices with their state (o.choices, o.skipper, o.occluders: how V_f is
+  // found, never what it must contain); hc() sets its start, on_visible, stats and
+  // visible_pixel_lod. `hold` (VisibilityHold, o.choices.visibility_hold): hc() records what it
+  // found and keeps recently seen renderables of V_{f-1} in V_f; the caller records the other
+  // node's additions.
+  HcFrame hc(uint32_t frame, VisibleSet& visible, const Camera& cam, OcclusionQueries& q, HcOptions o,
+             DiffSender& out, VisibilityHold* hold = nullptr) const;
 
  private:
   const Renderables& r_;

@@ -4,25 +4,18 @@
 
 #include "common/hash.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <charconv>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
-#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <thread>
 
-#include <boost/asio.hpp>
+#include "protocol/net/asio_names.hpp"
 
 namespace occ::net {
-namespace asio = boost::asio;
-using tcp = asio::ip::tcp;
-using boost::system::error_code;
-using Clock = std::chrono::steady_clock;
+using namespace asio_names;
 
 namespace {
 
@@ -98,6 +91,7 @@ struct Connection::Impl {
   bool read_paused = false;                 // inbox full: no read outstanding
   End end = End::none;
   std::string end_reason;
+  bool busy_bye = false;  // ended by the peer's Bye refusing us as busy (wire::kByeBusy)
   bool finished = false;  // socket closed
   ConnectionStats stats;
 
@@ -171,6 +165,7 @@ struct Connection::Impl {
     } else if (end != End::none) {
       r.status = end == End::closed ? Received::Status::closed : Received::Status::error;
       r.reason = end_reason;
+      r.busy = busy_bye;
     }
     return r;
   }
@@ -283,6 +278,7 @@ struct Connection::Impl {
     std::unique_lock lk(m);
     count(stats.received, wire::type_of(msg), bytes);
     if (auto* bye = std::get_if<wire::Bye>(&msg)) {
+      busy_bye = end == End::none && bye->reason.starts_with(wire::kByeBusy);  // the wire's refusal
       end_locked(End::closed, "peer said bye: " + bye->reason, Ending::quiet);
       return;
     }
@@ -521,9 +517,9 @@ std::string wrong_key(const wire::Hello& prover) {
 
 Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine_in,
                               const PeerExpectation& expect, Millis timeout) {
-  auto fail = [&](const std::string& reason) -> Result<wire::Hello> {
-    conn.close_with_error(reason);
-    return Error{"peer " + conn.peer() + ": " + reason};
+  auto fail = [&](const Error& e) -> Result<wire::Hello> {
+    conn.close_with_error(e.reason);
+    return Error{"peer " + conn.peer() + ": " + e.reason, e.kind};
   };
   const auto deadline = deadline_after(timeout);
   // One message from the peer within the handshake's time; a Bye or failure ends it with its reason.
@@ -533,7 +529,7 @@ Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine_in,
     switch (r.status) {
       case Received::Status::timeout:
         return Error{"no " + what + " within " + std::to_string(timeout.count()) + " ms"};
-      case Received::Status::closed:
+      case Received::Status::closed: return Error{r.reason, r.busy ? ErrorKind::busy : ErrorKind::other};
       case Received::Status::error: return Error{r.reason};
       case Received::Status::message: break;
     }
@@ -554,43 +550,43 @@ Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine_in,
   using wire::ProofDirection;
 
   if (!conn.accepted()) {  // the connector: hello, (its proof), then the acceptor's verdict
-    if (auto e = send(mine)) return fail(*e);
+    if (auto e = send(mine)) return fail(Error{*e});
     auto m = next(wire::Type::hello);
-    if (!m) return fail(m.error());
+    if (!m) return fail(Error{m.error(), m.error_kind()});
     const wire::Hello peer = std::get<wire::Hello>(*m);
-    if (auto e = hello_mismatch(mine, peer, expect)) return fail(*e);
-    if (auto e = auth_mismatch(keyed, peer)) return fail(*e);
+    if (auto e = hello_mismatch(mine, peer, expect)) return fail(Error{*e});
+    if (auto e = auth_mismatch(keyed, peer)) return fail(Error{*e});
     if (!keyed) return peer;
-    if (peer.nonce == mine.nonce) return fail("cluster key: the peer's nonce is ours (reflected)");
-    if (auto e = send(expect.key->prove(ProofDirection::connector, mine, peer))) return fail(*e);
+    if (peer.nonce == mine.nonce) return fail(Error{"cluster key: the peer's nonce is ours (reflected)"});
+    if (auto e = send(expect.key->prove(ProofDirection::connector, mine, peer))) return fail(Error{*e});
     auto p = next(wire::Type::proof);
-    if (!p) return fail(p.error());
+    if (!p) return fail(Error{p.error(), p.error_kind()});
     if (!expect.key->verify(std::get<wire::Proof>(*p), ProofDirection::acceptor, peer, mine))
-      return fail(wrong_key(peer));
+      return fail(Error{wrong_key(peer)});
     return peer;
   }
 
   // The acceptor: the connector's hello first, then ours (or a refusal instead of our last message).
   auto m = next(wire::Type::hello);
-  if (!m) return fail(m.error());
+  if (!m) return fail(Error{m.error(), m.error_kind()});
   const wire::Hello peer = std::get<wire::Hello>(*m);
   std::optional<std::string> wrong = hello_mismatch(mine, peer, expect);
   if (!wrong) wrong = auth_mismatch(keyed, peer);
   if (wrong) {  // our hello first, so the connector sees the difference and says so itself
     send(mine);
-    return fail(*wrong);
+    return fail(Error{*wrong});
   }
   if (keyed) {
-    if (auto e = send(mine)) return fail(*e);
+    if (auto e = send(mine)) return fail(Error{*e});
     auto p = next(wire::Type::proof);
-    if (!p) return fail(p.error());
+    if (!p) return fail(Error{p.error(), p.error_kind()});
     if (!expect.key->verify(std::get<wire::Proof>(*p), ProofDirection::connector, peer, mine))
-      return fail(wrong_key(peer));
+      return fail(Error{wrong_key(peer)});
   }
   if (expect.refuse)
-    if (auto why = expect.refuse(peer)) return fail(*why);
+    if (auto why = expect.refuse(peer)) return fail(Error{*why});
   if (auto e = send(keyed ? wire::Message{expect.key->prove(ProofDirection::acceptor, mine, peer)} : wire::Message{mine}))
-    return fail(*e);
+    return fail(Error{*e});
   return peer;
 }
 
@@ -648,8 +644,8 @@ Result<Connection> Listener::accept(Millis timeout, ConnectionOptions options) {
     impl_->io.run();
   }
   if (result == asio::error::operation_aborted)
-    return Error{"no connection on " + impl_->where() + " within " +
-                 std::to_string(timeout.count()) + " ms"};
+    return Error{"no connection on " + impl_->where() + " within " + std::to_string(timeout.count()) + " ms",
+                 ErrorKind::timeout};
   if (result) return Error{"accept on " + impl_->where() + ": " + result.message()};
   conn->accepted = true;
   conn->start();
@@ -673,48 +669,9 @@ Result<Peer> Listener::accept_peer(const wire::Hello& mine, const PeerExpectatio
     ++impl_->rejected;
     last = hello.error();
   }
-  return Error{"no valid peer on " + impl_->where() + " within " +
-               std::to_string(overall_timeout.count()) + " ms (" +
-               std::to_string(impl_->rejected) + " rejected" +
-               (last.empty() ? "" : "; last: " + last) + ")"};
-}
-
-// ---------------------------------------------------------------------------------------------
-// Port files
-
-std::optional<std::string> write_port_file(const std::string& path, uint16_t port) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << port << '\n';
-    out.flush();
-    if (!out) return "cannot write port file " + tmp;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    return "cannot rename " + tmp + " to " + path;
-  }
-  return std::nullopt;
-}
-
-Result<uint16_t> read_port_file(const std::string& path, Millis timeout) {
-  const auto deadline = deadline_after(timeout);
-  for (;;) {
-    std::ifstream in(path);
-    if (in) {
-      std::string text;
-      std::getline(in, text);
-      unsigned value = 0;
-      auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-      if (ec != std::errc() || end != text.data() + text.size() || value == 0 || value > 65535)
-        return Error{"port file " + path + ": invalid content '" + text.substr(0, 32) + "'"};
-      return static_cast<uint16_t>(value);
-    }
-    if (remaining_until(deadline) == Millis(0))
-      return Error{"port file " + path + " did not appear within " +
-                   std::to_string(timeout.count()) + " ms"};
-    std::this_thread::sleep_for(std::min(remaining_until(deadline), Millis(10)));
-  }
+  return Error{"no valid peer on " + impl_->where() + " within " + std::to_string(overall_timeout.count()) + " ms (" +
+                   std::to_string(impl_->rejected) + " rejected" + (last.empty() ? "" : "; last: " + last) + ")",
+               ErrorKind::timeout};
 }
 
 }  // namespace occ::net

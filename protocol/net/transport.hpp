@@ -61,6 +61,7 @@ struct Received {
   // what it belongs to: stats().received counts when the io thread decodes, which may be ahead.
   size_t wire_bytes = 0;
   std::string reason;     // closed / error: why, without the peer address (see peer())
+  bool busy = false;      // closed: by the peer's Bye refusing us as busy (wire.hpp kByeBusy)
   bool ok() const { return status == Status::message; }
 };
 
@@ -126,6 +127,7 @@ struct PeerExpectation {
 // `mine`'s auth and nonce are set here (a fresh nonce per call). On failure the connection is
 // ended with close_with_error, so the peer gets a Bye saying why, and the error names the peer
 // and both values: "peer 127.0.0.1:5555: scene fingerprint mismatch: ours 0x..., peer has 0x...".
+// Its kind: busy when the acceptor refused us with a kByeBusy reason (expect.refuse), else other.
 Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine,
                               const PeerExpectation& expect, Millis timeout);
 
@@ -148,12 +150,13 @@ class Listener {
   uint16_t port() const;
   const std::string& address() const;
 
-  // Waits up to `timeout` for one incoming connection (no handshake).
+  // Waits up to `timeout` for one incoming connection (no handshake); ErrorKind::timeout when none came.
   Result<Connection> accept(Millis timeout, ConnectionOptions options = {});
 
   // Accepts until a peer passes handshake(mine, expect) or overall_timeout passes. Strangers
   // (garbage, no hello within hello_timeout, a wrong hello) are logged by their connection,
-  // counted in rejected(), closed, and the wait goes on.
+  // counted in rejected(), closed, and the wait goes on. ErrorKind::timeout when no peer passed
+  // within overall_timeout ("no valid peer on ..."); other when accepting failed.
   Result<Peer> accept_peer(const wire::Hello& mine, const PeerExpectation& expect,
                            Millis overall_timeout, Millis hello_timeout = Millis(2000),
                            ConnectionOptions options = {});

@@ -8,16 +8,13 @@
 #include <optional>
 #include <random>
 #include <thread>
-#include <utility>  // before asio: Boost 1.74 awaitable.hpp lacks it under C++20
+#include <utility>
 #include <vector>
 
-#include <boost/asio.hpp>
+#include "protocol/net/asio_names.hpp"
 
 namespace occ::relay {
-namespace asio = boost::asio;
-using tcp = asio::ip::tcp;
-using boost::system::error_code;
-using Clock = std::chrono::steady_clock;
+using namespace asio_names;
 
 namespace {
 

@@ -1,8 +1,8 @@
 // cull_overview: a picture of what the occlusion switch culls in one frame (the paper's colour
-// plate). It replays the cluster's lockstep culling in one process up to frame F (the OR of
-// frame f renders V_{f-2} and then the streamed additions of V_{f-1} depth-only, as the switch
-// nodes do; HC is the nodes' own SwitchStep, with front tracking and each node's adaptive
-// queries, against that depth), classifies every
+// plate). It replays the cluster's lockstep culling in one process up to frame F with the switch
+// nodes' own cull frames (switch_node/cull_frame.hpp: the OR of frame f renders V_{f-2} and then
+// the streamed additions of V_{f-1} depth-only; HC is SwitchStep with every HC choice of the
+// nodes, the visibility hold included), classifies every
 // non-empty leaf for frame F (visible = yellow, frustum-culled = violet, occlusion-culled =
 // orange) and renders the scene from up and behind the camera, each pixel coloured by its
 // node's class and shaded by the scene's own lighting, with camera F's frustum and a legend.
@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -21,15 +22,13 @@
 #include "common/cli.hpp"
 #include "common/culling.hpp"
 #include "common/error.hpp"
-#include "common/gl/box_query.hpp"
-#include "common/gl/geometry_query.hpp"
-#include "common/gl/hzb_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/image.hpp"
 #include "common/gl/startup.hpp"
 #include "common/scene_setup.hpp"
 #include "protocol/cluster/switch_step.hpp"
+#include "switch_node/cull_frame.hpp"
 
 namespace occ {
 namespace {
@@ -56,58 +55,42 @@ struct Rgb {
 constexpr Rgb kCategoryColour[4] = {{0, 0, 0}, {255, 214, 0}, {150, 70, 255}, {255, 110, 0}};
 constexpr uint8_t kBackground[3] = {16, 18, 24};
 
-// ---- The cluster's visible set of frame F, replayed in one process (lockstep mode, tau 0).
+// ---- The cluster's visible set of frame F, replayed in one process (lockstep mode, tau 0): two
+// cull frames, one per switch node, on one GL context, in the nodes' own schedule. Node f % 2
+// does OR(f) (its V_{f-2}, then the other node's stream of frame f-1, message by message) and
+// HC(f), whose stream the other node reads in turn.
 std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vector<Camera>& path, uint32_t last,
                                          const Options& o, CullStats& last_stats) {
   const Hierarchy& h = ls.hierarchy;
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
-  HcQuerier querier(*ctx, o.hc.test, false);  // tau = 0: no sample counts needed
   const Renderables renderables(h, nullptr);
-  Camera current;  // HC's camera (the geometry querier's restore)
-  GeometryQuerier geometry(*ctx, querier, renderer, renderables, [&] { querier.begin(current); });
-  OcclusionQueries& queries = o.hc.leaf_test == LeafTest::geometry ? static_cast<OcclusionQueries&>(geometry) : querier;
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
-  const SwitchStep step(renderables, config, o.height);
-  std::vector<QuerySkipper> skippers;  // one per switch node: node f % 2 does HC(f)
-  if (o.hc.adaptive_queries) skippers.assign(2, QuerySkipper(h.size()));
-  DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
-  VisibleSet visible(renderables.count());  // V_{f-1}
-  std::vector<uint32_t> before;             // V_{f-2} (sorted)
+  const Viewport vp{o.width, o.height};
+  CullFrame node0(*ctx, renderer, renderables, config, o.hc, vp, "switch node 1");
+  CullFrame node1(*ctx, renderer, renderables, config, o.hc, vp, "switch node 0");
+  CullFrame* const nodes[2] = {&node0, &node1};
+  std::vector<wire::Message> stream, next;  // HC(f-1)'s messages, as the other node reads them
   for (uint32_t f = 0; f <= last; ++f) {
-    // OR(f): the OR node's own V_{f-2}, then the other node's streamed additions of V_{f-1}.
-    std::vector<uint32_t> prev(visible.ids().begin(), visible.ids().end()), occluders;
-    std::sort(prev.begin(), prev.end());
-    std::set_union(before.begin(), before.end(), prev.begin(), prev.end(), std::back_inserter(occluders));
-    renderer.begin_frame(path[f], false);
-    // HC(f), with the node's choices (occluder fusion draws what it finds that OR did not).
-    std::vector<uint8_t> drawn(h.size(), 0);
-    for (uint32_t id : occluders) drawn[id] = 1;
-    const OccluderSelection select{o.hc.occluder_pixels_per_triangle};
-    select.filter(occluders, renderables, path[f], o.height);
-    renderer.draw_items(items_of_nodes(h, occluders), SceneRenderer::Mode::DepthOnly);
-    // (No query budget: its choices follow the nodes' measured timings, which a replay cannot.)
-    HcLocal local{skippers.empty() ? nullptr : &skippers[f % 2], nullptr, o.hc.order, nullptr};
-    local.leaf_test = o.hc.leaf_test;
-    local.geometry_below = o.hc.geometry_below;
-    current = path[f];
-    if (o.hc.occluder_fusion)
-      local.occluders = [&](std::span<const uint32_t> found) {
-        std::vector<uint32_t> fresh;
-        for (uint32_t id : found)
-          if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
-        select.filter(fresh, renderables, path[f], o.height);
-        renderer.draw_items(items_of_nodes(h, fresh), SceneRenderer::Mode::DepthOnly);
-        querier.depth_added();
-      };
-    querier.begin(path[f]);
-    HcFrame hc = step.hc(f, visible, path[f], queries, local, nowhere);
-    querier.end();
-    before = std::move(prev);
+    CullFrame& node = *nodes[f % 2];
+    node.begin_or(path[f], true);
+    if (f > 0) {
+      node.begin_stream(f - 1);
+      for (const wire::Message& m : stream)
+        if (Result<CullFrame::Stream> step = node.take(m); !step)
+          throw std::logic_error("cull_overview: the replay's own stream of frame " + std::to_string(f - 1) + ": " +
+                                 step.error());
+    }
+    next.assign(1, to_wire(f, path[f], vp));
+    DiffSender out(wire::kDefaultDiffChunkIds, config.full_sets, [&](const wire::Message& m) { next.push_back(m); });
+    HcFrame hc = node.hc(f, path[f], out);
+    out.send(hc.eof);
+    stream.swap(next);
     last_stats = hc.stats;
   }
+  const VisibleSet& visible = nodes[last % 2]->visible();
   std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
   std::sort(v.begin(), v.end());
   return v;

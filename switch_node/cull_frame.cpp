@@ -1,0 +1,152 @@
+#include "switch_node/cull_frame.hpp"
+
+#include <algorithm>
+
+#include "common/hash.hpp"
+
+namespace occ {
+
+CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const ClusterConfig& config,
+                     const HcChoices& choices, Viewport vp, std::string other)
+    : ctx_(ctx),
+      renderer_(renderer),
+      r_(r),
+      config_(config),
+      choices_(choices),
+      vp_(vp),
+      other_(std::move(other)),
+      step_(r, config, vp.height),
+      // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
+      querier_(ctx, choices.test, config.visible_pixel_lod && config.lod()),
+      visible_(r.count()) {
+  if (choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
+  restart();
+}
+
+void CullFrame::restart() {
+  visible_.clear();
+  stream_ = DiffReceiver{};
+  // The hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
+  hold_.reset();
+  if (choices_.visibility_hold > 0) hold_.emplace(r_.hierarchy().size(), uint32_t(choices_.visibility_hold));
+}
+
+void CullFrame::begin_or(const Camera& cam, bool occlusion) {
+  occlusion_ = occlusion;
+  drawn_.assign(r_.count(), 0);
+  if (!occlusion_) return;
+  renderer_.begin_frame(cam, false);
+  std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
+  std::sort(ids.begin(), ids.end());
+  for (uint32_t id : ids) drawn_[id] = 1;
+  renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
+  // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
+  // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for the
+  // end of the OR and lengthened its tail, which HC waits for.
+  ctx_.gl().Flush();
+}
+
+// Draws, depth only, those of `ids` that are not in this frame's depth buffer yet (the OR's
+// streamed additions, occluder fusion); all of `ids` count as drawn from now on. Returns the
+// renderables drawn.
+std::vector<uint32_t> CullFrame::draw_new_occluders(std::span<const uint32_t> ids) {
+  std::vector<uint32_t> fresh;
+  for (uint32_t id : ids)
+    if (!drawn_[id]) {
+      drawn_[id] = 1;
+      fresh.push_back(id);
+    }
+  if (!fresh.empty()) renderer_.draw_renderables(r_, fresh, SceneRenderer::Mode::DepthOnly);
+  return fresh;
+}
+
+void CullFrame::begin_stream(uint32_t frame) {
+  in_ = Incoming{};
+  in_.frame = frame;
+}
+
+Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
+  const std::string f = "frame " + std::to_string(in_.frame) + ": ";
+  auto lost = [](std::string why) { return Error{std::move(why)}; };
+  // The frame's first diff or EndOfFrame: in full-sets mode it replaces the set; only ids not in
+  // V' were found visible (for the hold).
+  auto start_frame = [&] {
+    if (config_.full_sets && !in_.started) {
+      if (hold_) {
+        in_.before.assign(visible_.ids().begin(), visible_.ids().end());
+        std::sort(in_.before.begin(), in_.before.end());
+      }
+      visible_.clear();
+    }
+    in_.started = true;
+  };
+  if (const auto* c = std::get_if<wire::Camera>(&m)) {
+    if (in_.have_camera) return lost(f + "sent two cameras");
+    in_.have_camera = true;
+    if (auto err = viewport_mismatch(*c, vp_)) return lost(f + "sent " + *err);
+    in_.expected_front = step_.coarsen(visible_, from_wire(*c));
+    return Stream::more;
+  }
+  if (const auto* d = std::get_if<wire::NodeDiff>(&m)) {
+    if (!in_.have_camera) return lost(f + "sent its diff before its camera");
+    start_frame();
+    if (auto err = stream_.on_diff(visible_, *d)) return lost("desync: " + *err);
+    if (hold_)  // the other node found these visible in this frame (added to V')
+      for (uint32_t id : d->added)
+        if (!config_.full_sets || !std::binary_search(in_.before.begin(), in_.before.end(), id))
+          hold_->seen(r_.node_of(id), in_.frame);
+    if (occlusion_ && !draw_new_occluders(d->added).empty()) ctx_.gl().Flush();  // as in begin_or
+    return Stream::more;
+  }
+  if (const auto* e = std::get_if<wire::EndOfFrame>(&m)) {
+    if (!in_.have_camera) return lost(f + "sent its diff before its camera");
+    start_frame();
+    if (e->frame != in_.frame)
+      return lost("ended frame " + std::to_string(e->frame) + ", expected " + std::to_string(in_.frame));
+    if (auto err = stream_.on_end_of_frame(visible_, *e)) return lost("desync: " + *err);
+    if (e->front_hash != in_.expected_front)
+      return lost("desync: " + f + "front hash " + hex(e->front_hash) + " from " + other_ + ", " +
+                  hex(in_.expected_front) + " here");
+    return Stream::done;
+  }
+  return lost(f + "sent an unexpected " + std::string(wire::type_name(wire::type_of(m))));
+}
+
+HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
+  HcFrame hc;
+  if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
+    FrustumOnlyQueries all;
+    hc = step_.hc(frame, visible_, cam, all, {.choices = choices_}, out);
+    hc.stats.queries = hc.eof.queries = 0;
+    ++totals_.frustum_frames;
+  } else {
+    HcOptions o{.choices = choices_, .skipper = skipper_ ? &*skipper_ : nullptr};
+    if (choices_.occluder_fusion)
+      o.occluders = [&](std::span<const uint32_t> found) {
+        // Restores the GL state the queries need; the pyramid is stale where they were drawn.
+        const std::vector<uint32_t> drawn = draw_new_occluders(found);
+        if (drawn.empty()) return;
+        std::vector<Aabb> boxes;
+        boxes.reserve(drawn.size());
+        for (uint32_t id : drawn) boxes.push_back(r_.hierarchy().node(r_.node_of(id)).box);
+        querier_.depth_added(boxes);
+      };
+    querier_.begin(cam);
+    hc = step_.hc(frame, visible_, cam, querier_, o, out, hold_ ? &*hold_ : nullptr);
+    querier_.end();
+  }
+  count(hc);
+  return hc;
+}
+
+void CullFrame::count(const HcFrame& hc) {
+  ++totals_.frames;
+  totals_.queries += hc.stats.queries;
+  totals_.assumed_visible += hc.stats.skipped;
+  totals_.pixel_stops += hc.stats.pixel_stops;
+  totals_.hlods += hc.stats.hlods;
+  totals_.tests_above_fronts += hc.tests_above_fronts;
+  totals_.held += hc.held;
+}
+
+}  // namespace occ
