@@ -129,9 +129,6 @@ constexpr size_t kMaxNameBytes = 64;
 constexpr size_t kMaxReasonBytes = 1024;
 constexpr uint32_t kMaxViewportPx = 16384;
 constexpr uint32_t kDefaultDiffChunkIds = 100;  // the paper's buffer size b
-// RETIRED with Camera.occlusion 2 (version 7): no process reads it any more; only
-// render_client/main.cpp's --occlusion-gate help still names it. Delete with that help text.
-constexpr double kSelectedOccluderPixelsPerTriangle = 4.0;
 constexpr uint32_t kMaxDiffIds = (kMaxPayloadBytes - 12) / 4;  // ids in one NodeDiff
 constexpr size_t kNonceBytes = 32;
 constexpr size_t kProofBytes = 32;  // HMAC-SHA256

@@ -167,18 +167,14 @@ class SceneRenderer {
   void draw_order(const Renderables& r, uint32_t id, std::vector<DrawOrder>& out);
 
   // Occlusion queries (scene_renderer_queries.cpp).
-  // For each renderable ids[k], a GL_SAMPLES_PASSED query queries[k] around its DepthOnly draws
-  // — the same programs, vertices, face culling and MASK alpha test as draw_renderables(...,
-  // DepthOnly), so its depth is bit-identical to the occluder pass's — with colour and depth
-  // writes off, depth test depth_func (GL_GEQUAL, reverse-Z: ties pass) and no occluder offset.
-  // BLEND items are left out, as in DepthOnly (holds_blended() tells which renderables have
-  // them). All records and commands are uploaded once. Leaves depth writes on and the depth test
-  // GL_GREATER. With depth_func GL_EQUAL the queries count the samples that tie with the depth
-  // buffer exactly (every mode computes the same depth: a Shaded draw of the renderable would
-  // tie there too). One query (queries.size() 1) counts the samples of all the renderables
-  // together (TwoPassDrawer's tie check); one query per renderable is GeometryQuerier's.
-  void query_renderables(const Renderables& r, std::span<const uint32_t> ids, std::span<const GLuint> queries,
-                         GLenum depth_func = GL_GEQUAL);
+  // One GL_SAMPLES_PASSED query around the DepthOnly draws of renderables `ids` — the same
+  // programs, vertices, face culling and MASK alpha test as draw_renderables(..., DepthOnly), so
+  // their depth is bit-identical to the occluder pass's — with colour and depth writes off, depth
+  // test depth_func and no occluder offset. BLEND items are left out, as in DepthOnly. With
+  // GL_EQUAL the query counts the samples that tie with the depth buffer exactly (every mode
+  // computes the same depth: a Shaded draw would tie there too): TwoPassDrawer's tie check.
+  // Leaves depth writes on and the depth test GL_GREATER. Throws std::out_of_range for an id not in r.
+  void query_renderables(const Renderables& r, std::span<const uint32_t> ids, GLuint query, GLenum depth_func);
   // The BLEND items' share of an exact visibility count: for each BLEND item items[k] (others
   // are an error), a GL_SAMPLES_PASSED query queries[k] around a depth-tested draw of it against
   // the depth buffer as it is (GL_GREATER, no colour or depth writes: what the Shaded pass does to
@@ -187,8 +183,6 @@ class SceneRenderer {
   void query_blended_items(std::span<const uint32_t> items, std::span<const GLuint> queries);
   // True when item `item` has a BLEND material.
   bool item_blended(uint32_t item) const;
-  // True when renderable `id` draws BLEND items (HLODs never do). Only GeometryQuerier asks.
-  bool holds_blended(const Renderables& r, uint32_t id) const;
 
   // The scene's shader variants, e.g. "shaded: plain, blended; depth: plain; ids: plain".
   const std::string& variants() const { return gpu_.variants; }
@@ -271,7 +265,7 @@ class SceneRenderer {
   std::vector<Pending> sorted_;
   std::vector<BatchOrder> batch_order_;
   std::vector<std::pair<double, uint32_t>> blend_order_;
-  std::vector<size_t> query_ends_;  // query_renderables: end of each renderable's draws
+  std::vector<size_t> query_ends_;  // query_pending: end of each query's draws
 };
 
 // Distinct ids in an item buffer (pixel value - 1, zero pixels ignored), ascending.

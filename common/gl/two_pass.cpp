@@ -71,7 +71,7 @@ TwoPassDrawer::Frame TwoPassDrawer::draw(const Camera& cam, std::span<const uint
   find_tie_candidates();
   if (!checked_.empty()) {
     if (tie_query_ == 0) gl.CreateQueries(GL_SAMPLES_PASSED, 1, &tie_query_);
-    renderer_.query_renderables(r_, checked_, std::span<const GLuint>(&tie_query_, 1), GL_EQUAL);
+    renderer_.query_renderables(r_, checked_, tie_query_, GL_EQUAL);
   }
   if (!second_.empty()) f.drawn += renderer_.draw_renderables(r_, second_, SceneRenderer::Mode::Shaded);
   f.drawn += renderer_.end_frame();
