@@ -19,3 +19,6 @@ add_test(NAME Docs.ReadmeFlagTablesMatchHelp
          COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/readme_flags_test.py ${PROJECT_SOURCE_DIR}
                  $<TARGET_FILE:render_client> $<TARGET_FILE:switch_node>)
 set_tests_properties(Docs.ReadmeFlagTablesMatchHelp PROPERTIES LABELS unit)
+# The code's shape: layers include only the layers below, files <= 700 lines, functions <= 120 lines.
+add_test(NAME Structure.LayersFileAndFunctionSizes COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/structure_test.py ${PROJECT_SOURCE_DIR})
+set_tests_properties(Structure.LayersFileAndFunctionSizes PROPERTIES LABELS unit)
