@@ -10,7 +10,7 @@
 #include <cstdlib>
 
 #include "common/camera_path.hpp"
-#include "common/scene_setup.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "integration_util.hpp"
 
 using namespace occtest;

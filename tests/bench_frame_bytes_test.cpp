@@ -8,7 +8,7 @@
 #include <algorithm>
 
 #include "common/camera_path.hpp"
-#include "common/scene_setup.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "integration_util.hpp"
 #include "protocol/net/transport.hpp"
 #include "protocol/visible_set.hpp"

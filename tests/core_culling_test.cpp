@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "common/culling.hpp"
-#include "common/lod.hpp"
+#include "common/cull/culling.hpp"
+#include "common/lod/lod.hpp"
 #include "scene_fixtures.hpp"
 
 using namespace occ;

@@ -5,7 +5,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "common/hierarchy.hpp"
+#include "common/scene/hierarchy.hpp"
 #include "scene_fixtures.hpp"
 
 using namespace occ;

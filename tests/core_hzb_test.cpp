@@ -2,7 +2,7 @@
 
 #include <optional>
 
-#include "common/hzb.hpp"
+#include "common/cull/hzb.hpp"
 #include "random_util.hpp"
 
 using namespace occ;

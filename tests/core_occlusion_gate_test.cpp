@@ -1,4 +1,4 @@
-// OcclusionGate (common/occlusion_gate.hpp): the render client's choice, per camera, between the
+// OcclusionGate (common/cull/occlusion_gate.hpp): the render client's choice, per camera, between the
 // switch with occlusion and frustum sets, driven by simulated frame intervals. The simulated
 // pipeline shows each decision `lag` frames later, as the cluster does (cameras go out ahead).
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 #include <deque>
 #include <functional>
 
-#include "common/occlusion_gate.hpp"
+#include "common/cull/occlusion_gate.hpp"
 
 namespace occ {
 namespace {

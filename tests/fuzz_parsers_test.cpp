@@ -13,9 +13,9 @@
 #include <gtest/gtest.h>
 
 #include "common/fuzz/fuzz_targets.hpp"
-#include "common/lod_cache.hpp"
+#include "common/lod/lod_cache.hpp"
 #include "common/mapped_file.hpp"
-#include "common/scene_cache.hpp"
+#include "common/scene/scene_cache.hpp"
 
 using namespace occ::fuzz;
 

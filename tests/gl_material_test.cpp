@@ -6,12 +6,12 @@
 #include <cmath>
 #include <numeric>
 
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
-#include "common/hierarchy.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/scene/scene_io.hpp"
 #include "material_util.hpp"
 #include "scratch_util.hpp"
 

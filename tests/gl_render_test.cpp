@@ -10,9 +10,9 @@
 #include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
-#include "common/hierarchy.hpp"
-#include "common/lod.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/lod/lod.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace occ {
 inline void PrintTo(GlBackend b, std::ostream* os) {

@@ -1,5 +1,5 @@
 // Numerical hard cases through the three real processes (issue 7): each pins exact cameras on a
-// generated hard-case scene (common/scene_io.hpp, hard:* and offset:*) and requires the cluster
+// generated hard-case scene (common/scene/scene_io.hpp, hard:* and offset:*) and requires the cluster
 // frame to equal the reference frame (no culling) for every frame: culling must stay
 // conservative however degenerate the camera or the geometry.
 #include <gtest/gtest.h>

@@ -1,10 +1,10 @@
-// The hard-case scene generator (common/scene_io.hpp: hard:walls, hard:span, hard:degenerate,
+// The hard-case scene generator (common/scene/scene_io.hpp: hard:walls, hard:span, hard:degenerate,
 // offset:DX,DY,DZ:<spec>): deterministic, the documented geometry, translations exact in double,
 // bad specs named.
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/scene_io.hpp"
 
 using namespace occ;
 

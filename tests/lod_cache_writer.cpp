@@ -4,8 +4,8 @@
 #include <cstdio>
 
 #include "common/error.hpp"
-#include "common/lod_cache.hpp"
-#include "common/scene_io.hpp"
+#include "common/lod/lod_cache.hpp"
+#include "common/scene/scene_io.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 3) {

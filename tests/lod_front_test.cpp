@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <random>
 
-#include "common/culling.hpp"
-#include "common/front.hpp"
-#include "common/scene_io.hpp"
+#include "common/cull/culling.hpp"
+#include "common/cull/front.hpp"
+#include "common/scene/scene_io.hpp"
 #include "protocol/cluster/switch_step.hpp"
 #include "scene_fixtures.hpp"
 

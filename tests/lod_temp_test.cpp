@@ -1,4 +1,4 @@
-// Stale cache temporaries (lod_cache.hpp: cache_temp_path, remove_stale_cache_temps) with real
+// Stale cache temporaries (cache_files.hpp: cache_temp_path, remove_stale_cache_temps) with real
 // writer processes (lod_cache_writer, a host's start): one killed with SIGKILL while it writes its
 // LOD cache, the next one (which removes that temporary) killed by the kernel mid-write (file size
 // limit: SIGXFSZ, a partial regular file), then the next start removes that one too and writes a
@@ -17,8 +17,8 @@
 
 #include <gtest/gtest.h>
 
-#include "common/lod_cache.hpp"
-#include "common/scene_io.hpp"
+#include "common/lod/lod_cache.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace fs = std::filesystem;
 using namespace occ;

@@ -7,8 +7,8 @@
 #include <limits>
 #include <random>
 
-#include "common/lod.hpp"
-#include "common/scene_io.hpp"
+#include "common/lod/lod.hpp"
+#include "common/scene/scene_io.hpp"
 #include "scene_fixtures.hpp"
 
 using namespace occ;

@@ -19,9 +19,9 @@
 #include "common/error.hpp"
 #include "common/fuzz/fuzz_targets.hpp"
 #include "common/image.hpp"
-#include "common/lod_cache.hpp"
-#include "common/scene_cache.hpp"
-#include "common/scene_io.hpp"
+#include "common/lod/lod_cache.hpp"
+#include "common/scene/scene_cache.hpp"
+#include "common/scene/scene_io.hpp"
 #include "render_client/scene_export.hpp"
 
 namespace fs = std::filesystem;

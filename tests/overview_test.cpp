@@ -9,7 +9,7 @@
 #include <regex>
 
 #include "common/image.hpp"
-#include "common/scene_setup.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "cluster_run.hpp"
 #include "integration_util.hpp"
 

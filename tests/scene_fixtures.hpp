@@ -5,8 +5,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "common/error.hpp"
-#include "common/scene.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/scene.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace occtest {
 

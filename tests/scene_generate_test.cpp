@@ -5,9 +5,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <iostream>
 
-#include "common/city.hpp"
+#include "common/scene/city.hpp"
 #include "common/error.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/scene_io.hpp"
 #include "scene_fixtures.hpp"
 
 using namespace occ;

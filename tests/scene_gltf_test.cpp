@@ -15,8 +15,8 @@
 #include <random>
 
 #include "common/error.hpp"
-#include "common/scene_io.hpp"
-#include "common/scene_setup.hpp"
+#include "common/scene/scene_io.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "scratch_util.hpp"
 
 using namespace occ;

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
-#include "common/scene_io.hpp"
+#include "common/scene/scene_io.hpp"
 
 using namespace occ;
 

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/scene_io.hpp"
 #include "material_util.hpp"
 #include "scratch_util.hpp"
 

@@ -1,4 +1,4 @@
-// The procedural plant (--scene plant:M, common/plant.hpp): deterministic, about M million
+// The procedural plant (--scene plant:M, common/scene/plant.hpp): deterministic, about M million
 // triangles, unique meshes, a walk down its aisle, clear errors for bad specs.
 #include <gtest/gtest.h>
 
@@ -14,11 +14,11 @@
 
 #include "common/camera_path.hpp"
 #include "common/error.hpp"
-#include "common/hierarchy.hpp"
-#include "common/plant.hpp"
-#include "common/scene_cache.hpp"
-#include "common/scene_io.hpp"
-#include "common/scene_setup.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/scene/plant.hpp"
+#include "common/scene/scene_cache.hpp"
+#include "common/scene/scene_io.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "scene_fixtures.hpp"
 
 using namespace occ;
@@ -109,7 +109,7 @@ TEST(Plant, BadSpecsNameTheSpec) {
   EXPECT_THROW(plant::generate_plant({0.0, 1}), InputError);
 }
 
-// ---- The scene cache (common/scene_cache.hpp, issue 16).
+// ---- The scene cache (common/scene/scene_cache.hpp, issue 16).
 
 namespace {
 

@@ -15,11 +15,11 @@
 #include "common/camera_path.hpp"
 #include "common/error.hpp"
 #include "common/hash.hpp"
-#include "common/lod_cache.hpp"
-#include "common/lod_select.hpp"
+#include "common/lod/lod_cache.hpp"
+#include "common/lod/lod_select.hpp"
 #include "common/mapped_file.hpp"
-#include "common/scene_cache.hpp"
-#include "common/scene_io.hpp"
+#include "common/scene/scene_cache.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace occ::fuzz {
 

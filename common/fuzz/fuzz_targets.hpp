@@ -24,8 +24,8 @@
 #include <string_view>
 #include <vector>
 
-#include "common/hierarchy.hpp"
-#include "common/scene.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/scene/scene.hpp"
 
 namespace occ::fuzz {
 

@@ -1,5 +1,5 @@
 // Occlusion queries on axis-aligned boxes against the current depth buffer (the GL side of
-// HardwareCull, common/culling.hpp). Each box is drawn as its front faces (12 triangles wound
+// HardwareCull, common/cull/culling.hpp). Each box is drawn as its front faces (12 triangles wound
 // counter-clockwise from outside, back faces culled) with colour and depth writes off and the
 // reverse-Z depth test GL_GREATER, inside a GL_SAMPLES_PASSED query (one pool
 // per query target: a GL query object is tied to its first target, and this class only counts
@@ -28,7 +28,7 @@
 #include <glm/glm.hpp>
 
 #include "common/camera.hpp"
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/gl/context.hpp"
 
 namespace occ {

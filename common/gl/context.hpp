@@ -6,7 +6,7 @@
 // projection: glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE), depth test GL_GREATER, depth cleared
 // to 0 (= far). Depth clamp stays off: clamping would rasterise geometry in front of the near
 // plane at depth 1 instead of clipping it, and occlusion boxes crossing the near plane are
-// decided on the CPU anyway (visible_without_query in common/culling.hpp).
+// decided on the CPU anyway (visible_without_query in common/cull/culling.hpp).
 // One context per thread at a time; the library prints nothing (callers print renderer()).
 #pragma once
 #include <memory>

@@ -3,7 +3,7 @@
 // GpuDepthPyramid: a hierarchical depth pyramid of farthest depths (reverse-Z: the MIN of 2 x 2
 // texels), built by a compute shader from the context's depth texture (GlContext::depth_texture),
 // two levels per dispatch, and never read back; level 0 is the depth texture itself, levels 1.. live in one R32F texture
-// (its mip k-1 holds level k). test() runs a batch of PyramidProbes (common/hzb.hpp: rectangle,
+// (its mip k-1 holds level k). test() runs a batch of PyramidProbes (common/cull/hzb.hpp: rectangle,
 // level and depth bound computed on the CPU) in one compute dispatch and reads back one word per
 // probe from a small shader storage buffer. Level contents equal DepthPyramid::build on the same
 // depth (min is exact), so the CPU DepthPyramid::occludes is the shader's specification.
@@ -46,10 +46,10 @@
 #include <span>
 #include <vector>
 
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
-#include "common/hzb.hpp"
+#include "common/cull/hzb.hpp"
 
 namespace occ {
 

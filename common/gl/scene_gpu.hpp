@@ -17,9 +17,9 @@
 
 #include "common/gl/gl_api.hpp"
 #include "common/gl/scene_shaders.hpp"
-#include "common/hierarchy.hpp"
-#include "common/lod.hpp"
-#include "common/scene.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/lod/lod.hpp"
+#include "common/scene/scene.hpp"
 
 namespace occ {
 

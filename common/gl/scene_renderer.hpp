@@ -74,10 +74,10 @@
 #include "common/gl/context.hpp"
 #include "common/gl/flush_schedule.hpp"
 #include "common/gl/scene_gpu.hpp"
-#include "common/hierarchy.hpp"
+#include "common/scene/hierarchy.hpp"
 #include "common/image.hpp"
-#include "common/lod.hpp"
-#include "common/scene.hpp"
+#include "common/lod/lod.hpp"
+#include "common/scene/scene.hpp"
 
 namespace occ {
 

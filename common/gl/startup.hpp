@@ -9,7 +9,7 @@
 
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
-#include "common/scene_setup.hpp"
+#include "common/setup/scene_setup.hpp"
 
 namespace occ {
 

@@ -27,9 +27,9 @@
 #include "common/camera.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
-#include "common/hierarchy.hpp"
-#include "common/hzb.hpp"
-#include "common/lod_select.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/cull/hzb.hpp"
+#include "common/lod/lod_select.hpp"
 
 namespace occ {
 

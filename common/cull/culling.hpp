@@ -1,0 +1,216 @@
+// Culling logic, independent of GL: hierarchical frustum culling and the HC traversal of the
+// occlusion switch (paper Algorithm 4.1, breadth-first with a level of queries in flight at once,
+// 4.7.1). The occlusion test itself sits behind OcclusionQueries: the GL implementation renders
+// boxes against the depth buffer; tests use a CPU fake.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "common/camera.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/lod/lod_select.hpp"
+
+namespace occ {
+
+class OcclusionQueries {
+ public:
+  virtual ~OcclusionQueries() = default;
+  // Starts an occlusion query for `box` against the current depth buffer; returns a handle.
+  virtual uint32_t issue(const Aabb& box) = 0;
+  // Samples of that box that passed the depth test (blocks until known).
+  virtual uint64_t result(uint32_t handle) = 0;
+  // Every result of the batch was read: handles may be recycled.
+  virtual void end_batch() {}
+};
+
+// Every box passes: with it HC's traversal returns the frustum set at the chosen LODs (a frame the
+// render client's OcclusionGate sends without occlusion). No GL.
+class FrustumOnlyQueries final : public OcclusionQueries {
+ public:
+  uint32_t issue(const Aabb&) override { return 0; }
+  uint64_t result(uint32_t) override { return ~uint64_t(0); }
+};
+
+// True when a ray from the eye could enter `box` before reaching the near plane (the eye is in
+// or on the box, or the box crosses the near plane close to the eye). A query would then
+// rasterise only far faces or nothing and could report 0 samples although the content shows, so
+// such boxes are visible without a query.
+bool visible_without_query(const Aabb& box, const Camera& cam);
+
+struct CullStats {
+  uint32_t nodes_visited = 0;
+  uint32_t frustum_culled = 0;     // nodes rejected by the frustum test
+  uint32_t queries = 0;            // occlusion queries issued
+  uint32_t occluded = 0;           // nodes whose query returned 0 samples
+  uint32_t near_visible = 0;       // nodes decided visible without a query
+  uint32_t levels = 0;             // query batches (levels) issued
+  uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
+  uint32_t hlods = 0;              // interior nodes accepted at their HLOD
+  uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
+};
+
+// Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
+// culling paper): a node whose query came back visible kTrust times in a row is assumed visible,
+// without a query, for its next `wait` visits; every confirmation doubles the wait (up to
+// kMaxWait), an occluded result resets it. Assuming visible is conservative: the node is accepted
+// or descended exactly as if its query had passed, so no frame changes; only the visible set may
+// keep a node for up to kMaxWait visits after it became occluded. A scene with little occlusion
+// (an open field, the outside of one object) thus stops paying for queries that never cull.
+class QuerySkipper {
+ public:
+  // 2 and 32 (were 3 and 16): duplex orbit at 1024^2, HC CPU -15 to -20 %; c45walk at 512^2 tau 0,
+  // p99 frame interval 11.1-12.7 against 12.9-18.6 ms; PVS/exact +0.01-0.04 (docs/spikes.md).
+  static constexpr uint8_t kTrust = 2;
+  static constexpr uint8_t kMaxWait = 32;
+  // A leaf with more triangles than this is queried every time: skipping its query saves one
+  // box test, but if it has become occluded it is drawn for nothing, twice (the other node's
+  // OR and the render client), for up to kMaxWait frames. Duplex orbit at 512^2 (the cluster,
+  // paired runs): triangles sent 13.5 k -> 7.2 k per frame for +1 % queries, frame interval
+  // -7 %; 50 and 100 query more for less; the city and the saw unchanged (docs/results.md).
+  static constexpr uint64_t kMaxSkippedLeafTriangles = 150;
+  // Whether `n`'s query may be skipped at all (interior nodes: their children are tested).
+  static bool may_skip(const HNode& n) { return !n.leaf() || n.triangles <= kMaxSkippedLeafTriangles; }
+  explicit QuerySkipper(size_t nodes) : state_(nodes) {}
+  // True when `node` is assumed visible this time (consumes one visit of its wait).
+  bool skip(uint32_t node);
+  void record(uint32_t node, bool visible);
+
+ private:
+  struct State {
+    uint8_t streak = 0, wait = 0, remaining = 0;
+  };
+  std::vector<State> state_;
+};
+
+// Hysteresis for the visible set (issue 15): a node HC found visible (in two frames, see recent())
+// stays in V for up to `frames` frames after the last frame it was seen, while it stays in the
+// frustum. Leaves that
+// flicker in and out of V between frames (a query that passes in one node's depth buffer and not
+// in the other's, a leaf seen through a gap every other frame) then cost no ids on the wire and
+// no re-draws at the edges of their visibility. Keeping more than is visible is conservative:
+// frames never change. Node-local state: each switch node records what its own HC found and the
+// additions it receives from the other node (an added id was found visible); what it cannot
+// know (the other node's kept ids) only shortens the hold.
+class VisibilityHold {
+ public:
+  VisibilityHold(size_t nodes, uint32_t frames) : frames_(frames), last_(nodes, 0), prev_(nodes, 0) {}
+  uint32_t frames() const { return frames_; }
+  // `node` was found visible in `frame`.
+  void seen(uint32_t node, uint32_t frame) {
+    if (frame + 1 <= last_.at(node)) return;
+    prev_[node] = last_[node];
+    last_[node] = frame + 1;
+  }
+  // Seen in one of the `frames` frames before `frame` (or in it), and once more before that within
+  // 4 x `frames` frames. A node seen in one frame only is not held: a set that exploded for one
+  // frame (start-up, the eye leaving a closed room) is not carried into the next frames.
+  bool recent(uint32_t node, uint32_t frame) const {
+    const uint32_t l = last_.at(node), p = prev_[node];
+    return l != 0 && l - 1 + frames_ >= frame && p != 0 && p - 1 + 4 * frames_ >= frame;
+  }
+  // The renderables of `prev` (V_{f-1}, front-tracking coarsened) to keep in V_f beside `found`
+  // (HC's result, ascending): recently seen, box not outside the frustum, and neither the same
+  // node as, an ancestor of, nor a descendant of a node in `found` (V_f stays an antichain: one
+  // representation per part of the scene). Ascending.
+  std::vector<uint32_t> held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
+                             std::span<const uint32_t> found, uint32_t frame) const;
+
+ private:
+  uint32_t frames_;
+  std::vector<uint32_t> last_, prev_;  // per node: last / previous frame seen + 1 (0: never)
+};
+
+// Leaves whose boxes are not outside the frustum, in ascending id order.
+std::vector<uint32_t> frustum_cull(const Hierarchy& h, const Camera& cam, CullStats* stats = nullptr);
+
+// What occlusion culling removed (render_client --window's O overlay): the non-empty leaves
+// frustum_cull keeps for `cam` that neither are nor descend from any of `drawn_nodes` (the
+// hierarchy nodes of a visible set: leaves, or interior nodes drawn at their HLOD). Ascending.
+std::vector<uint32_t> occluded_leaves(const Hierarchy& h, const Camera& cam, std::span<const uint32_t> drawn_nodes);
+
+// HardwareCull: breadth-first, one level at a time. For every node of a level: frustum test,
+// then either visible_without_query() or an occlusion query; all queries of the level are issued
+// before any result is read. Children of visible interior nodes form the next level; each
+// visible leaf is reported through on_visible as soon as its level's results are in (streaming).
+// Returns the visible leaves in ascending id order.
+// `r`: the hierarchy's renderables, built once by a caller that culls every frame (its LOD data,
+// if any, is not used). The Hierarchy overload builds them per call, for one-off culls.
+std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, OcclusionQueries& q,
+                                    const std::function<void(uint32_t)>& on_visible,
+                                    CullStats* stats = nullptr);
+std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                    const std::function<void(uint32_t)>& on_visible,
+                                    CullStats* stats = nullptr);
+
+// How LODs are chosen for one viewport: tau and the viewport height go together everywhere.
+struct LodPolicy {
+  double tau = 0;                  // pixels of error (0: original geometry only)
+  double viewport_height_px = 1;
+  bool visible_pixel_lod = false;  // accept a node whose query saw fewer than tau samples (4.7.2)
+  LodSelector selector(const Renderables& r, const Camera& cam) const { return {r, cam, viewport_height_px, tau}; }
+};
+
+// The order in which the traversal batches its queries.
+enum class HcOrder {
+  levels,      // breadth-first: a whole level of the hierarchy per batch (paper 4.7.1)
+  near_first,  // nearest boxes first: shells from a distance-ordered queue (the nearest box at d
+               // and all within 2d), so the near occluders found (and drawn, HcOptions::occluders)
+               // hide what the next shell holds (the default)
+};
+
+// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each (queries: what
+// a hardware GPU would choose); a GPU depth pyramid first, with queries for the boxes it cannot
+// prove occluded (pyramid: no per-frame read-back); or a depth pyramid read back to the CPU once
+// a frame in front of batch-counted boxes (cpu_pyramid: the llvmpipe default). The answers are
+// the same: only what they cost differs.
+enum class HcTest { queries, pyramid, cpu_pyramid };
+
+// How HC searches: the one option set, node-local (not in the config hash: the processes need not
+// agree, the visible set stays a conservative superset either way). The CLI fills it
+// (add_hc_options, protocol/cluster); the switch node's cull frame builds what each choice needs
+// (switch_node/cull_frame.hpp); SwitchStep::hc and hardware_cull_lod read it through HcOptions.
+struct HcChoices {
+  HcOrder order = HcOrder::near_first;
+  bool adaptive_queries = true;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
+  bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
+  int visibility_hold = 2;       // frames a node found visible stays in V (VisibilityHold; 0 off)
+  // How each box is tested (common/gl/hzb_query.hpp): cpu_pyramid on llvmpipe (the default);
+  // queries or pyramid on a hardware GPU (no per-frame read-back).
+  HcTest test = HcTest::cpu_pyramid;
+};
+
+// What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
+struct HcOptions {
+  // The traversal reads choices.order; adaptive queries and occluder fusion act through `skipper`
+  // and `occluders` (state the caller keeps across frames), each only when its choice is on.
+  HcChoices choices = {};
+  bool visible_pixel_lod = false;
+  std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
+  QuerySkipper* skipper = nullptr;       // choices.adaptive_queries' state (null: query every node)
+  std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
+  CullStats* stats = nullptr;
+  uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
+  // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it
+  // accepted, before the next batch is issued; the caller draws them (depth only) into the buffer
+  // the queries test, so what was just found visible hides what lies behind it in the same frame.
+  // Real geometry only adds depth that is really there: the traversal stays conservative.
+  std::function<void(std::span<const uint32_t>)> occluders = nullptr;
+};
+
+// HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like
+// hardware_cull, but a visible node is accepted when sel.satisfies() it (interior: its HLOD meets
+// tau; leaves always, at sel.leaf_level()), or, with visible_pixel_lod and tau > 0, when its query
+// saw fewer than tau samples (then at its coarsest representation); other visible interior nodes
+// are refined. The first batch is o.start. on_visible gets each accepted renderable id
+// (lod_select.hpp) as its batch resolves. Returns the renderables, ascending. With tau = 0 it
+// returns exactly hardware_cull's leaves.
+std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
+                                        const LodSelector& sel, const HcOptions& o = {});
+
+// The items of the given nodes, ascending (the one draw order everywhere, so that z-ties resolve
+// identically in every renderer).
+std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes);
+
+}  // namespace occ

@@ -1,0 +1,124 @@
+#include "common/cull/occlusion_gate.hpp"
+
+#include <algorithm>
+#include <sstream>
+#include <vector>
+
+namespace occ {
+
+bool OcclusionGate::occlusion(uint32_t camera) const {
+  if (o_.test_alternate > 0) return (camera / o_.test_alternate) % 2 == 0;
+  switch (o_.policy) {
+    case Policy::on: return true;
+    case Policy::off: return false;
+    case Policy::automatic: break;
+  }
+  return state_ == State::on || state_ == State::trial_on;
+}
+
+bool OcclusionGate::wants_frustum_triangles() const {
+  return o_.policy == Policy::automatic && o_.test_alternate == 0 && state_ == State::on && n_ >= next_trial_ &&
+         on_.size() >= std::min(o_.trial_after, o_.window);
+}
+
+double OcclusionGate::median(const std::deque<double>& v) {
+  std::vector<double> s(v.begin(), v.end());
+  std::sort(s.begin(), s.end());
+  return s.empty() ? 0 : s.size() % 2 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
+}
+
+void OcclusionGate::push(std::deque<double>& ring, double v) const {
+  ring.push_back(v);
+  while (ring.size() > o_.window) ring.pop_front();
+}
+
+void OcclusionGate::enter(State s) {
+  state_ = s;
+  fresh_ = 0;
+  slow_ = 0;
+  if (s == State::trial_off) {
+    ++trials_;
+    off_.clear();
+  }
+  if (s == State::trial_on) on_.clear();
+}
+
+uint32_t OcclusionGate::doubled(uint32_t v) const { return std::min(2 * (v ? v : o_.first_hold), o_.max_hold); }
+
+void OcclusionGate::back_off() {
+  on_wait_ = doubled(on_wait_);
+  next_trial_ = n_ + on_wait_;
+  enter(State::on);
+}
+
+void OcclusionGate::go_off(uint32_t hold) {
+  off_hold_ = hold;
+  off_until_ = n_ + hold;
+  enter(State::off);
+}
+
+void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
+                          std::optional<uint64_t> frustum_triangles) {
+  ++n_;
+  same_ = occlusion == last_mode_ ? same_ + 1 : 1;
+  last_mode_ = occlusion;
+  if (!occlusion) ++frames_off_;
+  if (o_.policy != Policy::automatic || o_.test_alternate > 0) return;
+  // Only settled frames are measured: the first frames of a mode still carry the other's work
+  // (the OR of the first frame with occlusion draws a whole frustum set).
+  const bool settled = same_ > o_.settle;
+  if (settled) {
+    push(occlusion ? on_ : off_, interval_ms);
+    const bool measured = (occlusion && (state_ == State::on || state_ == State::trial_on)) ||
+                          (!occlusion && (state_ == State::off || state_ == State::trial_off));
+    if (measured) ++fresh_;
+  }
+  if (frustum_triangles && wants_frustum_triangles()) {
+    const double ratio = double(*frustum_triangles) / double(std::max<uint64_t>(drawn_triangles, 1));
+    if (ratio < o_.try_below)
+      enter(State::trial_off);
+    else  // culling pays on this view: look again later (much later where it pays much)
+      next_trial_ = n_ + o_.window * (ratio > 2 * o_.try_below ? 4 : 1);
+  }
+  if (!settled) return;
+  const double med_on = median(on_), med_off = median(off_);
+  // Frames without occlusion much slower than the reference median, give_up_frames in a row.
+  auto gave_up = [&](double reference_ms) {
+    slow_ = interval_ms > o_.give_up * reference_ms ? slow_ + 1 : 0;
+    return slow_ >= std::max(o_.give_up_frames, 1u);
+  };
+  if (state_ == State::trial_off && !occlusion && on_.size() < o_.window) {
+    // A trial that came early (trial_after): occlusion is measured next, then compared.
+    if (fresh_ >= o_.window) enter(State::trial_on);
+  } else if (state_ == State::trial_off && !occlusion) {
+    // Much slower than with occlusion stops the trial at once; otherwise a full window decides.
+    if (gave_up(med_on) || (fresh_ >= o_.window && !(med_off < o_.margin * med_on)))
+      back_off();
+    else if (fresh_ >= o_.window)
+      go_off(off_hold_ ? off_hold_ : o_.first_hold);
+  } else if (state_ == State::off && !occlusion) {
+    if (gave_up(med_off) || n_ >= off_until_) enter(State::trial_on);
+  } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
+    if (med_on < o_.margin * med_off) {  // occlusion pays again
+      off_hold_ = 0;
+      on_wait_ = 0;
+      next_trial_ = n_ + o_.first_hold;
+      enter(State::on);
+    } else {
+      go_off(doubled(off_hold_));
+    }
+  }
+}
+
+std::string OcclusionGate::describe(const std::string& mode) const {
+  std::ostringstream s;
+  const std::string state[] = {"on", "trial without " + mode, "off", "trial with " + mode};
+  const auto ms = [](const std::deque<double>& ring) {
+    return ring.empty() ? std::string("not measured") : std::to_string(median(ring)) + " ms";
+  };
+  s << state[int(state_)] << ", " << trials_ << " trials without " << mode << ", " << frames_off_
+    << " frames without; median with " << mode << " " << ms(on_) << ", without " << ms(off_);
+  return s.str();
+}
+
+}  // namespace occ

@@ -1,0 +1,18 @@
+// glTF 2.0 files (.gltf/.glb) as Scenes. Every failure throws InputError naming the file and the
+// node/mesh/accessor at fault.
+#pragma once
+#include <string>
+
+#include "common/scene/scene.hpp"
+
+namespace occ {
+
+// Loads all scenes' node trees (default scene if set, else scene 0) with node transforms and
+// mesh instancing. Triangle primitives only (mode 4); other modes are counted and reported,
+// not drawn. Missing normals are computed.
+Scene load_gltf(const std::string& path);
+
+// Whether path names a glTF file: it ends in .gltf or .glb, in any case.
+bool is_gltf_path(const std::string& path);
+
+}  // namespace occ

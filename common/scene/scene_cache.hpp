@@ -1,0 +1,47 @@
+// The scene cache (issue 16): a generated scene and its hierarchy, preprocessed once, so the
+// next start of a big `plant:M` reads them instead of generating and building (plant:13: ~6 s of
+// generation and hierarchy build per process). One file per (scene spec, hierarchy parameters)
+// beside the LOD cache (lod_cache.hpp: same folder, `.scene` instead of `.lod`); the LODs stay in
+// their own cache, keyed by the hierarchy fingerprint this one restores.
+//
+// Format: a header (magic "OCCSCN\r\n", format version, cache key, payload bytes, payload
+// StreamHash) and the payload: the Scene (meshes with their clusters, objects, materials,
+// textures, images, source) and the Hierarchy (parameters, depth, fingerprint, nodes, items),
+// arrays copied in host byte order. Written atomically (temporary file + rename), streamed (never
+// the whole payload in memory). Read from a memory mapping, every size checked before it is
+// trusted, the parsed pages dropped as it goes (mapped_file.hpp). No GL.
+//
+// Only `plant:` specs are cached: the other generated scenes are instanced and load in well
+// under a second, and files would need their own staleness check. The key covers the spec, the
+// hierarchy parameters, the cache format and plant::kGeneratorVersion (bump it when the plant
+// generator's output changes).
+#pragma once
+#include <optional>
+#include <string>
+
+#include "common/scene/hierarchy.hpp"
+#include "common/scene/scene.hpp"
+
+namespace occ {
+
+struct CachedScene {
+  Scene scene;
+  Hierarchy hierarchy;
+};
+
+// Whether `spec` is one the scene cache stores.
+bool scene_cache_applies(const std::string& spec);
+// DIR/<scene name>-<hash of spec>.scene (DIR as for lod_cache_path).
+std::string scene_cache_path(const std::string& cache_dir, const std::string& spec);
+uint64_t scene_cache_key(const std::string& spec, const BuildParams& params);
+
+// Writes atomically; returns an error message or nullopt. The scene's geometry must not be
+// released.
+std::optional<std::string> save_scene_cache(const std::string& path, uint64_t key, const Scene& scene,
+                                            const Hierarchy& h);
+// nullopt and *why (missing, truncated, bad magic, version, stale key, checksum, inconsistent
+// data, with what and where) when the file cannot be used. First removes the stale temporaries
+// of its folder (remove_stale_cache_temps, cache_files.hpp).
+std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why);
+
+}  // namespace occ

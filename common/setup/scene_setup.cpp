@@ -1,0 +1,111 @@
+#include "common/setup/scene_setup.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <iostream>
+
+#include "common/hash.hpp"
+#include "common/scene/scene_cache.hpp"
+#include "common/scene/scene_io.hpp"
+
+namespace occ {
+
+void add_scene_options(Cli& cli, SceneOptions& o) {
+  cli.option("scene", &o.spec, "SPEC",
+             "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), plant:M (M million triangles, "
+             "unique meshes), layout:NXxNZ:file");
+  cli.option("arity", &o.build.arity, 2, 64, "hierarchy: max children per node");
+  cli.option("leaf-items", &o.build.leaf_items, 1, 1024, "hierarchy: max items per leaf");
+  cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,
+             "hierarchy: meshes above this many triangles are split into spatial clusters");
+  cli.option("lod-cache", &o.lod_cache, "DIR",
+             "LOD/HLOD and scene cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
+  cli.choice<bool>("scene-cache", &o.scene_cache, {{"on", true}, {"off", false}},
+                   "keep plant:M scenes and their hierarchy in a binary cache in the --lod-cache folder");
+}
+
+LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, bool with_lod) {
+  auto t0 = std::chrono::steady_clock::now();
+  LoadedScene ls;
+  auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  char buf[768];
+  const bool use_cache = opts.scene_cache && scene_cache_applies(opts.spec);
+  const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
+  const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build) : 0;
+  std::optional<CachedScene> cached;
+  if (use_cache) {
+    std::string why;
+    cached = load_scene_cache(cache_path, cache_key, &why);
+    if (!cached && why != "missing")
+      std::cerr << who << ": scene cache " << cache_path << " is unusable (" << why << "): rebuilding it\n";
+  }
+  auto t1 = t0, t2 = t0;
+  const bool from_cache = cached.has_value();
+  if (from_cache) {
+    ls.scene = std::move(cached->scene);
+    ls.hierarchy = std::move(cached->hierarchy);
+    cached.reset();
+    t1 = t2 = std::chrono::steady_clock::now();
+  } else {
+    ls.scene = load_scene(opts.spec);
+    t1 = std::chrono::steady_clock::now();
+    ls.hierarchy = Hierarchy::build(ls.scene, opts.build);
+    t2 = std::chrono::steady_clock::now();
+  }
+  std::snprintf(buf, sizeof buf,
+                "%s: scene %s: %zu objects, %zu meshes, %.3f M triangles, %zu items, %zu nodes, depth %u, "
+                "fingerprint %016llx (%s %.0f ms, build %.0f ms)",
+                who.c_str(), opts.spec.c_str(), ls.scene.objects.size(), ls.scene.meshes.size(),
+                ls.scene.triangle_count() / 1e6, ls.hierarchy.items().size(), ls.hierarchy.size(),
+                ls.hierarchy.depth(), static_cast<unsigned long long>(ls.hierarchy.fingerprint()),
+                from_cache ? ("read from scene cache " + cache_path + " in").c_str() : "load", ms(t0, t1),
+                ms(t1, t2));
+  std::cerr << buf << "\n";
+  if (use_cache && !from_cache) {
+    const auto t3 = std::chrono::steady_clock::now();
+    if (auto err = save_scene_cache(cache_path, cache_key, ls.scene, ls.hierarchy)) {
+      std::cerr << who << ": warning: scene cache not written: " << *err << "\n";
+    } else {
+      std::error_code ec;
+      const auto bytes = std::filesystem::file_size(cache_path, ec);
+      std::snprintf(buf, sizeof buf, "%s: wrote scene cache %s (%.1f MB in %.0f ms)", who.c_str(), cache_path.c_str(),
+                    ec ? 0.0 : double(bytes) / 1e6, ms(t3, std::chrono::steady_clock::now()));
+      std::cerr << buf << "\n";
+    }
+  }
+  ls.fingerprint = ls.hierarchy.fingerprint();
+  if (with_lod) {
+    ls.lod = std::make_unique<LodData>(
+        load_or_build_lod(ls.scene, ls.hierarchy, opts.lod, opts.lod_cache, opts.spec, who));
+    Hasher fh;
+    fh.u64(ls.hierarchy.fingerprint());
+    fh.u64(ls.lod->hash());
+    ls.fingerprint = fh.value();
+    // Pay only for what the scene calls for: LODs that save (almost) nothing are dropped, so no
+    // process selects, uploads or draws them. Every process decides from the same data (its hash
+    // is in the fingerprint), so the three agree.
+    const LodBenefit benefit = lod_benefit(*ls.lod, ls.hierarchy);
+    std::snprintf(buf, sizeof buf,
+                  "%s: scene fingerprint with LODs %016llx; the coarsest LODs save %.1f %% of the triangles (%llu)",
+                  who.c_str(), static_cast<unsigned long long>(ls.fingerprint), 100.0 * benefit.fraction,
+                  static_cast<unsigned long long>(benefit.saved_triangles));
+    std::cerr << buf << "\n";
+    if (!benefit.worth_selecting()) {
+      std::snprintf(buf, sizeof buf,
+                    "%s: LOD selection skipped: LODs that save less than %.0f %% or %llu triangles are not worth "
+                    "selecting; drawing full detail as with --pixel-error 0",
+                    who.c_str(), 100.0 * LodBenefit::kMinFraction,
+                    static_cast<unsigned long long>(LodBenefit::kMinSavedTriangles));
+      std::cerr << buf << "\n";
+      ls.lod.reset();
+    } else if (const uint32_t n = forbid_blended_hlods(*ls.lod, ls.scene, ls.hierarchy)) {
+      std::cerr << who << ": " << n << " HLODs not used: their subtrees hold BLEND (transparent) objects, "
+                << "which an HLOD would draw opaque\n";
+    }
+  }
+  return ls;
+}
+
+}  // namespace occ
