@@ -43,7 +43,7 @@
 //   100  u8   occlusion                1: the switch culls this camera's frame with occlusion (OR,
 //                                      HC's queries); 0: its HC node sends the frustum set (no OR,
 //                                      no queries). The render client's OcclusionGate chooses
-//                                      (common/occlusion_gate.hpp)
+//                                      (common/cull/occlusion_gate.hpp)
 //
 // NodeDiff (12 + 4 * (added_count + removed_count)) — one chunk of δ(f,f-1) and δ(f-1,f)
 //     0  u32  frame
@@ -58,7 +58,7 @@
 //     8  u32  total_removed     ids removed in all of this frame's NodeDiff chunks
 //    12  u32  visible_count     |V_f|
 //    16  u64  set_hash          set_hash(V_f), see visible_set.hpp
-//    24  u64  front_hash        front_hash(V') of front tracking (common/front.hpp); 0 when unused
+//    24  u64  front_hash        front_hash(V') of front tracking (common/cull/front.hpp); 0 when unused
 //    32  u32  queries           sender's per-frame statistics: occlusion queries issued,
 //    36  u32  hc_us               HC time (microseconds, wall clock),
 //    40  u32  or_us               time spent on the OR for this frame (microseconds, wall clock,

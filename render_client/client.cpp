@@ -9,7 +9,7 @@
 
 #include "common/camera_path.hpp"
 #include "common/cpu_time.hpp"
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/startup.hpp"
 #include "common/progress.hpp"

@@ -2,7 +2,7 @@
 
 #include <iostream>
 
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/gl/scene_renderer.hpp"
 
 namespace occ {

@@ -10,7 +10,7 @@
 #include "common/gl/box_overlay.hpp"
 #include "common/gl/startup.hpp"
 #include "common/gl/two_pass.hpp"
-#include "common/occlusion_gate.hpp"
+#include "common/cull/occlusion_gate.hpp"
 #include "render_client/options.hpp"
 
 namespace occ {

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "common/gl/context.hpp"
-#include "common/occlusion_gate.hpp"
-#include "common/scene_setup.hpp"
+#include "common/cull/occlusion_gate.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "protocol/cluster/cluster.hpp"
 
 namespace occ {

@@ -7,7 +7,7 @@
 #pragma once
 #include <string>
 
-#include "common/scene.hpp"
+#include "common/scene/scene.hpp"
 
 namespace occ {
 

@@ -6,7 +6,7 @@ blocks along +z, and so on, each turn done in TURN frames.
   scripts/street_walk.py --city 45x45:4 --frames 400 --out street.csv [--speed 4] [--step 2] [--turn 6]
 
 --city BXxBZ:N matches the scene's city:BXxBZ:N:F:D (blocks and buildings per block side): street
-centre lines are at (i - B/2) * pitch, pitch = N * 20 m + 12 m (common/city.hpp)."""
+centre lines are at (i - B/2) * pitch, pitch = N * 20 m + 12 m (common/scene/city.hpp)."""
 import argparse, math, sys
 
 LOT, STREET = 20.0, 12.0

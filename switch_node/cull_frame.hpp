@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "common/gl/context.hpp"
-#include "common/scene_setup.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "protocol/cluster/cluster.hpp"
 
 namespace occ {

@@ -14,7 +14,7 @@
 //                those it cannot prove occluded become real queries (issued together, then read);
 //                nothing is read back but one word per probe;
 //   cpu_pyramid  the llvmpipe default (issue 14): HC's depth read back once a frame (glReadPixels)
-//                into a DepthPyramid (common/hzb) that proves boxes occluded
+//                into a DepthPyramid (common/cull/hzb) that proves boxes occluded
 //                (DepthPyramid::occludes) and, without sample counts and until occluder fusion
 //                draws more, boxes that show (DepthPyramid::shows: answered 1 with no test); the
 //                rest are counted by one draw per batch (BoxBatchCounter, no query objects), except

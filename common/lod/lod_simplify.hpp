@@ -1,5 +1,5 @@
 // The mesh simplifier behind the leaf LODs and HLODs (lod_build.cpp). Internal to occ_common:
-// nothing outside common/lod_*.cpp includes it.
+// nothing outside common/lod/ includes it.
 //
 // meshopt_simplify on a position-welded copy (normal/colour seams do not block collapses), borders
 // locked, falling back to meshopt_simplifySloppy when topology stops it (disjoint buildings);

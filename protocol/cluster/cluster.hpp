@@ -12,8 +12,8 @@
 #include <string>
 
 #include "common/camera.hpp"
-#include "common/culling.hpp"
-#include "common/hierarchy.hpp"
+#include "common/cull/culling.hpp"
+#include "common/scene/hierarchy.hpp"
 #include "protocol/net/auth.hpp"
 #include "protocol/net/endpoint.hpp"
 #include "protocol/net/transport.hpp"
@@ -53,7 +53,7 @@ struct ClusterConfig {
   uint64_t hash() const;
 };
 
-// The one HC option set (common/culling.hpp HcChoices), from the command line:
+// The one HC option set (common/cull/culling.hpp HcChoices), from the command line:
 // --adaptive-queries, --hc-order, --occluder-fusion, --visibility-hold, --hc-test.
 void add_hc_options(Cli& cli, HcChoices& c);
 // The --hc-test word of `t` ("cpu-pyramid"), as logs name it.

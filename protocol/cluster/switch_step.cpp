@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "common/front.hpp"
+#include "common/cull/front.hpp"
 
 namespace occ {
 

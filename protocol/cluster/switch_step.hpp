@@ -12,9 +12,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/culling.hpp"
-#include "common/hierarchy.hpp"
-#include "common/lod.hpp"
+#include "common/cull/culling.hpp"
+#include "common/scene/hierarchy.hpp"
+#include "common/lod/lod.hpp"
 #include "protocol/cluster/cluster.hpp"
 #include "protocol/visible_set.hpp"
 

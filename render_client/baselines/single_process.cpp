@@ -3,7 +3,7 @@
 #include <deque>
 #include <queue>
 
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 
 namespace occ {
 

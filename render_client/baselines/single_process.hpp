@@ -17,7 +17,7 @@
 #include "common/camera.hpp"
 #include "common/gl/box_query.hpp"
 #include "common/gl/scene_renderer.hpp"
-#include "common/hierarchy.hpp"
+#include "common/scene/hierarchy.hpp"
 
 namespace occ {
 

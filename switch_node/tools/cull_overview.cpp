@@ -20,13 +20,13 @@
 
 #include "common/camera_path.hpp"
 #include "common/cli.hpp"
-#include "common/culling.hpp"
+#include "common/cull/culling.hpp"
 #include "common/error.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/image.hpp"
 #include "common/gl/startup.hpp"
-#include "common/scene_setup.hpp"
+#include "common/setup/scene_setup.hpp"
 #include "protocol/cluster/switch_step.hpp"
 #include "switch_node/cull_frame.hpp"
 
