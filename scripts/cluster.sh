@@ -11,7 +11,7 @@
 # file or an unknown kind is refused before anything starts). --lookahead N (render client,
 # default 2): cameras sent ahead, docs/latency.md.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
-# --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P
+# --arity ...), except render-client-only ones (--no-images --item-buffer --lookahead N --on-node-failure P
 # --occlusion-gate G --two-pass T) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --query-budget,
 # --occluder-pixels-per-triangle, --visibility-hold, --leaf-test, --leaf-test-below, --hc-test), which go where they belong. OCC_BIN overrides the binaries' folder;
@@ -50,7 +50,7 @@ while [ $# -gt 0 ]; do
     --netns) netns=1; shift ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
-    --no-images) rvg_only+=("$1"); shift ;;
+    --no-images|--item-buffer) rvg_only+=("$1"); shift ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     --record) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
