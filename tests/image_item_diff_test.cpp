@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <functional>
+#include <initializer_list>
+#include <utility>
 #include <filesystem>
 #include <random>
 
@@ -26,6 +28,19 @@ IdImage blank(int w = 32, int h = 24) { return IdImage{w, h, std::vector<uint32_
 void rect(IdImage& img, int x0, int y0, int x1, int y1, uint32_t value) {
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) img.ids[size_t(y) * img.width + x] = value;
+}
+
+struct Rect {
+  int x0, y0, x1, y1;
+  uint32_t value;
+};
+// A reference of `rects` (drawn in order) and a frame: its copy with `changes` drawn over it.
+std::pair<IdImage, IdImage> buffers(std::initializer_list<Rect> rects, std::initializer_list<Rect> changes) {
+  std::pair<IdImage, IdImage> b{blank(), blank()};
+  for (const Rect& r : rects) rect(b.first, r.x0, r.y0, r.x1, r.y1, r.value);
+  b.second = b.first;
+  for (const Rect& r : changes) rect(b.second, r.x0, r.y0, r.x1, r.y1, r.value);
+  return b;
 }
 
 // Gives `img` a depth: `near` of each value (larger is nearer: reverse-Z), background 0.
@@ -95,11 +110,7 @@ TEST(ItemDiff, ASurfaceMovedByKPixelsIsDisplacedByK) {
 TEST(ItemDiff, AnUncoveredObjectIsChargedToTheOccluderThatMoved) {
   // Item 0 behind item 1: the reference shows a sliver of 0 far away only. Item 1's edge moves
   // down by one pixel: the uncovered row of 0 is one pixel from where 1 still is.
-  IdImage ref = blank(), tau = blank();
-  rect(ref, 0, 10, 32, 20, 2);
-  rect(ref, 30, 5, 32, 10, 1);
-  tau = ref;
-  rect(tau, 0, 10, 30, 11, 1);
+  auto [ref, tau] = buffers({{0, 10, 32, 20, 2}, {30, 5, 32, 10, 1}}, {{0, 10, 30, 11, 1}});
   with_depth(ref, by_value);  // item 1 (value 2) in front of item 0
   with_depth(tau, by_value);
   ItemDiff d = diff_items(space(), ref, tau, 1.0);
@@ -156,11 +167,7 @@ TEST(ItemDiff, AnHlodStandsForTheItemsItHolds) {
 
 TEST(ItemDiff, SliversAreExcusedFromTheThickBound) {
   // A one-pixel line of item 0 on item 1 that the tau frame lost for 16 pixels of its length.
-  IdImage ref = blank(), tau = blank();
-  rect(ref, 0, 4, 32, 20, 2);
-  rect(ref, 4, 12, 28, 13, 1);
-  tau = ref;
-  rect(tau, 4, 12, 20, 13, 2);
+  auto [ref, tau] = buffers({{0, 4, 32, 20, 2}, {4, 12, 28, 13, 1}}, {{4, 12, 20, 13, 2}});
   with_depth(ref, [](uint32_t v) { return v == 1 ? 0.6f : 0.5f; });  // the line in front
   with_depth(tau, [](uint32_t v) { return v == 1 ? 0.6f : 0.5f; });
   ItemDiff d = diff_items(space(), ref, tau, 1.0);

@@ -23,9 +23,9 @@ struct Case {
 
 // "key=value" of frame_diff's summary line.
 std::string field(const std::string& log, const std::string& key) {
-  const size_t at = log.rfind(key + "=");
+  const size_t at = log.rfind(" " + key + "=");
   if (at == std::string::npos) return "?";
-  const size_t from = at + key.size() + 1;
+  const size_t from = at + key.size() + 2;
   return log.substr(from, log.find_first_of(" \n", from) - from);
 }
 
