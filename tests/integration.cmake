@@ -23,6 +23,3 @@ add_dependencies(membership_test switch_node render_client frame_diff occlusion_
 # issue 32: each --serve session's summary counts its own client only
 occ_test(serve_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_serve_test.cpp)
 add_dependencies(serve_test switch_node render_client)
-# issue 33: the tau > 0 promise (0 objects missing, displacement <= tau + 1) on item buffers
-occ_test(tau_bound_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/lod_tau_bound_test.cpp)
-add_dependencies(tau_bound_test switch_node render_client frame_diff)
