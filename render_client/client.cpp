@@ -98,6 +98,7 @@ class Client {
 
   void loop() {
     out_.emplace(o_.out, !o_.no_images, FrameStats::columns());
+    if (o_.item_buffer) out_->write_item_space(g_.hierarchy());
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes, or one of them alone after a failure): a
     // single occlusion_server sends plain diffs.
@@ -168,9 +169,18 @@ class Client {
     Image image;
     if (out_->writes_images() || viewer_) image = g_.ctx->read_rgba();
     if (out_->writes_images()) out_->write_frame(f.number, image);  // the frame itself, never the overlay
-    if (!viewer_) return;
+    if (!viewer_ && !o_.item_buffer) return;
     // What was drawn: the set, less what the two passes proved hidden (also for the overlay).
     const std::vector<uint32_t> shown_ids = drawer_->drawn_ids(f.drawn, f.ids);
+    if (viewer_) show_in_window(f, shown_ids, std::move(image));
+    // Last: it draws over the frame buffer.
+    if (o_.item_buffer) {
+      const Image ids = drawer_->item_buffer(f.cam, shown_ids);
+      out_->write_items(f.number, ids, drawer_->depth());
+    }
+  }
+
+  void show_in_window(const Frame& f, const std::vector<uint32_t>& shown_ids, Image image) {
     const Mode mode = f.row.mode;
     HudStats hud{f.row.latency_ms, shown_ids.size(), leaf_count_, f.drawn.st.triangles, o_.config.pixel_error, -1,
                  mode == Mode::single    ? "degraded: one switch node"

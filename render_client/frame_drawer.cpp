@@ -49,6 +49,12 @@ std::vector<uint32_t> FrameDrawer::drawn_ids(const Drawn& d, const std::vector<u
   return drawn;
 }
 
+Image FrameDrawer::item_buffer(const Camera& cam, const std::vector<uint32_t>& ids) {
+  g_.renderer->begin_id_frame(cam);
+  g_.renderer->draw_renderables(*g_.renderables, ids, SceneRenderer::Mode::ItemIds);
+  return g_.ctx->read_rgba();
+}
+
 size_t FrameDrawer::draw_overlay(const Camera& cam, const std::vector<uint32_t>& visible_ids) {
   if (!overlay_) overlay_ = std::make_unique<BoxOverlay>(*g_.ctx);
   std::vector<uint32_t> nodes;

@@ -33,6 +33,11 @@ class FrameDrawer {
   void measured(const Drawn& d, double render_ms);
   // What the last draw() drew: `ids` less what two passes proved hidden.
   std::vector<uint32_t> drawn_ids(const Drawn& d, const std::vector<uint32_t>& ids) const;
+  // An item buffer of renderables `ids` with camera `cam` (--item-buffer): each pixel the id of
+  // the item (leaf, any level) or HLOD that drew it (SceneRenderer::draw_renderables, ItemIds).
+  // Leaves the frame buffer holding it.
+  Image item_buffer(const Camera& cam, const std::vector<uint32_t>& ids);
+  std::vector<float> depth() const { return g_.ctx->read_depth(); }  // of what was drawn last
   // The O overlay: tints the boxes of the leaves in the frustum that occlusion culling removed
   // over the frame just drawn; returns how many.
   size_t draw_overlay(const Camera& cam, const std::vector<uint32_t>& visible_ids);

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "common/error.hpp"
+#include "render_client/tools/item_diff.hpp"
 
 namespace occ {
 
@@ -26,12 +27,31 @@ FrameOutput::FrameOutput(const std::string& dir, bool images, std::vector<std::s
   csv_ << "\n";
 }
 
-void FrameOutput::write_frame(uint32_t frame, const Image& img) {
-  if (!writes_images()) return;
-  const std::string final_path = dir_ + "/" + frame_file_name(frame);
+namespace {
+
+void write_png_atomically(const std::string& final_path, const Image& img) {
   const std::string tmp = final_path + ".tmp.png";
   write_png(tmp, img);
   std::filesystem::rename(tmp, final_path);
+}
+
+}  // namespace
+
+void FrameOutput::write_frame(uint32_t frame, const Image& img) {
+  if (writes_images()) write_png_atomically(dir_ + "/" + frame_file_name(frame), img);
+}
+
+void FrameOutput::write_items(uint32_t frame, const Image& ids, const std::vector<float>& depth) {
+  if (dir_.empty()) return;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "items_%05u.png", frame);
+  write_png_atomically(dir_ + "/" + buf, ids);
+  std::snprintf(buf, sizeof buf, "depth_%05u.png", frame);
+  write_png_atomically(dir_ + "/" + buf, encode_depth(ids.width, ids.height, depth));
+}
+
+void FrameOutput::write_item_space(const Hierarchy& h) {
+  if (!dir_.empty()) ItemSpace::of(h).write(dir_ + "/items.txt");
 }
 
 void FrameOutput::write_row(const std::vector<double>& values, const std::vector<std::string>& text) {

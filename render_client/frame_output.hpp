@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/scene/hierarchy.hpp"
 #include "common/image.hpp"
 
 namespace occ {
@@ -17,6 +18,11 @@ class FrameOutput {
   void write_frame(uint32_t frame, const Image& img);
   // One per column, in order: the numbers, then `text` (words without commas) for the last columns.
   void write_row(const std::vector<double>& values, const std::vector<std::string>& text = {});
+  // --item-buffer: DIR/items_%05d.png, an item buffer of the frame (RGBA8 = a little-endian u32 id per
+  // pixel), DIR/depth_%05d.png its depth (the float's bits, the same way; `depth` as GL reads it,
+  // bottom row first), and once DIR/items.txt, the ids' space (render_client/tools/item_diff.hpp).
+  void write_items(uint32_t frame, const Image& ids, const std::vector<float>& depth);
+  void write_item_space(const Hierarchy& h);
   bool writes_images() const { return !dir_.empty() && images_; }
   const std::string& dir() const { return dir_; }
 

@@ -46,6 +46,8 @@ int main(int argc, char** argv) {
                "its default)");
     cli.option("out", &o.out, "DIR", "write DIR/frame_%05d.png and DIR/stats.csv");
     cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
+    cli.flag("item-buffer", &o.item_buffer,
+             "also write DIR/items_%05d.png: each pixel the id of the item or HLOD that drew it (frame_diff --items)");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl);
     cli.flag("reference", &o.reference, "single-process reference renderer");
     cli.choice<occ::Cull>("cull", &o.cull,

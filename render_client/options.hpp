@@ -24,6 +24,7 @@ struct ClientOptions {
   std::string path;  // empty: walk:60, or interactive with --window (main.cpp)
   std::string out;
   bool no_images = false;
+  bool item_buffer = false;  // --item-buffer: DIR/items_%05d.png per frame (render_client/tools/item_diff.hpp)
   int width = 512, height = 512;
   GlBackend gl = GlBackend::Auto;
   // reference mode

@@ -208,6 +208,7 @@ class ReferenceRun {
     querier_.emplace(*g_.ctx);
     chc_.emplace(g_.hierarchy());
     out_.emplace(o_.out, !o_.no_images, ReferenceRow::columns(o_.exact));
+    if (o_.item_buffer) out_->write_item_space(g_.hierarchy());
     const Hierarchy& h = g_.hierarchy();
     for (uint32_t id = 0; id < h.size(); ++id)
       if (h.node(id).leaf() && h.node(id).item_count > 0) all_leaves_.push_back(id);
@@ -252,6 +253,11 @@ class ReferenceRun {
     if (viewer_)
       viewer_->show(cam, std::move(image), {row.render_ms, st.nodes_drawn, all_leaves_.size(), st.triangles, 0.0, -1, ""});
     if (exact_) row.exact = exact_->measure(cam, std::move(st.drawn), image);
+    if (o_.item_buffer) {  // full detail: every item in the frustum, in colour item index + 1
+      g_.renderer->begin_id_frame(cam);
+      g_.renderer->draw_items(items_of_nodes(g_.hierarchy(), frustum_cull(g_.hierarchy(), cam)), SceneRenderer::Mode::ItemIds);
+      out_->write_items(f, g_.ctx->read_rgba(), g_.ctx->read_depth());
+    }
     out_->write_row(row.values());
     total_ms_ += row.render_ms;
     total_tris_ += st.triangles;

@@ -20,7 +20,7 @@
 # file or an unknown kind is refused before anything starts). --lookahead N (render client,
 # default 2): cameras sent ahead, docs/latency.md.
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
-# --arity ...), except render-client-only ones (--no-images --lookahead N --on-node-failure P
+# --arity ...), except render-client-only ones (--no-images --item-buffer --lookahead N --on-node-failure P
 # --occlusion-gate G --two-pass T) and node-only ones
 # (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --visibility-hold, --hc-test),
 # which go where they belong. OCC_BIN overrides the binaries' folder;

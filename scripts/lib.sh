@@ -51,7 +51,7 @@ occ_set() {
 occ_route_flag() {
   occ_shift=2
   case "$1" in
-    --no-images) rvg_only+=("$1"); occ_shift=1 ;;
+    --no-images|--item-buffer) rvg_only+=("$1"); occ_shift=1 ;;
     --full-sets) common+=("$1"); occ_shift=1 ;;
     --record|--lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2") ;;
     --diff-chunk|--adaptive-queries|--hc-order|--occluder-fusion|--visibility-hold|--hc-test)

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "common/image.hpp"
 
@@ -107,4 +108,46 @@ TEST_F(FrameDiff, UsageErrorsExitTwo) {
   ToolRun help = frame_diff("--help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.output.find("usage: frame_diff DIR_A DIR_B"), std::string::npos) << help.output;
+}
+
+// --items (the tau checker, render_client/tools/item_diff.hpp): item buffers and items.txt written
+// by hand; a 4 x 4 square of item 0 moved right by 3 pixels in B.
+class FrameDiffItems : public FrameDiff {
+ protected:
+  // Item 0 (value 1) at [x0, x0 + 4) x [2, 6) of 12 x 8; as depth: 0.5f there (bits 0x3f000000).
+  static Image square(int x0, bool depth) {
+    Image img = solid(12, 8, 0);
+    for (int y = 2; y < 6; ++y)
+      for (int x = x0; x < x0 + 4; ++x) img.rgba[4 * size_t(y * 12 + x) + (depth ? 3 : 0)] = depth ? 0x3f : 1;
+    return img;
+  }
+  void write(const std::string& dir, int x0, bool space = true) {
+    write_png((root_ / dir / "items_00000.png").string(), square(x0, false));
+    write_png((root_ / dir / "depth_00000.png").string(), square(x0, true));
+    if (space) std::ofstream(root_ / dir / "items.txt") << "occswitch item buffer ids 1\nitems 1 nodes 1\n0 1\n";
+  }
+};
+
+TEST_F(FrameDiffItems, ReportsTheDisplacementAndChecksThePromise) {
+  write("a", 2);
+  write("b", 5);
+  ToolRun r = frame_diff(a() + " " + b() + " --items --tau 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("frames=1 objects_missing=0 max_displacement=3.000"), std::string::npos) << r.output;
+  EXPECT_EQ(frame_diff(a() + " " + b() + " --items --tau 1 --check").exit_code, 3);  // 3 > 1 + 1
+  EXPECT_EQ(frame_diff(a() + " " + b() + " --items --tau 2 --check").exit_code, 0);  // 3 <= 2 + 1
+  EXPECT_EQ(frame_diff(a() + " " + b() + " --items --tau 1 --slack 2 --check").exit_code, 0);
+  write("b", 0, true);
+  write_png((root_ / "b" / "items_00000.png").string(), solid(12, 8, 0));  // drew nothing
+  r = frame_diff(a() + " " + b() + " --items --tau 5 --check");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("objects_missing=1"), std::string::npos) << r.output;
+}
+
+TEST_F(FrameDiffItems, NeedsTheIdSpaceOfBothRuns) {
+  write("a", 2);
+  write("b", 2, false);
+  ToolRun r = frame_diff(a() + " " + b() + " --items");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("items.txt"), std::string::npos) << r.output;
 }

@@ -182,7 +182,9 @@ void SceneRenderer::add_renderable(const Renderables& r, uint32_t id, Mode mode,
       add_draw(d, i + 1, mode, true, stats);
     }
   } else if (!n.leaf() && !gpu_.hlod_draws.empty() && gpu_.hlod_of_node[node] != kNoNode) {
-    add_draw(gpu_.hlod_draws[gpu_.hlod_of_node[node]], node + 1, mode, false, stats);  // its look: vertex colours
+    // ItemIds: an HLOD writes items + node + 1, apart from every item id.
+    const uint32_t id_plus_one = (mode == Mode::ItemIds ? uint32_t(hierarchy_.items().size()) : 0u) + node + 1;
+    add_draw(gpu_.hlod_draws[gpu_.hlod_of_node[node]], id_plus_one, mode, false, stats);  // its look: vertex colours
   } else {
     for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) add_item(i, i + 1, mode, stats);
   }

@@ -144,7 +144,9 @@ class SceneRenderer {
   // colours of the source objects). Collected by the node's first item, then level — for
   // level-0 leaves exactly ascending item order, as everywhere else; drawn by batch key, segment,
   // near to far, then that order (submit), so z-ties resolve identically in every renderer.
-  // Without LOD data uploaded, LOD ids fall back to full detail.
+  // Without LOD data uploaded, LOD ids fall back to full detail. ItemIds: a leaf at any level
+  // writes its item index + 1, an HLOD items().size() + node id + 1 (an item buffer of a tau
+  // frame, render_client --item-buffer; frame_diff --items reads it).
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
   // ItemIds rendering of whole nodes, each in colour node id + 1.
   DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);
