@@ -425,6 +425,9 @@ class SwitchNode {
   int run() {
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
     g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
+    if (o_.hc.test == HcTest::by_renderer)
+      std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))
+                << " (--hc-test auto on a " << renderer_class_name(g_.ctx->renderer_class()) << " renderer)\n";
     mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
                        g_.hierarchy().params(), o_.config, who_);
     // Both nodes keep their listener for the whole run: node 0 takes a restarted node 1 through it

@@ -177,6 +177,27 @@ TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsRefere
   EXPECT_GT(std::stoul(r->node1_log.substr(from + 2, at - from - 2)), 0u) << r->node1_log;
 }
 
+// Defaults by renderer class (issue 34): with every process told it runs on a hardware GPU
+// (OCC_RENDERER_CLASS=hardware, on llvmpipe), --hc-test auto picks occlusion queries (no depth
+// read-back on the frame's path) and --two-pass auto is off; the frames still equal the reference.
+// The software choice (cpu-pyramid, two passes by measurement) is every other test's default.
+TEST(Cluster, HardwareRendererDefaultsQueriesNoTwoPassEqualsReference) {
+  fs::path dir = fresh_dir("hardware_defaults");
+  ClusterOptions o = cluster("plant:0.3", "walk:30");
+  ::setenv("OCC_RENDERER_CLASS", "hardware", 1);  // inherited by the processes this test starts
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 30);
+  ::unsetenv("OCC_RENDERER_CLASS");
+  if (!r) return;
+  for (const std::string* log : {&r->node0_log, &r->node1_log}) {
+    EXPECT_NE(log->find("hardware renderer (OCC_RENDERER_CLASS)"), std::string::npos) << *log;
+    EXPECT_NE(log->find("HC test queries (--hc-test auto on a hardware renderer)"), std::string::npos) << *log;
+    EXPECT_NE(log->find("HC test queries: "), std::string::npos) << *log;  // the summary: what it ran
+    EXPECT_EQ(log->find("HC test cpu-pyramid"), std::string::npos) << *log;
+  }
+  EXPECT_NE(r->rvg_log.find("two passes off (--two-pass auto on a hardware renderer"), std::string::npos)
+      << r->rvg_log;
+}
+
 TEST(Cluster, DuplexWalkEqualsReference) {
   if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found: the duplex test needs it";
   expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);

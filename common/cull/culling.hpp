@@ -165,7 +165,9 @@ enum class HcOrder {
 // prove occluded (pyramid: no per-frame read-back); or a depth pyramid read back to the CPU once
 // a frame in front of batch-counted boxes (cpu_pyramid: the llvmpipe default). The answers are
 // the same: only what they cost differs.
-enum class HcTest { queries, pyramid, cpu_pyramid };
+// by_renderer (the default, --hc-test auto): queries on a hardware GPU, cpu_pyramid on a software
+// renderer (llvmpipe), chosen when the GL context is known (hc_test_for in common/gl/hzb_query.hpp).
+enum class HcTest { queries, pyramid, cpu_pyramid, by_renderer };
 
 // How HC searches: the one option set, node-local (not in the config hash: the processes need not
 // agree, the visible set stays a conservative superset either way). The CLI fills it
@@ -176,9 +178,9 @@ struct HcChoices {
   bool adaptive_queries = true;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
   bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
   int visibility_hold = 2;       // frames a node found visible stays in V (VisibilityHold; 0 off)
-  // How each box is tested (common/gl/hzb_query.hpp): cpu_pyramid on llvmpipe (the default);
-  // queries or pyramid on a hardware GPU (no per-frame read-back).
-  HcTest test = HcTest::cpu_pyramid;
+  // How each box is tested (common/gl/hzb_query.hpp): by the renderer (cpu_pyramid on llvmpipe,
+  // queries on a hardware GPU: no per-frame read-back), or as the flag says.
+  HcTest test = HcTest::by_renderer;
 };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.

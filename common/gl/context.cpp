@@ -78,6 +78,14 @@ GlContext::GlContext(std::unique_ptr<gl_detail::Surface> surface, int width, int
                              version() + " (" + renderer() + ")");
 
   renderer_class_ = classify_renderer(renderer(), vendor());
+  // OCC_RENDERER_CLASS=software|hardware: the defaults of the other class on this renderer (tests
+  // of both choices on llvmpipe); anything else is an error naming the variable.
+  if (const char* forced = std::getenv("OCC_RENDERER_CLASS"); forced && *forced) {
+    const std::string f = forced;
+    if (f != "software" && f != "hardware")
+      throw std::runtime_error("OCC_RENDERER_CLASS=" + f + ": must be software or hardware");
+    renderer_class_ = f == "software" ? RendererClass::software : RendererClass::hardware;
+  }
 
   gl_.CreateRenderbuffers(1, &color_rb_);
   gl_.NamedRenderbufferStorage(color_rb_, GL_RGBA8, width, height);

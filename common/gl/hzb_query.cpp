@@ -226,8 +226,17 @@ uint64_t probe_pixels(const PyramidProbe& p) {
 }
 }  // namespace
 
+HcTest hc_test_for(HcTest test, RendererClass renderer) {
+  if (test != HcTest::by_renderer) return test;
+  return renderer == RendererClass::hardware ? HcTest::queries : HcTest::cpu_pyramid;
+}
+
 HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
-    : test_(test), sample_counts_(sample_counts), policy_(policy), ctx_(ctx), queries_(ctx) {
+    : test_(hc_test_for(test, ctx.renderer_class())),
+      sample_counts_(sample_counts),
+      policy_(test == HcTest::by_renderer ? HcQuerier::policy(test_) : policy),
+      ctx_(ctx),
+      queries_(ctx) {
   if (test_ == HcTest::cpu_pyramid) {
     cpu_pyramid_ = std::make_unique<DepthPyramid>();
     counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);

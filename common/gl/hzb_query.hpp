@@ -82,6 +82,12 @@ class GpuDepthPyramid {
   GLint count_loc_ = -1, src_size_loc_[2] = {-1, -1}, dst_size_loc_[2] = {-1, -1}, two_loc_[2] = {-1, -1};
 };
 
+// The test HcTest::by_renderer stands for on a renderer of class `renderer`: queries on a hardware
+// GPU (batched occlusion queries against the OR's depth, nothing read back on the frame's path),
+// cpu_pyramid on a software renderer (llvmpipe: reading depth back is a memcpy, queries are
+// rasterised). Any other test is returned as it is. HcQuerier applies it to the test it is given.
+HcTest hc_test_for(HcTest test, RendererClass renderer);
+
 class HcQuerier final : public OcclusionQueries {
  public:
   // When the pyramid is used, and how it tests (defaults per HcTest: policy()).

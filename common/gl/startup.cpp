@@ -1,6 +1,7 @@
 #include "common/gl/startup.hpp"
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "common/camera.hpp"
@@ -25,7 +26,7 @@ std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, i
   auto ctx = GlContext::create(backend, width, height);
   std::cerr << who << ": GL_RENDERER " << ctx->renderer() << " (" << ctx->backend_name() << "), GL_VERSION "
             << ctx->version() << ", GL_VENDOR " << ctx->vendor() << ", " << renderer_class_name(ctx->renderer_class())
-            << " renderer\n";
+            << " renderer" << (std::getenv("OCC_RENDERER_CLASS") ? " (OCC_RENDERER_CLASS)" : "") << "\n";
   return ctx;
 }
 

@@ -22,7 +22,7 @@ void add_view_options(Cli& cli, SceneOptions& scene, int* width, int* height, Gl
 
 // Creates the context and prints "<who>: GL_RENDERER <renderer> (<back end>), GL_VERSION <version>,
 // GL_VENDOR <vendor>, <software|hardware> renderer" to stderr: which GPU and driver, and the
-// renderer class (GlContext::renderer_class(); defaults chosen by it are a later step).
+// renderer class (GlContext::renderer_class(); the defaults that differ by it: docs/gpu.md).
 std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, int width, int height);
 
 // A process's scene and GL state. The members refer to each other: keep the object in place.

@@ -93,7 +93,8 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
 namespace {
 // The --hc-test words: one table for the flag and for hc_test_name().
 const std::vector<std::pair<std::string, HcTest>> kHcTests = {
-    {"queries", HcTest::queries}, {"pyramid", HcTest::pyramid}, {"cpu-pyramid", HcTest::cpu_pyramid}};
+    {"auto", HcTest::by_renderer}, {"queries", HcTest::queries}, {"pyramid", HcTest::pyramid},
+    {"cpu-pyramid", HcTest::cpu_pyramid}};
 }  // namespace
 
 const char* hc_test_name(HcTest t) {
@@ -113,12 +114,14 @@ void add_hc_options(Cli& cli, HcChoices& c) {
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
   cli.choice<HcTest>("hc-test", &c.test, kHcTests,
-                     "how HC tests a box: queries = an occlusion query each (a hardware GPU); pyramid = a depth "
+                     "how HC tests a box: auto = by the renderer (queries on a hardware GPU, cpu-pyramid on a "
+                     "software renderer such as llvmpipe; the start-up says which); queries = an occlusion query "
+                     "each; pyramid = a depth "
                      "pyramid built on the GPU from HC's depth buffer first proves boxes occluded (one compute "
                      "dispatch per batch, no read-back), queries only for the rest; cpu-pyramid = a depth pyramid "
                      "read back to the CPU once a frame proves what it can (boxes occluded and, without "
                      "--visible-pixel-lod, boxes that show), the rest counted by one draw per batch (boxes over "
-                     "16384 pixels stay queries; the default, for llvmpipe). Same results");
+                     "16384 pixels stay queries). Same results");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }
