@@ -92,10 +92,34 @@ glibc=$(getconf GNU_LIBC_VERSION | awk '{ print $2 }')
 } >"$dir/BUILD_INFO"
 echo "$glibc" >"$dir/lib/glibc/VERSION"
 
+# The shared scenes: each folder that holds a glTF/GLB file, with its glTF, GLB, .bin and image
+# files only (nothing else a folder may have gathered), while the bundle stays under its limit: the
+# scenes run_gpu.sh names in its help first, then the smaller before the larger. A scene left out
+# is named; copy it to the GPU machine by hand and give run_gpu.sh --scenes its path.
 shared_scenes=${OCC_SHARED_DIR:-$here/../shared}/scenes
+limit_kb=$((60 * 1024))
 if [ -d "$shared_scenes" ]; then
-  cp -rL "$shared_scenes" "$dir/scenes"
-  chmod -R u+w "$dir/scenes"
+  scene_files() { find "$shared_scenes/$1" -maxdepth 1 -type f \( -iname '*.gltf' -o -iname '*.glb' -o -iname '*.bin' \
+    -o -iname '*.png' -o -iname '*.jpg' -o -iname '*.jpeg' -o -iname '*.ktx2' -o -iname '*.webp' \) -print0; }
+  folders=$(cd "$shared_scenes" && find -L . -type f \( -iname '*.gltf' -o -iname '*.glb' \) -printf '%h\n' | sed 's|^\./||' | sort -u |
+    while read -r f; do
+      kb=$(scene_files "$f" | du -ckL --files0-from=- | tail -n 1 | awk '{ print $1 }')
+      case "$f" in ReciprocatingSaw|bim/schependomlaan) rank=0 ;; *) rank=1 ;; esac
+      echo "$rank $kb $f"
+    done | sort -k1,1n -k2,2n)
+  left_out=()
+  while read -r rank kb f; do
+    [ -n "$f" ] || continue
+    used_kb=$(du -sk "$dir" | awk '{ print $1 }')
+    # 1 MB kept free for du's rounding and the files still to come.
+    if [ $((used_kb + kb + 1024)) -ge $limit_kb ]; then left_out+=("$f ($((kb / 1024)) MB)"); continue; fi
+    mkdir -p "$dir/scenes/$f"
+    scene_files "$f" | xargs -0 -r cp -L -t "$dir/scenes/$f"
+  done <<<"$folders"
+  [ ! -f "$shared_scenes/README.md" ] || cp "$shared_scenes/README.md" "$dir/scenes/"
+  [ -d "$dir/scenes" ] && chmod -R u+w "$dir/scenes"
+  [ ${#left_out[@]} = 0 ] ||
+    echo "gpu_bundle: left out to stay under 60 MB: ${left_out[*]} (copy a scene's folder by hand and pass its path to run_gpu.sh --scenes)" >&2
 else
   echo "gpu_bundle: no shared scenes at $shared_scenes: the bundle has the generated scenes only" >&2
 fi

@@ -150,3 +150,31 @@ TEST(GpuBundle, RunsEndToEndOnASoftwareRenderer) {
     EXPECT_NE(rows[m][5], "n/a") << m << "\n" << table;
   }
 }
+
+// The bundle stays under 60 MB whatever the shared folder holds: a scene that would push it over
+// is left out and named, and a scene folder's other files (caches, temporaries) are not copied.
+TEST(GpuBundle, LeavesOutSceneFilesOverItsLimitAndNamesThem) {
+  const fs::path dir = fresh_dir("gpu_bundle_limit");
+  const fs::path shared = dir / "shared", bundle = dir / "bundle";
+  auto write = [](const fs::path& p, size_t bytes, char c) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary) << std::string(bytes, c);
+  };
+  write(shared / "scenes/small/small.gltf", 1000, ' ');
+  write(shared / "scenes/small/small.bin", 1u << 20, 'a');
+  write(shared / "scenes/small/small.lod.tmp", 2u << 20, 'b');  // not a scene file
+  write(shared / "scenes/huge/huge.glb", 70u << 20, 'c');
+  const Outcome made = run_to_end({"/usr/bin/env", std::string("OCC_BIN=") + OCC_BIN_DIR, "OCC_SHARED_DIR=" + shared.string(),
+                                   "/bin/bash", std::string(OCC_SOURCE_DIR) + "/scripts/gpu_bundle.sh", bundle.string()},
+                                  dir / "bundle.log", 120s);
+  ASSERT_EQ(made.code, 0) << made.log;
+  EXPECT_NE(made.log.find("left out to stay under 60 MB: huge (70 MB)"), std::string::npos) << made.log;
+  EXPECT_TRUE(fs::exists(bundle / "scenes/small/small.gltf"));
+  EXPECT_TRUE(fs::exists(bundle / "scenes/small/small.bin"));
+  EXPECT_FALSE(fs::exists(bundle / "scenes/small/small.lod.tmp"));
+  EXPECT_FALSE(fs::exists(bundle / "scenes/huge"));
+  uintmax_t bytes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(bundle))
+    if (e.is_regular_file()) bytes += e.file_size();
+  EXPECT_LT(bytes, 60u << 20);
+}
