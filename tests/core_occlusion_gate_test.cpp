@@ -63,7 +63,7 @@ TEST(OcclusionGate, KeepsOcclusionWhereFramesWithoutItAreSlower) {
 }
 
 // The first trial starts at the first frame that shows occlusion culling little, then measures
-// occlusion again before it decides: a short run (compare.sh's 30-frame orbit) reaches the faster
+// occlusion again before it decides: a short run (a 30-frame orbit) reaches the faster
 // mode early, either way round.
 TEST(OcclusionGate, TheFirstTrialComesAtOnceAndMeasuresBothModesBeforeDeciding) {
   for (bool off_faster : {true, false}) {

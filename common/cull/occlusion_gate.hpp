@@ -15,7 +15,7 @@
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
 //     occlusion is tried again the same way; give_up_frames frames in a row without it that take
 //     give_up x the median (the view changed: culling may pay now) end them at once. One slow frame
-//     does not: on two cores a scheduling hiccup doubles a frame now and then (compare.sh, saw
+//     does not: on two cores a scheduling hiccup doubles a frame now and then (a 30-frame saw orbit at
 //     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
 // The render client's choice between two passes and one for those frustum sets (--two-pass) is a
 // second gate of this kind, fed the render time: "occlusion" there means two passes.
@@ -41,7 +41,7 @@ class OcclusionGate {
     uint32_t window = 8, settle = 3;
     // A trial needs this many settled frames with occlusion measured (at most `window`). With
     // fewer than `window` of them it ends by measuring occlusion again (a trial with it) before
-    // deciding; 0: the first frame may start one (a short run, e.g. compare.sh's 30 frames, would
+    // deciding; 0: the first frame may start one (a short run, e.g. a 30-frame orbit, would
     // otherwise spend a third of it waiting).
     uint32_t trial_after = 0;
     double try_below = 1.6;
