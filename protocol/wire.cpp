@@ -167,7 +167,9 @@ constexpr uint32_t list_bytes(void (*list)(ByteCount&, M&)) {
 }
 constexpr void resync_fields(auto& io, auto& m) { io(m.frame, m.epoch, m.nodes); }
 static_assert(list_bytes<Resync>(resync_fields) == kResyncBytes);
+#if !defined(__clang__)  // clang 14 cannot build libstdc++'s std::string (Hello::name) in a constant expression
 static_assert(list_bytes<Hello>(hello_fields) == kHelloFixedBytes - 4 - 2 - 2);  // magic, version, name_bytes
+#endif
 static_assert(list_bytes<Camera>(camera_fields) == kCameraBytes);
 static_assert(list_bytes<EndOfFrame>(end_of_frame_fields) == kEndOfFrameBytes);
 

@@ -46,7 +46,7 @@ for n in "${names[@]}"; do
   seeds=()
   [ ! -d tests/fuzz/$n ] || seeds=(tests/fuzz/$n)
   dict=()
-  [ ! -f common/fuzz/$n.dict ] || dict=(-dict=common/fuzz/$n.dict)
+  [ ! -f common/fuzz/$n.dict ] || dict=(-dict="$here/common/fuzz/$n.dict")
   echo "fuzz: $n, $runs inputs ..." >&2
   t0=$(date +%s.%N)
   rc=0

@@ -160,3 +160,19 @@ TEST(Specs, BadSpecsSayWhatIsWrong) {
   for (const auto& [spec, words] : cases)
     EXPECT_NE(spec_error(spec).find(words), std::string::npos) << spec << " -> " << spec_error(spec);
 }
+
+// Zero-area triangles (repeated indices, coincident or collinear vertices) cover nothing and are
+// left out; every triangle with area stays, in order, however thin or small.
+TEST(Mesh, ZeroAreaTrianglesAreLeftOutAndCounted) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {1e-7f, 1e-7f, 0}, {1e6f, 1, 0}, {1e6f, 1.0625f, 0}};
+  m.indices = {0, 1, 2,   // a triangle
+               0, 0, 1,   // repeated index
+               0, 1, 3,   // collinear along x
+               0, 4, 2,   // tiny but not zero
+               1, 3, 1,   // repeated index
+               0, 5, 6};  // a sliver 1e6 long and 1/16 wide
+  EXPECT_EQ(drop_zero_area_triangles(m), 3u);
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 4, 2, 0, 5, 6}));
+  EXPECT_EQ(drop_zero_area_triangles(m), 0u);
+}

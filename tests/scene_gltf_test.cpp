@@ -188,7 +188,8 @@ TEST_F(GltfFiles, InterleavedStrideNormalsAndByteIndices) {
   const Mesh& m = s.meshes[0];
   EXPECT_EQ(m.positions, (std::vector<glm::vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
   EXPECT_EQ(m.normals, std::vector<glm::vec3>(3, {0, 0, 1}));
-  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 2, 2, 2}));  // degenerate triangle kept
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));  // the zero-area triangle left out, and counted
+  EXPECT_EQ(s.zero_area_triangles, 1u);
 }
 
 TEST_F(GltfFiles, StripsAndFansBecomeListsAndLinesAreSkipped) {

@@ -197,6 +197,7 @@ class GltfReader {
       for (size_t p = 0; p < mesh.primitives.size(); ++p) it->second.push_back(build_mesh(node.mesh, int(p)));
     }
     const std::string name = node.name.empty() ? where : node.name;
+    scene_.zero_area_triangles += zero_area_of_mesh_[node.mesh];  // counted per instance, as drawn
     for (int m : it->second)
       if (m >= 0) scene_.objects.push_back(Object{uint32_t(m), world, name});
   }
@@ -327,6 +328,7 @@ class GltfReader {
           mesh.indices.insert(mesh.indices.end(), {v[i + 1], v[i + 2], v[0]});
       }
     }
+    zero_area_of_mesh_[mi] += drop_zero_area_triangles(mesh);
     if (mesh.indices.empty()) return -1;
 
     if (const auto nrm = prim.attributes.find("NORMAL"); nrm != prim.attributes.end()) {
@@ -537,6 +539,7 @@ class GltfReader {
   const tinygltf::Model& m_;
   std::string file_;
   Scene scene_;
+  std::map<int, uint64_t> zero_area_of_mesh_;  // glTF mesh -> zero-area triangles left out of its primitives
   std::vector<int> parent_;                     // per node, -1 for roots
   std::map<int, std::vector<int>> mesh_cache_;  // glTF mesh -> scene mesh per primitive (-1: none)
   std::map<int, uint32_t> material_cache_;      // glTF material (-1: default) -> scene material

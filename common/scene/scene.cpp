@@ -123,6 +123,23 @@ void compute_normals(Mesh& mesh) {
   }
 }
 
+uint64_t drop_zero_area_triangles(Mesh& mesh) {
+  size_t kept = 0;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+    // Float differences and their products are exact in double: zero only when collinear.
+    const glm::dvec3 pa(mesh.positions[a]), pb(mesh.positions[b]), pc(mesh.positions[c]);
+    const glm::dvec3 n = glm::cross(pb - pa, pc - pa);
+    if (n.x == 0 && n.y == 0 && n.z == 0) continue;
+    mesh.indices[kept++] = a;
+    mesh.indices[kept++] = b;
+    mesh.indices[kept++] = c;
+  }
+  const uint64_t dropped = (mesh.indices.size() - kept) / 3;
+  mesh.indices.resize(kept);
+  return dropped;
+}
+
 namespace {
 
 // Recursively splits triangles [begin, end) of `order` at the median centroid along the longest

@@ -100,6 +100,9 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::vector<Image> images;  // decoded RGBA8, top row first
+  // Triangles of the source left out of the meshes because they have no area
+  // (drop_zero_area_triangles), counted per instance like triangle_count().
+  uint64_t zero_area_triangles = 0;
 
   Aabb bounds() const;               // world bounds of all objects
   uint64_t triangle_count() const;   // drawn triangles, counting every instance
@@ -117,6 +120,13 @@ struct Scene {
 
 // Smooth per-vertex normals from area-weighted face normals (for meshes without NORMAL).
 void compute_normals(Mesh& mesh);
+
+// Removes the triangles whose three positions are collinear (repeated indices, coincident or
+// collinear vertices: an exactly zero cross product) and returns how many. They cover no area, yet
+// a GPU may rasterise a pixel of one after rounding its transformed vertices, with any depth
+// (llvmpipe: the near plane's, metres in front of the triangle): no culling can foresee that
+// pixel, so brute force and a culled frame would differ there. Real exports have such triangles.
+uint64_t drop_zero_area_triangles(Mesh& mesh);
 
 // Prepares each mesh for drawing, deterministically: merges vertices equal in every attribute,
 // reorders its triangles into spatial clusters of at most max_triangles triangles (recursive
