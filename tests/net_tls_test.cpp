@@ -353,3 +353,34 @@ TEST_F(Tls, AByteAlteredOnTheWayEndsTheLinkWithAnIntegrityError) {
     EXPECT_TRUE(contains(lines[lines_before], "occ_net: peer 127.0.0.1:")) << lines[lines_before];
   }
 }
+
+TEST_F(Tls, LargeAndSmallMessagesInBurstsArriveIntactAndInOrder) {
+  // Messages larger than a TLS record (16 KiB) and bursts of small ones coalesced into one record.
+  const net::ClusterKey key = key_of('k');
+  Pair p = handshake_pair(*listener, listener->port(), &key, &key, log);
+  ASSERT_TRUE(p.acceptor_hello) << p.acceptor_hello.error();
+  ASSERT_TRUE(p.connector_hello) << p.connector_hello.error();
+  std::vector<wire::NodeDiff> sent;
+  for (uint32_t i = 0; i < 300; ++i) {
+    wire::NodeDiff d{i, {}, {}};
+    const uint32_t n = i % 10 == 0 ? 30000 + i : i % 7;  // 120 KB every tenth, else a few bytes
+    for (uint32_t k = 0; k < n; ++k) d.added.push_back(k * 3 + i);
+    sent.push_back(std::move(d));
+  }
+  std::thread sender([&] {
+    for (const auto& d : sent) EXPECT_EQ(p.connector->send(d), std::nullopt);
+  });
+  size_t got = 0;
+  for (; got < sent.size(); ++got) {
+    const net::Received r = p.acceptor->receive(10s);
+    ASSERT_TRUE(r.ok()) << r.reason;
+    const auto* d = std::get_if<wire::NodeDiff>(&r.message);
+    ASSERT_TRUE(d);
+    ASSERT_EQ(*d, sent[got]) << "message " << got;
+  }
+  sender.join();
+  const net::ConnectionStats s = p.connector->stats();
+  EXPECT_GT(s.socket_bytes_sent, s.sent.bytes);
+  EXPECT_LT(s.socket_bytes_sent, s.sent.bytes + s.sent.bytes / 50 + 4096) << "TLS adds a little per record";
+  EXPECT_TRUE(log.snapshot().empty());
+}

@@ -78,8 +78,9 @@ struct Received {
   enum class Status { message, timeout, closed, error };
   Status status = Status::timeout;
   wire::Message message;  // valid when status == message
-  // Bytes of this message on the wire (header + payload), so a reader can attribute traffic to
-  // what it belongs to: stats().received counts when the io thread decodes, which may be ahead.
+  // Bytes of this message on the wire (header + payload; TLS's records add theirs, counted in
+  // ConnectionStats::socket_bytes_received), so a reader can attribute traffic to what it
+  // belongs to: stats().received counts when the io thread decodes, which may be ahead.
   size_t wire_bytes = 0;
   std::string reason;     // closed / error: why, without the peer address (see peer())
   bool busy = false;      // closed: by the peer's Bye refusing us as busy (wire.hpp kByeBusy)
