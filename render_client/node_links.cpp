@@ -23,10 +23,10 @@ void NodeLinks::connect(const wire::Hello& mine) {
   mine_ = mine;
   for (const std::string& text : o_.connect) {
     const net::Endpoint e = net::parse_endpoint("connect", text);
-    auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms));
-    if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
     net::PeerExpectation expect{wire::Role::switch_node, std::nullopt};
     expect.key = o_.key ? &*o_.key : nullptr;
+    auto conn = net::Connection::connect(e.host, e.port, Millis(o_.timeout_ms), net::keyed_options(expect.key));
+    if (!conn) throw std::runtime_error("cannot reach switch node at " + text + ": " + conn.error());
     auto hello = net::handshake(*conn, mine_, expect, Millis(o_.timeout_ms));
     if (!hello && hello.error_kind() == ErrorKind::busy)
       throw std::runtime_error("the cluster is busy: the switch node at " + text + " refused us: " + hello.error());
@@ -128,10 +128,10 @@ void NodeLinks::rejoin_loop() {
       }
       next_try[k] = Clock::now() + Millis(200);
       const net::Endpoint e = net::parse_endpoint("connect", address);
-      auto conn = net::Connection::connect(e.host, e.port, Millis(20));
-      if (!conn) continue;  // nothing listens there (yet)
       net::PeerExpectation expect{wire::Role::switch_node, uint8_t(k)};
       expect.key = o_.key ? &*o_.key : nullptr;  // a keyed cluster takes back only a node with the key
+      auto conn = net::Connection::connect(e.host, e.port, Millis(20), net::keyed_options(expect.key));
+      if (!conn) continue;  // nothing listens there (yet)
       auto hello = net::handshake(*conn, mine_, expect, Millis(std::min(o_.timeout_ms, 5000)));
       if (!hello) {  // logged by the connection; a stranger there is not asked again at once
         next_try[k] = Clock::now() + backoff[k];

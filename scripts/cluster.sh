@@ -48,7 +48,9 @@
 # (scripts/cluster_hosts.sh --help, docs/clusters.md).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
 # it to all three processes (--cluster-key-file; docs/security.md), unless --cluster-key-file F
-# names one to use instead.
+# names one to use instead. With the key every link is TLS 1.3 (encrypted and authenticated).
+# --no-key runs the cluster without one (plain TCP, no membership check): for loopback
+# measurements of what TLS costs (docs/security.md), never across a network you do not trust.
 set -uo pipefail
 for a in "$@"; do [ "$a" = --hosts ] && exec "$(dirname "$0")/cluster_hosts.sh" "$@"; done  # three hosts over ssh
 source "$(dirname "$0")/lib.sh"
@@ -62,6 +64,7 @@ while [ $# -gt 0 ]; do
     --scene|--path|--frames|--out|--link) occ_set "$@"; shift 2 ;;
     --netns) netns=1; shift ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
+    --no-key) key_file=none; shift ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
     --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
@@ -103,7 +106,7 @@ if [ -z "$key_file" ]; then  # a fresh random key per run, readable by this user
   key_file=$out/cluster.key
   occ_make_key "$key_file"
 fi
-common+=(--cluster-key-file "$key_file")
+[ "$key_file" = none ] || common+=(--cluster-key-file "$key_file")
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 
 pids=()

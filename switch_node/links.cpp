@@ -15,7 +15,7 @@ class Links::Door {
     net::PeerExpectation e = links.expect(std::nullopt, std::nullopt);
     e.refuse = [&links](const wire::Hello& h) { return links.door_reason(h); };
     while (!stop_) {
-      auto conn = links.listener_.accept(Millis(100));
+      auto conn = links.listener_.accept(Millis(100), net::keyed_options(e.key));
       if (!conn) continue;
       if (auto hello = net::handshake(*conn, links.mine_, e, Millis(2000))) links.hand_over_peer(std::move(*conn));
     }
@@ -103,7 +103,7 @@ void Links::set_peer(std::unique_ptr<net::Connection> c) {
 // Waits for a peer on the listener: for --timeout-ms, or (--serve) as long as it takes.
 net::Peer Links::accept(const net::PeerExpectation& e, const std::string& what) {
   for (;;) {
-    auto p = listener_.accept_peer(mine_, e, Millis(o_.timeout_ms));
+    auto p = listener_.accept_peer(mine_, e, Millis(o_.timeout_ms), Millis(2000), net::keyed_options(e.key));
     if (p) return std::move(*p);
     if (!o_.serve) throw std::runtime_error(who_ + ": " + what + ": " + p.error());
     if (p.error_kind() != ErrorKind::timeout) {  // not a timeout: do not spin
@@ -121,7 +121,7 @@ void Links::connect_peer() {
   const net::Endpoint pe = net::parse_endpoint("peer", o_.peer);
   const auto deadline = Clock::now() + timeout;
   for (;;) {
-    auto conn = net::Connection::connect(pe.host, pe.port, timeout);
+    auto conn = net::Connection::connect(pe.host, pe.port, timeout, net::keyed_options(o_.key ? &*o_.key : nullptr));
     if (!conn) throw std::runtime_error(who_ + ": cannot reach switch node 0 at " + o_.peer + ": " + conn.error());
     auto hello = net::handshake(*conn, mine_, expect(wire::Role::switch_node, uint8_t(0)), timeout);
     if (hello) {

@@ -379,6 +379,10 @@ class Session {
               << t.frustum_frames << " frames without occlusion (the render client's gate), sent "
               << links_.rvg().stats().sent.bytes << " B to the render client and " << links_.peer_sent_bytes()
               << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
+    const net::ConnectionStats r = links_.rvg().stats();  // on the wire: with TLS's records (docs/security.md)
+    std::cerr << who_ << ": link to the render client (" << (links_.rvg().encrypted() ? "TLS 1.3" : "plain TCP")
+              << "): " << r.sent.bytes << " B of messages sent as " << r.socket_bytes_sent << " B on the wire, "
+              << r.received.bytes << " B received as " << r.socket_bytes_received << " B\n";
     if (stats_.resyncs)
       std::cerr << who_ << ": " << stats_.resyncs << " resyncs from the render client, " << stats_.single_frames
                 << " HC frames served alone\n";

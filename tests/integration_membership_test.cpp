@@ -99,10 +99,10 @@ TEST(Membership, ProcessesWithoutTheKeyAreRefusedWhileTheRealClientIsServed) {
   // saying why (the node's reason in its error, which a timeout could not give), and takes no
   // slot.
   const Outcome nokey = run_to_end(client_argv(o, p0, p1, dir / "nokey", {}), dir / "nokey.log", 60s);
-  expect_one_error(nokey, {"cluster key: the peer requires one (--cluster-key-file), this process has none"});
+  expect_one_error(nokey, {"the peer speaks TLS: it has a cluster key (--cluster-key-file), this process has none"});
   const Outcome other = run_to_end(client_argv(o, p0, p1, dir / "wrongkey", {"--cluster-key-file", wrong}),
                                    dir / "wrongkey.log", 60s);
-  expect_one_error(other, {"cluster key mismatch: the proof of render_client 0 (\"render_client\") does not verify: another key"});
+  expect_one_error(other, {"TLS handshake failed: cluster key mismatch: the peer rejected the PSK of our key"});
   EXPECT_EQ(frame_count(dir / "nokey") + frame_count(dir / "wrongkey"), 0u);
 
   // The real client, and while it is served (held mid-run) another one without the key.
@@ -111,15 +111,15 @@ TEST(Membership, ProcessesWithoutTheKeyAreRefusedWhileTheRealClientIsServed) {
   ASSERT_TRUE(h.hold());
   const Outcome late = run_to_end(client_argv(o, p0, p1, dir / "late", {}), dir / "late.log", 60s);
   ASSERT_TRUE(h.release());
-  expect_one_error(late, {"cluster key: the peer requires one"});
+  expect_one_error(late, {"the peer speaks TLS: it has a cluster key"});
 
   const ClusterRun r = c.finish();
   ASSERT_EQ(r.rvg_code, 0) << r.logs();
   EXPECT_EQ(r.node0_code, 0) << r.node0_log;
   EXPECT_EQ(r.node1_code, 0) << r.node1_log;
   // Logged on the nodes: node 0 saw all three strangers (the clients connect to it first).
-  EXPECT_EQ(count(r.node0_log, "cluster key: the peer has none"), 2u) << r.node0_log;
-  EXPECT_EQ(count(r.node0_log, "cluster key mismatch"), 1u) << r.node0_log;
+  EXPECT_EQ(count(r.node0_log, "TLS handshake failed: the peer speaks no TLS: it has no cluster key"), 2u) << r.node0_log;
+  EXPECT_EQ(count(r.node0_log, "TLS handshake failed: cluster key mismatch: the peer has another key"), 1u) << r.node0_log;
 
   const Outcome ref = run_reference(dir / "reference", kCity, o.path, kView);
   ASSERT_EQ(ref.code, 0) << ref.log;
@@ -135,13 +135,14 @@ TEST(Membership, AKeylessClusterStillWorksAndRefusesAKeyedClient) {
   ASSERT_TRUE(p0 && p1) << c.logs();
   const Outcome keyed = run_to_end(client_argv(o, p0, p1, dir / "keyed", {"--cluster-key-file", key}),
                                    dir / "keyed.log", 60s);
-  expect_one_error(keyed, {"cluster key: the peer has none"});
+  expect_one_error(keyed, {"TLS handshake failed: the peer speaks no TLS: it has no cluster key"});
   c.start_client();
   const ClusterRun r = c.finish();
   EXPECT_EQ(r.rvg_code, 0) << r.logs();
   EXPECT_EQ(r.node0_code, 0) << r.logs();
   EXPECT_EQ(r.node1_code, 0) << r.logs();
-  EXPECT_NE(r.node0_log.find("cluster key: the peer requires one"), std::string::npos) << r.node0_log;
+  EXPECT_NE(r.node0_log.find("the peer speaks TLS: it has a cluster key (--cluster-key-file), this process has none"),
+            std::string::npos) << r.node0_log;
 }
 
 TEST(Membership, BadKeyFilesGetOneClearErrorNamingTheFile) {

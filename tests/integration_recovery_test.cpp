@@ -362,6 +362,30 @@ TEST(Recovery, StalledLinkDegradesAfterTheTimeoutAndFramesEqualTheReference) {
   expect_equals_reference(dir, path, 300);
 }
 
+// With a cluster key the links are TLS (docs/security.md): a byte altered on node 1's link to the
+// client (link_relay "flip", node 1 -> client) ends that link with an integrity error, never a
+// corrupted frame: the client degrades to node 0 alone and every frame equals the reference.
+TEST(Recovery, AByteAlteredOnAKeyedLinkEndsItAndTheClientDegrades) {
+  const std::string path = "walk:300";
+  const fs::path dir = fresh_dir("recovery_tamper") / "cluster";
+  ClusterOptions o(kCity, path, kView);
+  o.all = {"--cluster-key-file", write_key(dir.parent_path() / "cluster.key", 't')};
+  o.relay_node1 = true;
+  Cluster c(dir, o);
+  ASSERT_TRUE(c.start_and_show(20)) << c.logs();
+  EXPECT_EQ(c.control("flip"), "ok flip armed");
+  const ClusterRun r = c.finish();
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(r.node0_code, 0) << r.logs();
+  EXPECT_NE(r.rvg_log.find("TLS integrity check failed: a record was altered on the way"), std::string::npos)
+      << r.rvg_log;
+  EXPECT_NE(r.rvg_log.find("degraded: switch node 0 ("), std::string::npos) << r.rvg_log;
+  const std::vector<std::string> m = modes(c.stats());
+  ASSERT_EQ(m.size(), 300u);
+  EXPECT_EQ(m.back(), "single");
+  expect_equals_reference(dir, path, 300);
+}
+
 // A launcher script (scripts/cluster.sh, scripts/cluster_rank.sh: `launcher`, its flags before
 // these) runs kCity on `path` into `out` (OUT/NAME.pid for each process): switch node 1 is killed
 // once the render client has shown 20 frames, and the client is held (SIGSTOP) from its "degraded"

@@ -9,6 +9,8 @@
 #include <fstream>
 
 #include <gtest/gtest.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
 
 #include "protocol/net/auth.hpp"
 
@@ -170,4 +172,20 @@ TEST(ClusterKeyProof, NoncesAreFreshAndNotZero) {
   const wire::Nonce a = net::random_nonce(), b = net::random_nonce();
   EXPECT_NE(a, b);
   EXPECT_NE(a, wire::Nonce{});
+}
+
+TEST(ClusterKeyDerive, IsHkdfSha256WithoutSaltOfTheLabel) {
+  // RFC 5869 by hand: PRK = HMAC(32 zero bytes, key); the first 32 output bytes = HMAC(PRK, info | 0x01).
+  const std::string label = "some purpose";
+  unsigned char zeros[32] = {}, prk[32], okm[32];
+  unsigned int len = 0;
+  ASSERT_TRUE(HMAC(EVP_sha256(), zeros, 32, reinterpret_cast<const unsigned char*>(kKey.data()), kKey.size(), prk, &len));
+  std::string info = label + '\x01';
+  ASSERT_TRUE(HMAC(EVP_sha256(), prk, 32, reinterpret_cast<const unsigned char*>(info.data()), info.size(), okm, &len));
+  const auto derived = key(kKey).derive(label);
+  EXPECT_TRUE(std::equal(derived.begin(), derived.end(), okm));
+  // Another label or another key gives another subkey; neither is the key itself.
+  EXPECT_NE(key(kKey).derive("other purpose"), derived);
+  EXPECT_NE(key(kKey + "x").derive(label), derived);
+  EXPECT_FALSE(std::equal(derived.begin(), derived.end(), reinterpret_cast<const unsigned char*>(kKey.data())));
 }

@@ -47,8 +47,8 @@ wire::Hello make_hello(wire::Role role, uint8_t node_id = 0, uint64_t fingerprin
 struct LogCapture {
   std::mutex m;
   std::vector<std::string> lines;
-  net::ConnectionOptions options(Millis linger = 300ms) {
-    net::ConnectionOptions o;
+  net::ConnectionOptions options(Millis linger = 300ms, const net::ClusterKey* key = nullptr) {
+    net::ConnectionOptions o = net::keyed_options(key);
     o.close_linger = linger;
     o.log = [this](const std::string& line) {
       std::lock_guard lk(m);
@@ -612,12 +612,12 @@ Outcomes handshake_both(net::Listener& listener, const net::PeerExpectation& acc
                         const net::PeerExpectation& connector, LogCapture& log) {
   Outcomes o;
   std::thread server([&] {
-    auto conn = listener.accept(5s, log.options());
+    auto conn = listener.accept(5s, log.options(300ms, acceptor.key));
     if (!conn) return;
     o.acceptor = net::handshake(*conn, make_hello(wire::Role::switch_node), acceptor, 5s);
     if (o.acceptor) conn->receive(2s);  // until the client's Bye
   });
-  auto conn = net::Connection::connect("127.0.0.1", listener.port(), 5s, log.options());
+  auto conn = net::Connection::connect("127.0.0.1", listener.port(), 5s, log.options(300ms, connector.key));
   if (conn) {
     o.connector = net::handshake(*conn, make_hello(wire::Role::render_client), connector, 5s);
     o.connection = std::make_unique<net::Connection>(std::move(*conn));
@@ -650,30 +650,20 @@ TEST_F(Handshake, TheSameKeyOnBothSidesIsAccepted) {
   EXPECT_TRUE(log.snapshot().empty());
 }
 
-TEST_F(Handshake, AKeyOnOneSideOnlyIsRefusedOnBothSidesSayingWhich) {
+// (A wrong key, or a key on one side only, fails in TLS before the hellos: net_tls_test.)
+TEST_F(Handshake, AKeyForTheHandshakeOnlyOrTheConnectionOnlyFailsAtOnce) {
   const net::ClusterKey key = key_of('k');
-  Outcomes o = handshake_both(*listener, with_key(&key), {}, log);  // a client without the key
-  ASSERT_FALSE(o.acceptor);
-  ASSERT_FALSE(o.connector);
-  EXPECT_TRUE(contains(o.acceptor.error(), "cluster key: the peer has none")) << o.acceptor.error();
-  EXPECT_TRUE(contains(o.connector.error(), "cluster key: the peer requires one")) << o.connector.error();
-
-  Outcomes p = handshake_both(*listener, {}, with_key(&key), log);  // a keyed client, a node without
-  ASSERT_FALSE(p.acceptor);
-  ASSERT_FALSE(p.connector);
-  EXPECT_TRUE(contains(p.acceptor.error(), "cluster key: the peer requires one")) << p.acceptor.error();
-  EXPECT_TRUE(contains(p.connector.error(), "cluster key: the peer has none")) << p.connector.error();
-}
-
-TEST_F(Handshake, AWrongKeyIsRefusedOnBothSidesAndTheAcceptorProvesNothing) {
-  const net::ClusterKey key = key_of('k'), wrong = key_of('w');
-  Outcomes o = handshake_both(*listener, with_key(&key), with_key(&wrong), log);
-  ASSERT_FALSE(o.acceptor);
-  ASSERT_FALSE(o.connector);
-  EXPECT_TRUE(contains(o.acceptor.error(), "cluster key mismatch")) << o.acceptor.error();
-  EXPECT_TRUE(contains(o.connector.error(), "peer said bye: cluster key mismatch: the proof of render_client 0 (\"test\") does not verify"))
-      << o.connector.error();
-  EXPECT_EQ(o.connection->stats().received.messages_of(wire::Type::proof), 0u);
+  for (bool tls : {false, true}) {
+    // The handshake has the key (expect.key) but the connection was made without (or the reverse).
+    auto conn = net::Connection::connect("127.0.0.1", listener->port(), 5s, log.options(300ms, tls ? &key : nullptr));
+    ASSERT_TRUE(conn) << conn.error();
+    auto r = net::handshake(*conn, make_hello(wire::Role::render_client), with_key(tls ? nullptr : &key), 5s);
+    ASSERT_FALSE(r);
+    EXPECT_TRUE(contains(r.error(), tls ? "a TLS connection but no cluster key for the handshake"
+                                        : "a cluster key for the handshake but a connection without TLS"))
+        << r.error();
+    EXPECT_EQ(conn->stats().sent.messages_of(wire::Type::hello), 0u) << "nothing sent";
+  }
 }
 
 // A connector that plays the handshake by hand with the right key, sends its proof through
@@ -689,11 +679,12 @@ struct ManualConnector {
                           std::vector<wire::Type>* answered) {
     Result<wire::Hello> acceptor = Error{"not run"};
     std::thread server([&] {
-      auto conn = listener.accept(5s, log.options());
+      auto conn = listener.accept(5s, log.options(300ms, &node_key));
       if (!conn) return;
       acceptor = net::handshake(*conn, make_hello(wire::Role::switch_node), with_key(&node_key), 5s);
     });
-    auto conn = net::Connection::connect("127.0.0.1", listener.port(), 5s, log.options());
+    // TLS with the node's key (the link is a given here); the proof made with my_key.
+    auto conn = net::Connection::connect("127.0.0.1", listener.port(), 5s, log.options(300ms, &node_key));
     if (conn) {
       wire::Hello mine = make_hello(wire::Role::render_client);
       mine.auth = wire::Auth::cluster_key;
@@ -711,6 +702,17 @@ struct ManualConnector {
     return acceptor;
   }
 };
+
+TEST_F(Handshake, InsideTlsAProofWithAnotherKeyIsRefusedAndTheAcceptorProvesNothing) {
+  const net::ClusterKey key = key_of('k'), wrong = key_of('w');
+  ManualConnector c{*listener, log, net::random_nonce(), {}};
+  std::vector<wire::Type> answered;
+  auto r = c.run(key, wrong, [](const wire::Proof& p) { return p; }, &answered);
+  ASSERT_FALSE(r);
+  EXPECT_TRUE(contains(r.error(), "cluster key mismatch: the proof of render_client 0 (\"test\") does not verify"))
+      << r.error();
+  EXPECT_TRUE(answered.empty());  // no proof of the acceptor's in return
+}
 
 TEST_F(Handshake, AReplayedProofIsRefused) {
   const net::ClusterKey key = key_of('k');

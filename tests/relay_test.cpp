@@ -365,7 +365,25 @@ TEST_F(Relay, StallHoldsEverythingUntilResume) {
   EXPECT_EQ(stat(after, "up"), data.size() + 1);
   EXPECT_EQ(stat(after, "down"), data.size() + 1);
   ASSERT_TRUE(ctl.send_all("bogus\n"));
-  EXPECT_EQ(ctl.line(), "error: unknown command 'bogus' (stall|resume|cut|stats)");
+  EXPECT_EQ(ctl.line(), "error: unknown command 'bogus' (stall|resume|cut|flip|stats)");
+}
+
+TEST_F(Relay, FlipAltersOneByteOfTheNextChunkFromTheTargetOnly) {
+  ASSERT_NO_FATAL_FAILURE(start([](auto& o) { o.control = true; }));
+  Sock ctl(r->control_port()), c(r->port());
+  ASSERT_TRUE(ctl.send_all("flip\n"));
+  EXPECT_EQ(ctl.line(), "ok flip armed");
+  const Bytes sent{10, 20, 30, 40, 50, 60, 70, 80};
+  const Bytes back = echo_through(c, sent, 0);  // up intact (the echo answers it), down altered
+  ASSERT_EQ(back.size(), sent.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < sent.size(); ++i)
+    if (back[i] != sent[i]) {
+      ++differing;
+      EXPECT_EQ(back[i] ^ sent[i], 0x01);
+    }
+  EXPECT_EQ(differing, 1u);
+  EXPECT_EQ(echo_through(c, sent, 0), sent) << "once only";
 }
 
 TEST_F(Relay, CutClosesBothSidesAndKeepsListening) {

@@ -3,6 +3,7 @@
 #include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
+#include <openssl/kdf.h>
 #include <openssl/rand.h>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -95,6 +96,20 @@ bool ClusterKey::verify(const wire::Proof& p, wire::ProofDirection d, const wire
                         const wire::Hello& verifier) const {
   const wire::Proof expected = prove(d, prover, verifier);
   return CRYPTO_memcmp(expected.mac.data(), p.mac.data(), p.mac.size()) == 0;
+}
+
+std::array<unsigned char, 32> ClusterKey::derive(std::string_view label) const {
+  std::array<unsigned char, 32> out{};
+  size_t len = out.size();
+  EVP_PKEY_CTX* ctx = EVP_PKEY_CTX_new_id(EVP_PKEY_HKDF, nullptr);
+  const bool ok = ctx && EVP_PKEY_derive_init(ctx) > 0 && EVP_PKEY_CTX_set_hkdf_md(ctx, EVP_sha256()) > 0 &&
+                  EVP_PKEY_CTX_set1_hkdf_key(ctx, bytes_.data(), int(bytes_.size())) > 0 &&
+                  EVP_PKEY_CTX_add1_hkdf_info(ctx, reinterpret_cast<const unsigned char*>(label.data()),
+                                              int(label.size())) > 0 &&
+                  EVP_PKEY_derive(ctx, out.data(), &len) > 0 && len == out.size();
+  EVP_PKEY_CTX_free(ctx);
+  if (!ok) throw std::runtime_error("HKDF-SHA256 failed (OpenSSL)");
+  return out;
 }
 
 wire::Nonce random_nonce() {

@@ -3,7 +3,9 @@
 // protocol/wire.hpp). The cryptography is OpenSSL's libcrypto (HMAC, RAND_bytes, CRYPTO_memcmp);
 // nothing here is home-made crypto.
 #pragma once
+#include <array>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "protocol/result.hpp"
@@ -34,6 +36,12 @@ class ClusterKey {
   // Whether `p` is that MAC (compared in constant time).
   bool verify(const wire::Proof& p, wire::ProofDirection d, const wire::Hello& prover,
               const wire::Hello& verifier) const;
+
+  // A 32-byte subkey for one purpose: HKDF-SHA256 (RFC 5869) of the key, no salt, info = label.
+  // The TLS links use one as their pre-shared key (protocol/net/tls.hpp), so the raw key serves
+  // only the handshake MAC. The caller wipes the result (OPENSSL_cleanse) when done; throws
+  // std::runtime_error if OpenSSL fails.
+  std::array<unsigned char, 32> derive(std::string_view label) const;
 
  private:
   explicit ClusterKey(std::vector<unsigned char> bytes) : bytes_(std::move(bytes)) {}

@@ -1,8 +1,7 @@
 #include "protocol/net/transport.hpp"
 
-#include "protocol/net/auth.hpp"
-
-#include "common/hash.hpp"
+#include "protocol/net/deadline.hpp"
+#include "protocol/net/tls.hpp"
 
 #include <algorithm>
 #include <condition_variable>
@@ -19,9 +18,6 @@ using namespace asio_names;
 
 namespace {
 
-// Longer waits are clamped (condition_variable::wait_for overflows near Millis::max()).
-constexpr Millis kMaxWait = std::chrono::hours(24 * 365);
-
 std::string endpoint_string(const tcp::endpoint& ep) {
   return ep.address().to_string() + ":" + std::to_string(ep.port());
 }
@@ -34,13 +30,9 @@ std::string bye_text(const std::string& reason) {
   return s;
 }
 
-Clock::time_point deadline_after(Millis timeout) {
-  return Clock::now() + std::clamp(timeout, Millis(0), kMaxWait);
-}
-
-Millis remaining_until(Clock::time_point deadline) {
-  return std::max(Millis(0), std::chrono::duration_cast<Millis>(deadline - Clock::now()));
-}
+// A keyless connection's reason when the peer's first bytes are a TLS record.
+const std::string kPeerSpeaksTls =
+    "the peer speaks TLS: it has a cluster key (--cluster-key-file), this process has none";
 
 void count(TrafficStats& s, wire::Type t, size_t bytes) {
   s.bytes += bytes;
@@ -70,6 +62,10 @@ struct Connection::Impl {
   asio::io_context io;
   tcp::socket sock;
   asio::steady_timer linger_timer;
+  std::atomic<uint64_t> wire_in{0}, wire_out{0};  // bytes through the socket
+  CountedSocket wire{sock, wire_in, wire_out};
+  std::unique_ptr<tls::Context> tls_context;  // with a key (set in start())
+  std::optional<tls::Stream> tls;             // over `wire`; the messages go through it
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
   std::thread thread;
   std::string peer = "unknown";
@@ -106,16 +102,34 @@ struct Connection::Impl {
   bool peer_eof = false;
   bool shutdown_sent = false;
   bool linger_started = false;
+  bool tls_ready = false;  // the TLS handshake is done: messages may flow
 
   void start() {
     error_code ec;
     sock.set_option(tcp::no_delay(true), ec);
     auto ep = sock.remote_endpoint(ec);
     if (!ec) peer = endpoint_string(ep);
+    if (opts.key) {
+      tls_context = std::make_unique<tls::Context>(*opts.key, accepted);
+      tls.emplace(wire, tls_context->native());
+      opts.key = nullptr;  // the context holds the PSK: the key need not outlive connect()/accept()
+    }
     io.restart();
     work.emplace(io.get_executor());
-    asio::post(io, [this] { read_header(); });
+    asio::post(io, [this] { tls ? start_tls() : read_header(); });
     thread = std::thread([this] { io.run(); });
+  }
+
+  // Every read and write of messages: through TLS with a key, else straight through the socket.
+  template <class Buffers, class Handler>
+  void read_exactly(const Buffers& b, Handler&& h) {
+    if (tls) asio::async_read(*tls, b, std::forward<Handler>(h));
+    else asio::async_read(wire, b, std::forward<Handler>(h));
+  }
+  template <class Buffers, class Handler>
+  void write_all(const Buffers& b, Handler&& h) {
+    if (tls) asio::async_write(*tls, b, std::forward<Handler>(h));
+    else asio::async_write(wire, b, std::forward<Handler>(h));
   }
 
   void stop() {  // owner thread, once, from ~Connection
@@ -229,6 +243,34 @@ struct Connection::Impl {
     }
   }
 
+  // ---- io thread: TLS (with a key), before any message ----
+
+  void start_tls() {
+    read_pending = true;  // wind_down() waits for the handshake as for a read
+    const auto side = accepted ? asio::ssl::stream_base::server : asio::ssl::stream_base::client;
+    tls->async_handshake(side, [this](error_code ec) {
+      read_pending = false;
+      if (!sock.is_open()) return;
+      if (ec) {
+        peer_eof = true;
+        if (auto refusal = tls::plaintext_refusal(ec); accepted && !refusal.empty()) {
+          error_code ignored;  // a few bytes into an empty socket buffer: does not block
+          wire_out += asio::write(sock, asio::buffer(refusal.data(), refusal.size()), ignored);
+        }
+        std::lock_guard lk(m);
+        return end_locked(End::error, tls::handshake_failure(ec), Ending::abort);
+      }
+      tls_ready = true;
+      bool queued = false;
+      {
+        std::lock_guard lk(m);
+        queued = writing;
+      }
+      if (queued) start_write();
+      read_header();
+    });
+  }
+
   // ---- io thread: reading ----
 
   bool ended() {
@@ -240,11 +282,11 @@ struct Connection::Impl {
     if (!sock.is_open() || read_pending) return;
     if (ended()) return wind_down();  // wind_down owns reading now
     read_pending = true;
-    asio::async_read(sock, asio::buffer(header), [this](error_code ec, size_t n) {
+    read_exactly(asio::buffer(header), [this](error_code ec, size_t n) {
       if (after_read(ec)) return;
       if (ec) return read_failed(ec, n, "header", header.size());
       auto h = wire::decode_header(header);
-      if (!h) return protocol_error(h.error());
+      if (!h) return protocol_error(!tls && tls::looks_like_tls(header) ? kPeerSpeaksTls : h.error());
       payload_type = h->type;
       payload.resize(h->payload_bytes);  // <= kMaxPayloadBytes, checked by decode_header
       read_payload();
@@ -253,7 +295,7 @@ struct Connection::Impl {
 
   void read_payload() {
     read_pending = true;
-    asio::async_read(sock, asio::buffer(payload), [this](error_code ec, size_t n) {
+    read_exactly(asio::buffer(payload), [this](error_code ec, size_t n) {
       if (after_read(ec)) return;
       if (ec)
         return read_failed(ec, n, std::string(wire::type_name(payload_type)) + " payload",
@@ -296,14 +338,17 @@ struct Connection::Impl {
 
   void read_failed(const error_code& ec, size_t got, const std::string& what, size_t want) {
     peer_eof = true;
-    const bool disconnected = ec == asio::error::eof || ec == asio::error::connection_reset;
+    const bool disconnected = ec == asio::error::eof || ec == asio::error::connection_reset ||
+                              ec == asio::ssl::error::stream_truncated;
     std::string reason;
-    if (ec == asio::error::eof && got == 0 && what == "header")
+    if (!tls && what == "header" && tls::looks_like_tls(std::span(header).first(got)))
+      reason = kPeerSpeaksTls;
+    else if (ec == asio::error::eof && got == 0 && what == "header")
       reason = "peer closed the connection without bye";
     else if (disconnected && (got > 0 || what != "header"))
       reason = "peer disconnected mid-message (" + std::to_string(got) + " of " +
                std::to_string(want) + " " + what + " bytes)";
-    else
+    else if (reason = tls::read_failure(ec); reason.empty())
       reason = "read error: " + ec.message();
     std::lock_guard lk(m);
     end_locked(End::error, reason, Ending::abort);
@@ -317,6 +362,7 @@ struct Connection::Impl {
   // ---- io thread: writing and closing ----
 
   void start_write() {
+    if (tls && !tls_ready) return;  // `writing` stays set: start_tls() calls back
     {
       std::lock_guard lk(m);
       inflight_bytes = 0;
@@ -327,10 +373,14 @@ struct Connection::Impl {
       outbox.clear();
     }
     if (!sock.is_open()) return;
+    if (tls && inflight.size() > 1) {  // one TLS record (up to 16 KiB) for many small messages
+      for (size_t i = 1; i < inflight.size(); ++i) inflight[0].insert(inflight[0].end(), inflight[i].begin(), inflight[i].end());
+      inflight.resize(1);
+    }
     std::vector<asio::const_buffer> buffers;
     buffers.reserve(inflight.size());
     for (const auto& b : inflight) buffers.push_back(asio::buffer(b));
-    asio::async_write(sock, buffers, [this](error_code ec, size_t) {
+    write_all(buffers, [this](error_code ec, size_t) {
       if (!sock.is_open()) return;
       std::unique_lock lk(m);
       if (ec) {
@@ -373,7 +423,7 @@ struct Connection::Impl {
     if (peer_eof) return force_close();
     if (read_pending) return;  // its handler calls back
     read_pending = true;       // discard input until the peer closes
-    sock.async_read_some(asio::buffer(discard_buf), [this](error_code ec, size_t) {
+    wire.async_read_some(asio::buffer(discard_buf), [this](error_code ec, size_t) {
       read_pending = false;
       if (!sock.is_open()) return;
       if (ec) peer_eof = true;
@@ -449,6 +499,7 @@ Received Connection::receive(Millis timeout) { return impl_->receive(timeout); }
 void Connection::close(const std::string& reason) { impl_->close(reason); }
 void Connection::close_with_error(const std::string& reason) { impl_->close_with_error(reason); }
 const std::string& Connection::peer() const { return impl_->peer; }
+bool Connection::encrypted() const { return impl_->tls.has_value(); }
 bool Connection::accepted() const { return impl_->accepted; }
 
 bool Connection::is_open() const {
@@ -458,136 +509,10 @@ bool Connection::is_open() const {
 
 ConnectionStats Connection::stats() const {
   std::lock_guard lk(impl_->m);
-  return impl_->stats;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Handshake
-
-namespace {
-
-std::optional<std::string> hello_mismatch(const wire::Hello& ours, const wire::Hello& peer,
-                                          const PeerExpectation& expect) {
-  auto differs = [](const char* what, auto a, auto b, bool as_hex) -> std::optional<std::string> {
-    if (a == b) return std::nullopt;
-    auto show = [&](uint64_t v) { return as_hex ? hex(v) : std::to_string(v); };
-    return std::string(what) + " mismatch: ours " + show(a) + ", peer has " + show(b);
-  };
-  if (auto e = differs("scene fingerprint", ours.scene_fingerprint, peer.scene_fingerprint, true))
-    return e;
-  if (auto e = differs("build parameter arity", ours.arity, peer.arity, false)) return e;
-  if (auto e = differs("build parameter leaf_items", ours.leaf_items, peer.leaf_items, false))
-    return e;
-  if (auto e = differs("build parameter cluster_triangles", ours.cluster_triangles,
-                       peer.cluster_triangles, false))
-    return e;
-  if (auto e = differs("config hash", ours.config_hash, peer.config_hash, true)) return e;
-  if (expect.role && *expect.role != peer.role)
-    return "unexpected role " + std::string(wire::role_name(peer.role)) + " (expected " +
-           std::string(wire::role_name(*expect.role)) + ")";
-  if (expect.node_id && *expect.node_id != peer.node_id)
-    return "unexpected node id " + std::to_string(peer.node_id) + " (expected " +
-           std::to_string(*expect.node_id) + ")";
-  if (expect.same_viewport && (ours.viewport_width_px != peer.viewport_width_px ||
-                               ours.viewport_height_px != peer.viewport_height_px))
-    return "viewport mismatch: ours " + std::to_string(ours.viewport_width_px) + "x" +
-           std::to_string(ours.viewport_height_px) + ", peer has " +
-           std::to_string(peer.viewport_width_px) + "x" + std::to_string(peer.viewport_height_px);
-  return std::nullopt;
-}
-
-// Whether the two hellos' auth settings can meet: both with a key or both without.
-std::optional<std::string> auth_mismatch(bool keyed, const wire::Hello& peer) {
-  const bool peer_keyed = peer.auth == wire::Auth::cluster_key;
-  if (keyed && !peer_keyed)
-    return std::string("cluster key: the peer has none (it was started without --cluster-key-file), this process "
-                       "requires one");
-  if (!keyed && peer_keyed)
-    return std::string("cluster key: the peer requires one (--cluster-key-file), this process has none");
-  return std::nullopt;
-}
-
-// Said by the side that checked the proof (and, in its Bye, to the side that sent it).
-std::string wrong_key(const wire::Hello& prover) {
-  return "cluster key mismatch: the proof of " + std::string(wire::role_name(prover.role)) + " " +
-         std::to_string(prover.node_id) + " (\"" + prover.name + "\") does not verify: another key";
-}
-
-}  // namespace
-
-Result<wire::Hello> handshake(Connection& conn, const wire::Hello& mine_in,
-                              const PeerExpectation& expect, Millis timeout) {
-  auto fail = [&](const Error& e) -> Result<wire::Hello> {
-    conn.close_with_error(e.reason);
-    return Error{"peer " + conn.peer() + ": " + e.reason, e.kind};
-  };
-  const auto deadline = deadline_after(timeout);
-  // One message from the peer within the handshake's time; a Bye or failure ends it with its reason.
-  auto next = [&](wire::Type type) -> Result<wire::Message> {
-    const std::string what(wire::type_name(type));
-    Received r = conn.receive(std::max(Millis(1), remaining_until(deadline)));
-    switch (r.status) {
-      case Received::Status::timeout:
-        return Error{"no " + what + " within " + std::to_string(timeout.count()) + " ms"};
-      case Received::Status::closed: return Error{r.reason, r.busy ? ErrorKind::busy : ErrorKind::other};
-      case Received::Status::error: return Error{r.reason};
-      case Received::Status::message: break;
-    }
-    if (wire::type_of(r.message) != type)
-      return Error{"expected " + what + ", got " + std::string(wire::type_name(wire::type_of(r.message)))};
-    return std::move(r.message);
-  };
-  // A connection that already ended (e.g. the peer's first bytes were garbage) reports why in
-  // receive(); only a message we cannot send at all fails here.
-  auto send = [&](const wire::Message& m) -> std::optional<std::string> {
-    if (auto e = conn.send(m); e && conn.is_open()) return e;
-    return std::nullopt;
-  };
-  const bool keyed = expect.key != nullptr;
-  wire::Hello mine = mine_in;
-  mine.auth = keyed ? wire::Auth::cluster_key : wire::Auth::none;
-  mine.nonce = keyed ? random_nonce() : wire::Nonce{};
-  using wire::ProofDirection;
-
-  if (!conn.accepted()) {  // the connector: hello, (its proof), then the acceptor's verdict
-    if (auto e = send(mine)) return fail(Error{*e});
-    auto m = next(wire::Type::hello);
-    if (!m) return fail(Error{m.error(), m.error_kind()});
-    const wire::Hello peer = std::get<wire::Hello>(*m);
-    if (auto e = hello_mismatch(mine, peer, expect)) return fail(Error{*e});
-    if (auto e = auth_mismatch(keyed, peer)) return fail(Error{*e});
-    if (!keyed) return peer;
-    if (peer.nonce == mine.nonce) return fail(Error{"cluster key: the peer's nonce is ours (reflected)"});
-    if (auto e = send(expect.key->prove(ProofDirection::connector, mine, peer))) return fail(Error{*e});
-    auto p = next(wire::Type::proof);
-    if (!p) return fail(Error{p.error(), p.error_kind()});
-    if (!expect.key->verify(std::get<wire::Proof>(*p), ProofDirection::acceptor, peer, mine))
-      return fail(Error{wrong_key(peer)});
-    return peer;
-  }
-
-  // The acceptor: the connector's hello first, then ours (or a refusal instead of our last message).
-  auto m = next(wire::Type::hello);
-  if (!m) return fail(Error{m.error(), m.error_kind()});
-  const wire::Hello peer = std::get<wire::Hello>(*m);
-  std::optional<std::string> wrong = hello_mismatch(mine, peer, expect);
-  if (!wrong) wrong = auth_mismatch(keyed, peer);
-  if (wrong) {  // our hello first, so the connector sees the difference and says so itself
-    send(mine);
-    return fail(Error{*wrong});
-  }
-  if (keyed) {
-    if (auto e = send(mine)) return fail(Error{*e});
-    auto p = next(wire::Type::proof);
-    if (!p) return fail(Error{p.error(), p.error_kind()});
-    if (!expect.key->verify(std::get<wire::Proof>(*p), ProofDirection::connector, peer, mine))
-      return fail(Error{wrong_key(peer)});
-  }
-  if (expect.refuse)
-    if (auto why = expect.refuse(peer)) return fail(Error{*why});
-  if (auto e = send(keyed ? wire::Message{expect.key->prove(ProofDirection::acceptor, mine, peer)} : wire::Message{mine}))
-    return fail(Error{*e});
-  return peer;
+  ConnectionStats s = impl_->stats;
+  s.socket_bytes_sent = impl_->wire_out;
+  s.socket_bytes_received = impl_->wire_in;
+  return s;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,6 +1,10 @@
 // TCP transport for the wire protocol (Boost.Asio inside, not in this header).
 //
-// Connection: one framed TCP stream, usable from plain threads. A private io thread reads whole
+// Connection: one framed TCP stream, usable from plain threads. With a cluster key
+// (ConnectionOptions::key) the stream is TLS 1.3 with a pre-shared key derived from it
+// (protocol/net/tls.hpp, docs/security.md): the io thread runs the TLS handshake first, and every
+// message after it is encrypted and authenticated. A failed TLS handshake, or a record altered
+// on the way, ends the connection as an error like any other (one line naming the peer). A private io thread reads whole
 // frames (header first, validated before the payload buffer is sized) into an inbox and drains
 // a write queue; TCP_NODELAY is on. Several owner threads may send(); one thread receives.
 // Nothing blocks without a bound: send() waits at most send_timeout for queue space, receive()
@@ -41,7 +45,13 @@ struct ConnectionStats {
   TrafficStats sent;      // counted when send() queues the message (Bye included)
   TrafficStats received;  // counted when a message is decoded
   uint64_t errors = 0;    // 0 or 1: the error that ended the connection
+  // Bytes through the socket (TCP payload), counted as the socket takes or gives them: the
+  // messages plus, with TLS, its handshake and each record's header and tag.
+  uint64_t socket_bytes_sent = 0;
+  uint64_t socket_bytes_received = 0;
 };
+
+class ClusterKey;  // protocol/net/auth.hpp
 
 struct ConnectionOptions {
   size_t max_send_queue_bytes = 8u << 20;     // send() waits while this much is queued ...
@@ -51,14 +61,26 @@ struct ConnectionOptions {
   // Receives the one log line of a failed connection (called with an internal lock held: must
   // not call back into the Connection). Default: the line goes to stderr.
   std::function<void(const std::string& line)> log;
+  // The cluster key: TLS 1.3 with a PSK derived from it (both sides need the same key); nullptr:
+  // plain TCP. Read by connect()/accept() only (it need not outlive them). handshake() wants the
+  // same key in PeerExpectation::key.
+  const ClusterKey* key = nullptr;
 };
+
+// Default options with the cluster key `key` (nullptr: none), for a cluster's connections.
+inline ConnectionOptions keyed_options(const ClusterKey* key) {
+  ConnectionOptions o;
+  o.key = key;
+  return o;
+}
 
 struct Received {
   enum class Status { message, timeout, closed, error };
   Status status = Status::timeout;
   wire::Message message;  // valid when status == message
-  // Bytes of this message on the wire (header + payload), so a reader can attribute traffic to
-  // what it belongs to: stats().received counts when the io thread decodes, which may be ahead.
+  // Bytes of this message on the wire (header + payload; TLS's records add theirs, counted in
+  // ConnectionStats::socket_bytes_received), so a reader can attribute traffic to what it
+  // belongs to: stats().received counts when the io thread decodes, which may be ahead.
   size_t wire_bytes = 0;
   std::string reason;     // closed / error: why, without the peer address (see peer())
   bool busy = false;      // closed: by the peer's Bye refusing us as busy (wire.hpp kByeBusy)
@@ -96,6 +118,8 @@ class Connection {
   bool is_open() const;
   // Made by Listener::accept (the acceptor of the handshake) rather than connect().
   bool accepted() const;
+  // Runs TLS (made with ConnectionOptions::key).
+  bool encrypted() const;
   ConnectionStats stats() const;
   const std::string& peer() const;  // "127.0.0.1:40312"
 
@@ -106,14 +130,13 @@ class Connection {
   friend class Listener;
 };
 
-class ClusterKey;  // protocol/net/auth.hpp
-
 // What a handshake accepts besides our own scene fingerprint and build parameters.
 struct PeerExpectation {
   std::optional<wire::Role> role;     // nullopt: any role
   std::optional<uint8_t> node_id;     // nullopt: any node id
   bool same_viewport = true;          // the peer's viewport must equal ours
   // The cluster key (docs/security.md): both sides prove it, or neither has one. nullptr: none.
+  // The connection must have been made with the same key (ConnectionOptions::key: TLS), or none.
   const ClusterKey* key = nullptr;
   // The acceptor only: asked once the connector's hello (and key) passed; a reason refuses it
   // (the connector gets Bye(reason) instead of our last handshake message), e.g. "busy: ...".
@@ -123,7 +146,9 @@ struct PeerExpectation {
 // Both sides call this first (the message order is in wire.hpp, "Handshake"): exchanges Hellos
 // (the one that connected sends first), waits up to `timeout` in all and checks the peer's
 // (magic and version in the decoder; scene fingerprint, arity, leaf_items, cluster_triangles,
-// config_hash equal to ours; then `expect`), then, with expect.key, the HMAC challenge-response.
+// config_hash equal to ours; then `expect`), then, with expect.key, the HMAC challenge-response
+// (inside TLS: a second proof of the key, bound to both hellos). A connection that is not TLS
+// while expect.key is set (or the reverse) fails at once: the caller forgot ConnectionOptions::key.
 // `mine`'s auth and nonce are set here (a fresh nonce per call). On failure the connection is
 // ended with close_with_error, so the peer gets a Bye saying why, and the error names the peer
 // and both values: "peer 127.0.0.1:5555: scene fingerprint mismatch: ours 0x..., peer has 0x...".

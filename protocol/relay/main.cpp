@@ -44,8 +44,9 @@ int main(int argc, char** argv) {
                  "adds, per direction, a one-way delay, jitter (never reordering bytes) and a bandwidth cap.\n"
                  "up = client -> target, down = target -> client. Per-direction flags default to -1 = the\n"
                  "symmetric value. Control (with --control-port-file): connect to that port on 127.0.0.1 and\n"
-                 "send lines 'stall', 'resume', 'cut' or 'stats'; each gets a one-line answer. Logs one line\n"
-                 "per connection opened / closed (bytes per direction) to stderr. SIGINT/SIGTERM: exit 0.");
+                 "send lines 'stall', 'resume', 'cut', 'flip' (alter one byte from the target) or 'stats';\n"
+                 "each gets a one-line answer. Logs one line per connection opened / closed (bytes per\n"
+                 "direction) to stderr. SIGINT/SIGTERM: exit 0.");
     cli.option("listen", &listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
     cli.option("port-file", &port_file, "FILE", "write the listening port here (atomically)");
     cli.option("target", &target, "HOST:PORT", "where to forward each connection (required)");

@@ -69,6 +69,7 @@ struct Hub {
   std::map<uint64_t, std::shared_ptr<Link>> links;  // open connections (connecting included)
   uint64_t accepted = 0, up_bytes = 0, down_bytes = 0;
   bool stalled = false;
+  bool flip_down = false;  // "flip": invert one byte of the next chunk from the target
 
   void log(const std::string& line) const {
     if (opts.log)
@@ -162,6 +163,10 @@ void Pipe::enqueue(size_t n) {
   double offset_ms = params.delay_ms;
   if (params.jitter_ms > 0) offset_ms += std::uniform_real_distribution<double>(-params.jitter_ms, params.jitter_ms)(rng);
   last_release = std::max(last_release, link_free + from_ms(std::max(0.0, offset_ms)));
+  if (&to == &link.client && link.hub.flip_down) {  // tampering on the way, for integrity tests
+    inbuf[n / 2] ^= 0x01;
+    link.hub.flip_down = false;
+  }
   queue.push_back({std::vector<uint8_t>(inbuf.begin(), inbuf.begin() + n), last_release});
   queued += n;
 }
@@ -307,8 +312,12 @@ std::string Hub::command(const std::string& line) {
     return "ok resumed";
   }
   if (line == "cut") return "ok cut " + std::to_string(close_all("cut", true));
+  if (line == "flip") {
+    flip_down = true;
+    return "ok flip armed";
+  }
   if (line == "stats") return stats().line();
-  return "error: unknown command '" + line + "' (stall|resume|cut|stats)";
+  return "error: unknown command '" + line + "' (stall|resume|cut|flip|stats)";
 }
 
 void Hub::resume() {

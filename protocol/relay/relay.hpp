@@ -1,5 +1,5 @@
 // Link emulator: a TCP relay between two processes that adds one-way delay, jitter and a
-// bandwidth cap, per direction, and can stall or cut the link on command. Protocol-agnostic: it
+// bandwidth cap, per direction, and can stall, cut or alter the link on command. Protocol-agnostic: it
 // forwards raw bytes and parses nothing. The kernel here has no netem; this is its user-space
 // stand-in for tests and benchmarks of the cluster (see link_relay --help).
 //
@@ -27,9 +27,11 @@
 // The same commands come as text lines on an optional control port (127.0.0.1 only, one line
 // in, one line out, several commands per control connection):
 //   "stall" -> "ok stalled"      "resume" -> "ok resumed"      "cut" -> "ok cut <n connections>"
+//   "flip"  -> "ok flip armed": one byte of the next chunk read from the target (on any connection)
+//              is inverted on its way to the client: tampering, for tests of the links' integrity
 //   "stats" -> "up=<bytes> down=<bytes> queued_up=<bytes> queued_down=<bytes> open=<n>
 //               accepted=<n> stalled=<0|1>"     (bytes forwarded per direction since start)
-//   other   -> "error: unknown command '<line>' (stall|resume|cut|stats)"
+//   other   -> "error: unknown command '<line>' (stall|resume|cut|flip|stats)"
 #pragma once
 #include <chrono>
 #include <cstdint>

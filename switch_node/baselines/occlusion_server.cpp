@@ -72,7 +72,7 @@ int serve(const ServerOptions& o) {
       make_hello(wire::Role::switch_node, 0, {o.width, o.height}, g.fingerprint(), h.params(), config, who);
   net::PeerExpectation expect{wire::Role::render_client, std::nullopt};
   expect.key = o.key ? &*o.key : nullptr;
-  auto peer = listener.accept_peer(mine, expect, net::Millis(o.timeout_ms));
+  auto peer = listener.accept_peer(mine, expect, net::Millis(o.timeout_ms), net::Millis(2000), net::keyed_options(expect.key));
   if (!peer) throw std::runtime_error("no render client: " + peer.error());
   net::Connection& rvg = peer->connection;
 
