@@ -19,8 +19,10 @@
 
 #include "protocol/net/auth.hpp"
 #include "protocol/net/transport.hpp"
+#include "net_test_util.hpp"
 
 using namespace occ;
+using namespace occtest;
 using namespace std::chrono_literals;
 using net::Millis;
 using Status = net::Received::Status;
@@ -47,26 +49,6 @@ wire::Hello make_hello(wire::Role role) {
 }
 
 net::ClusterKey key_of(char fill) { return *net::ClusterKey::from_bytes(std::string(40, fill)); }
-
-struct LogCapture {
-  std::mutex m;
-  std::vector<std::string> lines;
-  net::ConnectionOptions options(const net::ClusterKey* key) {
-    net::ConnectionOptions o = net::keyed_options(key);
-    o.close_linger = 300ms;
-    o.log = [this](const std::string& line) {
-      std::lock_guard lk(m);
-      lines.push_back(line);
-    };
-    return o;
-  }
-  std::vector<std::string> snapshot() {
-    std::lock_guard lk(m);
-    return lines;
-  }
-};
-
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 bool contains_bytes(const std::vector<uint8_t>& hay, const std::vector<uint8_t>& needle) {
   return std::search(hay.begin(), hay.end(), needle.begin(), needle.end()) != hay.end();

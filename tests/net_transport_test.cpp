@@ -17,9 +17,11 @@
 
 #include "protocol/net/auth.hpp"
 #include "protocol/net/transport.hpp"
+#include "net_test_util.hpp"
 #include "protocol/visible_set.hpp"
 
 using namespace occ;
+using namespace occtest;
 using namespace std::chrono_literals;
 using net::Millis;
 using Status = net::Received::Status;
@@ -43,28 +45,6 @@ wire::Hello make_hello(wire::Role role, uint8_t node_id = 0, uint64_t fingerprin
   return h;
 }
 
-// Collects the log lines of the connections it configures.
-struct LogCapture {
-  std::mutex m;
-  std::vector<std::string> lines;
-  net::ConnectionOptions options(Millis linger = 300ms, const net::ClusterKey* key = nullptr) {
-    net::ConnectionOptions o = net::keyed_options(key);
-    o.close_linger = linger;
-    o.log = [this](const std::string& line) {
-      std::lock_guard lk(m);
-      lines.push_back(line);
-    };
-    return o;
-  }
-  std::vector<std::string> snapshot() {
-    std::lock_guard lk(m);
-    return lines;
-  }
-};
-
-bool contains(const std::string& s, const std::string& part) {
-  return s.find(part) != std::string::npos;
-}
 
 // "Returns when its timeout runs out, not long after": the bound catches a timeout taken in the
 // wrong unit or never armed (a hang is ctest's --timeout), not speed. It is far above the timeouts
