@@ -21,3 +21,6 @@ add_dependencies(hard_faults_test switch_node render_client frame_diff)
 occ_test(hard_exit_test hard LIBS occ_common SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/hard_exit_test.cpp)
 add_dependencies(hard_exit_test switch_node render_client frame_diff)
+occ_test(hard_cracks_test hard LIBS occ_common SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_cracks_test.cpp)
+add_dependencies(hard_cracks_test switch_node render_client occlusion_server frame_diff)

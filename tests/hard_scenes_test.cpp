@@ -9,7 +9,8 @@
 using namespace occ;
 
 TEST(HardScenes, GeneratedScenesAreDeterministic) {
-  for (const char* spec : {"hard:walls", "hard:walls:3", "hard:span", "hard:degenerate", "offset:1e7,-2,3.5:hard:span"})
+  for (const char* spec : {"hard:walls", "hard:walls:3", "hard:span", "hard:degenerate", "hard:cracks", "hard:cracks:5",
+                           "offset:1e7,-2,3.5:hard:span"})
     EXPECT_EQ(load_scene(spec).content_hash(), load_scene(spec).content_hash()) << spec;
 }
 
@@ -66,10 +67,34 @@ TEST(HardScenes, BadSpecsAreNamed) {
   EXPECT_NE(message("hard:nope").find("unknown hard case"), std::string::npos);
   EXPECT_NE(message("hard:walls:0").find("walls must be 1..100"), std::string::npos);
   EXPECT_NE(message("hard:span:3").find("unknown hard case"), std::string::npos);
+  EXPECT_NE(message("hard:cracks:0").find("bays must be 1..50"), std::string::npos);
   EXPECT_NE(message("offset:1,2:hard:walls").find("offset must be DX,DY,DZ"), std::string::npos);
   EXPECT_NE(message("offset:1,2,x:hard:walls").find("'x' must be a finite number"), std::string::npos);
   EXPECT_NE(message("offset:1,2,inf:hard:walls").find("must be a finite number"), std::string::npos);
   EXPECT_NE(message("offset:2e9,0,0:hard:walls").find("|v| <= 1e9"), std::string::npos);
   EXPECT_NE(message("offset:1,2,3").find("expected offset:DX,DY,DZ:<scene spec>"), std::string::npos);
   EXPECT_NE(message("offset:1,2,3:hard:nope").find("unknown hard case"), std::string::npos);
+}
+
+// hard:cracks: seams of 0 .. 24 mm between the cross walls' panels (bays 0..3: 0, 0.5, 2, 8 mm
+// times 1, 2, 3), every part its own mesh, and objects of 2 to 10 mm behind the seams.
+TEST(HardScenes, CracksHaveSeamsOfTheStatedWidthsBetweenSeparateMeshes) {
+  const Scene s = load_scene("hard:cracks:4");
+  std::vector<double> seams;  // gaps along z between consecutive cross wall panels at y = 0.5
+  std::vector<Aabb> panels;
+  int tiny = 0;
+  for (const Object& o : s.objects) {
+    const Aabb b = s.meshes[o.mesh].box().transformed(o.transform);
+    if (o.name.find("cross wall panel") != std::string::npos && b.min.y < 0.5 && b.max.y > 0.5) panels.push_back(b);
+    tiny += b.max.x - b.min.x <= 0.0101;
+  }
+  ASSERT_EQ(panels.size(), 16u);  // 4 bays x 4 panels
+  for (size_t i = 0; i + 1 < panels.size(); ++i)
+    if (panels[i].min.x == panels[i + 1].min.x) seams.push_back(panels[i + 1].min.z - panels[i].max.z);
+  ASSERT_EQ(seams.size(), 12u);
+  const double base[4] = {0.0, 0.0005, 0.002, 0.008};
+  for (size_t k = 0; k < 4; ++k)
+    for (size_t j = 0; j < 3; ++j) EXPECT_NEAR(seams[3 * k + j], base[k] * double(j + 1), 1e-6) << k << " " << j;
+  EXPECT_EQ(tiny, 4 * (9 + 36));  // behind the seams, and the floor's field
+  EXPECT_EQ(s.meshes.size(), 1u + 4 * 10);  // the cube, and each of a bay's 10 parts its own mesh
 }

@@ -141,4 +141,54 @@ Scene hard_degenerate() {
   return s;
 }
 
+// hard:cracks (layout in hard_scenes.hpp): separate meshes that abut or nearly abut, tiny objects
+// behind the seams.
+Scene hard_cracks(int bays) {
+  Scene s;
+  const uint32_t cube = add_mesh(s, box_mesh("unit cube", {0, 0, 0}, {1, 1, 1}));
+  // Every part its own box mesh in world coordinates (as exports place them: no shared vertices).
+  auto part = [&](const std::string& name, glm::dvec3 lo, glm::dvec3 hi) {
+    const uint32_t m = add_mesh(s, box_mesh(name, glm::vec3(lo), glm::vec3(hi)));
+    s.objects.push_back(Object{m, glm::dmat4(1.0), name});
+  };
+  const double base_gap[4] = {0.0, 0.0005, 0.002, 0.008};
+  for (int k = 0; k < bays; ++k) {
+    const double x0 = 8.0 * k, xw = x0 + 8.0, g = base_gap[k % 4];
+    const std::string bay = "bay " + std::to_string(k);
+    part(bay + " slab", {x0, -0.3, -4}, {xw, 0, 4});
+    // The cross wall: four panels along z, seams at z = -2, 0, 2 of width g, 2g, 3g.
+    double z = -4;
+    for (int j = 0; j < 4; ++j) {
+      const double z1 = j < 3 ? -2.0 + 2.0 * j - 0.5 * g * (j + 1) : 4.0;
+      const std::string panel = bay + " cross wall panel " + std::to_string(j);
+      if (j == 2) {  // split at y = 1.5: a seam across the wall, T-junctions with both neighbours
+        part(panel + " lower", {xw, 0, z}, {xw + 0.2, 1.5, z1});
+        part(panel + " upper", {xw, 1.5, z}, {xw + 0.2, 3, z1});
+      } else {
+        part(panel, {xw, 0, z}, {xw + 0.2, 3, z1});
+      }
+      if (j < 3) z = -2.0 + 2.0 * j + 0.5 * g * (j + 1);
+    }
+    // Side walls of two panels each, cut at x0 + 3 and x0 + 5 (where the cross wall is not); the
+    // one at z = 4 ends on the cross wall's face.
+    part(bay + " side wall -z a", {x0, 0, -4.2}, {x0 + 3, 3, -4});
+    part(bay + " side wall -z b", {x0 + 3, 0, -4.2}, {xw + 0.2, 3, -4});
+    part(bay + " side wall +z a", {x0, 0, 4}, {x0 + 5, 3, 4.2});
+    part(bay + " side wall +z b", {x0 + 5, 0, 4}, {xw, 3, 4.2});
+    // Behind each seam, in the next bay: 2, 5 and 10 mm cubes at three heights.
+    for (int j = 0; j < 3; ++j)
+      for (int h = 0; h < 3; ++h) {
+        const double size = h == 0 ? 0.002 : h == 1 ? 0.005 : 0.01;
+        const glm::dvec3 at(xw + 0.25 + 0.05 * h, 0.5 + 1.0 * h, -2.0 + 2.0 * j - 0.5 * size);
+        place(s, cube, at, bay + " behind seam " + std::to_string(j) + " cube " + std::to_string(h), glm::dvec3(size));
+      }
+    // A field of 3 mm cubes on the floor: sub-pixel beyond a few metres.
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j)
+        place(s, cube, {x0 + 1.0 + 1.1 * i, 0.0, -3.0 + 1.1 * j}, bay + " grain " + std::to_string(i * 6 + j),
+              glm::dvec3(0.003));
+  }
+  return s;
+}
+
 }  // namespace occ

@@ -30,4 +30,16 @@ Scene hard_degenerate();
 // occlusion switch's worst case: nothing it saw last frame hides the field).
 Scene hard_exit(int n);
 
+// hard:cracks[:N]: cracks between meshes, as real building exports have them, in N (1..50, default 6)
+// bays of 8 m along x (bay k: x 8k..8k+8, z -4..4), each a separate mesh per part: a floor slab
+// (y -0.3..0, slabs abutting at the bays' ends) with the walls standing on it; a cross wall at its
+// +x end (x 8k+8..8k+8.2, y 0..3) of four panels along z with seams at z = -2, 0, 2 of width
+// g (j + 1) for seam j, g = 0, 0.5, 2, 8 mm in bays k = 0, 1, 2, 3 (mod 4): 0 to 1.5 pixels at
+// 512^2 from 8 m; its third panel split at y = 1.5, and a side wall along z = 4 whose end meets
+// the cross wall's face (T-junctions where the vertices do not match); side walls along z = -4 and
+// z = 4 of two panels each, cut where the cross wall's panels are not; right behind every seam,
+// in the next bay, cubes of 2, 5 and 10 mm at y = 0.5, 1.5, 2.5, and a field of 3 mm cubes on each
+// floor: objects seen, if at all, through a crack or smaller than a pixel.
+Scene hard_cracks(int bays);
+
 }  // namespace occ

@@ -79,8 +79,10 @@ Scene hard_scene(const std::string& spec, const std::vector<std::string_view>& f
   if (kind == "exit" && f.size() <= 3) return hard_exit(f.size() == 3 ? parse_int(spec, "field", f[2], 2, 100) : 16);
   if (kind == "span" && f.size() == 2) return hard_span();
   if (kind == "degenerate" && f.size() == 2) return hard_degenerate();
+  if (kind == "cracks" && f.size() <= 3) return hard_cracks(f.size() == 3 ? parse_int(spec, "bays", f[2], 1, 50) : 6);
   throw InputError("--scene '" + spec +
-                   "': unknown hard case; expected hard:walls[:N], hard:exit[:N], hard:span or hard:degenerate");
+                   "': unknown hard case; expected hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate or "
+                   "hard:cracks[:N]");
 }
 
 }  // namespace
@@ -126,8 +128,8 @@ Scene load_scene(const std::string& spec) {
     throw InputError("--scene '" + spec +
                      "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
                      "(blocks, buildings per block side, max floors, detail), layout:NXxNZ:path.gltf|.glb, "
-                     "plant:M (M million triangles), hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate or "
-                     "offset:DX,DY,DZ:<spec>");
+                     "plant:M (M million triangles), hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate, "
+                     "hard:cracks[:N] or offset:DX,DY,DZ:<spec>");
   }
   scene.source = spec;
   return scene;

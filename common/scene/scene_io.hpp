@@ -33,6 +33,8 @@ namespace occ {
 //   hard:span        parts of 1e-3 .. 1e3 units, a tiny part behind a tiny plate, a 1e5 hall
 //   hard:degenerate  zero-area triangles, a single point, huge triangles, a sub-pixel field
 //   hard:exit[:N]    a closed room and an N x N field (default 16, 2..100) of cubes outside it
+//   hard:cracks[:N]  N bays (default 6, 1..50) of walls and slabs as separate meshes with seams of
+//                    0 .. 24 mm and T-junctions, mm cubes behind the seams, a sub-pixel field
 // Throws InputError for unknown specs and bad numbers.
 Scene load_scene(const std::string& spec);
 
