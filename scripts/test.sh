@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs every test (CTest labels unit, gl, integration, hard).
+# Installs what is missing, builds, and runs every test (CTest labels unit, gl, integration, hard,
+# matrix).
 #   scripts/test.sh              all tests
 #   scripts/test.sh -L unit      only one label (any ctest arguments are passed through)
-#   scripts/test.sh --sanitize   ASan+UBSan build in build-asan/, then the whole suite
+#   scripts/test.sh --sanitize   ASan+UBSan build in build-asan/, then the whole suite but the
+#                                label matrix (every method against brute force on many scenes:
+#                                pixels, not memory; the same code runs in the other tests);
+#                                ctest arguments replace that selection
 #   scripts/test.sh --tsan       TSan build in build-tsan/ of the threaded parts (transport, camera
 #                                buffer, the switch node's camera thread in one cluster run and the
 #                                strangers-at-the-ports test, the --serve nodes' busy door, a node
@@ -35,6 +39,7 @@ case "$MODE" in
     export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0
     export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
     scripts/build.sh -DOCC_SANITIZE=ON
+    [ $# -gt 0 ] || set -- -LE matrix
     ;;
   tsan)
     export OCC_BUILD_DIR=build-tsan
