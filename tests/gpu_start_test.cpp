@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -96,6 +97,10 @@ TEST(GpuBundle, RunsEndToEndOnASoftwareRenderer) {
   fs::create_directories(work);
   auto bare = [&](const std::vector<std::string>& env, const std::vector<std::string>& cmd) {
     std::vector<std::string> a = {"/usr/bin/env", "-i", "PATH=/usr/bin:/bin", "HOME=" + home.string(), "LP_NUM_THREADS=0"};
+    // The sanitizer suite's settings (its leak suppressions for Mesa) belong to the test, not to
+    // the machine the bundle models.
+    for (const char* v : {"ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS", "TSAN_OPTIONS"})
+      if (const char* value = std::getenv(v)) a.push_back(std::string(v) + "=" + value);
     a.insert(a.end(), env.begin(), env.end());
     a.insert(a.end(), cmd.begin(), cmd.end());
     return a;
