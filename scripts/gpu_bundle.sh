@@ -116,8 +116,10 @@ if [ -d "$shared_scenes" ]; then
     mkdir -p "$dir/scenes/$f"
     scene_files "$f" | xargs -0 -r cp -L -t "$dir/scenes/$f"
   done <<<"$folders"
-  [ ! -f "$shared_scenes/README.md" ] || cp "$shared_scenes/README.md" "$dir/scenes/"
-  [ -d "$dir/scenes" ] && chmod -R u+w "$dir/scenes"
+  if [ -d "$dir/scenes" ]; then
+    [ ! -f "$shared_scenes/README.md" ] || cp "$shared_scenes/README.md" "$dir/scenes/"
+    chmod -R u+w "$dir/scenes"
+  fi
   [ ${#left_out[@]} = 0 ] ||
     echo "gpu_bundle: left out to stay under 60 MB: ${left_out[*]} (copy a scene's folder by hand and pass its path to run_gpu.sh --scenes)" >&2
 else
