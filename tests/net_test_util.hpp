@@ -2,8 +2,11 @@
 #pragma once
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "protocol/net/transport.hpp"
 
@@ -28,6 +31,19 @@ struct LogCapture {
     std::lock_guard lk(m);
     return lines;
   }
+};
+
+// Most transport tests start with a listener on a free port of 127.0.0.1 and a log for the
+// connections they make.
+class WithListener : public testing::Test {
+ protected:
+  void SetUp() override {
+    auto l = occ::net::Listener::open(0);
+    ASSERT_TRUE(l) << l.error();
+    listener.emplace(std::move(*l));
+  }
+  LogCapture log;
+  std::optional<occ::net::Listener> listener;
 };
 
 inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }

@@ -165,16 +165,7 @@ Pair handshake_pair(net::Listener& listener, uint16_t connect_port, const net::C
   return p;
 }
 
-class Tls : public testing::Test {
- protected:
-  void SetUp() override {
-    auto l = net::Listener::open(0);
-    ASSERT_TRUE(l) << l.error();
-    listener.emplace(std::move(*l));
-  }
-  LogCapture log;
-  std::optional<net::Listener> listener;
-};
+class Tls : public WithListener {};
 
 // Both ways through a proxy; returns what went up and down. Checks the messages arrive intact.
 std::pair<std::vector<uint8_t>, std::vector<uint8_t>> exchange(net::Listener& listener, const net::ClusterKey* key,

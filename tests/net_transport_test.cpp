@@ -94,18 +94,6 @@ uint16_t recently_free_port() {
   return l->port();
 }
 
-// Most tests here start with a listener on a free port of 127.0.0.1 and a log for the
-// connections they make.
-class WithListener : public testing::Test {
- protected:
-  void SetUp() override {
-    auto l = net::Listener::open(0);
-    ASSERT_TRUE(l) << l.error();
-    listener.emplace(std::move(*l));
-  }
-  LogCapture log;
-  std::optional<net::Listener> listener;
-};
 class Loopback : public WithListener {};
 class Handshake : public WithListener {};
 class Connection : public WithListener {};
