@@ -246,7 +246,7 @@ class ReferenceRun {
     const Clock::time_point t0 = Clock::now();
     const uint64_t cpu0 = process_cpu_us();
     BaselineStats st = draw(cam);
-    ReferenceRow row{f, st.nodes_drawn, st.triangles, ms_since(t0), st.queries, double(process_cpu_us() - cpu0) / 1000.0};
+    ReferenceRow row{f, st.nodes_drawn, st.triangles, ms_since(t0), st.queries, double(process_cpu_us() - cpu0) / 1000.0, std::nullopt};
     Image image;
     if (out_->writes_images() || viewer_) image = g_.ctx->read_rgba();
     if (out_->writes_images()) out_->write_frame(f, image);

@@ -6,11 +6,12 @@
 
 namespace occ {
 
-CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const ClusterConfig& config,
-                     const HcChoices& choices, Viewport vp, std::string other)
+CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
+                     const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other)
     : ctx_(ctx),
       renderer_(renderer),
       r_(r),
+      sealed_(sealed),
       config_(config),
       choices_(choices),
       vp_(vp),
@@ -116,11 +117,11 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
   HcFrame hc;
   if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
     FrustumOnlyQueries all;
-    hc = step_.hc(frame, visible_, cam, all, {.choices = choices_}, out);
+    hc = step_.hc(frame, visible_, cam, all, {.choices = choices_, .enclosures = &sealed_}, out);
     hc.stats.queries = hc.eof.queries = 0;
     ++totals_.frustum_frames;
   } else {
-    HcOptions o{.choices = choices_, .skipper = skipper_ ? &*skipper_ : nullptr};
+    HcOptions o{.choices = choices_, .skipper = skipper_ ? &*skipper_ : nullptr, .enclosures = &sealed_};
     if (choices_.occluder_fusion)
       o.occluders = [&](std::span<const uint32_t> found) {
         // Restores the GL state the queries need; the pyramid is stale where they were drawn.

@@ -39,9 +39,10 @@ struct CullTotals {
 
 class CullFrame {
  public:
-  // `vp`: the cluster's viewport; `other`: the other node's name, for the stream's errors.
-  CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const ClusterConfig& config,
-            const HcChoices& choices, Viewport vp, std::string other);
+  // `vp`: the cluster's viewport; `other`: the other node's name, for the stream's errors;
+  // `sealed`: the scene's items sealed inside solids (LoadedScene::enclosures).
+  CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
+            const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other);
   CullFrame(const CullFrame&) = delete;
   CullFrame& operator=(const CullFrame&) = delete;
 
@@ -76,6 +77,7 @@ class CullFrame {
   GlContext& ctx_;
   SceneRenderer& renderer_;
   const Renderables& r_;
+  const Enclosures& sealed_;
   const ClusterConfig config_;
   const HcChoices choices_;
   const Viewport vp_;

@@ -61,7 +61,7 @@ class Session {
         other_("switch node " + std::to_string(1 - o.id)),
         g_(g),
         links_(o, mine, listener),
-        cull_(*g.ctx, *g.renderer, *g.renderables, o.config, o.hc, {o.width, o.height}, other_) {}
+        cull_(*g.ctx, *g.renderer, *g.renderables, g.sealed, o.config, o.hc, {o.width, o.height}, other_) {}
 
   // Returns 0 after the client's Bye.
   int run() {

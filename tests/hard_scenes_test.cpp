@@ -98,3 +98,32 @@ TEST(HardScenes, CracksHaveSeamsOfTheStatedWidthsBetweenSeparateMeshes) {
   EXPECT_EQ(tiny, 4 * (9 + 36));  // behind the seams, and the floor's field
   EXPECT_EQ(s.meshes.size(), 1u + 4 * 10);  // the cube, and each of a bay's 10 parts its own mesh
 }
+
+// The limit benchmarks' structures (common/scene/structures.hpp): deterministic, their size set
+// by N, each object's geometry where the layout says, bad specs named.
+TEST(Structures, GeneratedDeterministicallyAndSizedByN) {
+  for (const char* kind : {"bridge", "office", "pipes"}) {
+    const std::string one = std::string(kind) + ":1", four = std::string(kind) + ":4";
+    EXPECT_EQ(load_scene(one).content_hash(), load_scene(one).content_hash()) << kind;
+    const size_t a = load_scene(one).objects.size(), b = load_scene(four).objects.size();
+    EXPECT_GT(b, 3 * a) << kind;  // N spans, bays or modules, beside what is shared (ground, end walls)
+    EXPECT_EQ(load_scene(kind).objects.size(), load_scene(std::string(kind) + (kind[0] == 'p' ? ":24" : ":16")).objects.size());
+  }
+  const Scene office = load_scene("office:2");
+  EXPECT_NEAR(office.bounds().extent().x, 12.4, 1e-9);  // two 6 m bays, end walls to 0.25 before, 0.15 beyond
+  EXPECT_EQ(office.bounds().min.y, -0.2);
+  uint32_t glass = 0;
+  for (const Object& o : load_scene("office:4").objects) glass += office.material_of(o.mesh) != nullptr;
+  EXPECT_GT(glass, 0u);  // window bands and the third cross wall
+}
+
+TEST(Structures, BadSpecsAreNamed) {
+  for (const char* spec : {"bridge:0", "bridge:201", "office:x", "pipes:101", "bridge:2:3", "office:"}) {
+    try {
+      load_scene(spec);
+      ADD_FAILURE() << spec << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + spec + "'"), std::string::npos) << e.what();
+    }
+  }
+}

@@ -81,6 +81,7 @@ class LodTraversal {
         o_(o),
         st_(o.stats ? *o.stats : local_),
         skipper_(o.choices.adaptive_queries ? o.skipper : nullptr),
+        enclosures_(o.choices.sealed ? o.enclosures : nullptr),
         occluders_(o.choices.occluder_fusion ? o.occluders : nullptr),
         fr_(cam.frustum()),
         tau_(sel.tau()),
@@ -140,6 +141,8 @@ class LodTraversal {
       if (n.item_count == 0) continue;
       if (fr_.classify(n.box) == Containment::Outside) {
         ++st_.frustum_culled;
+      } else if (enclosures_ && enclosures_->hides(id, cam_, sel_.viewport_height_px())) {
+        ++st_.sealed;
       } else if (visible_without_query(n.box, cam_)) {
         ++st_.near_visible;
         visible_.emplace_back(id, kNoQuery);
@@ -213,6 +216,7 @@ class LodTraversal {
   CullStats local_;
   CullStats& st_;
   QuerySkipper* const skipper_;
+  const Enclosures* const enclosures_;
   const std::function<void(std::span<const uint32_t>)> occluders_;
   const Frustum fr_;
   const double tau_;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/camera.hpp"
+#include "common/cull/enclosure.hpp"
 #include "common/scene/hierarchy.hpp"
 #include "common/lod/lod_select.hpp"
 
@@ -49,6 +50,7 @@ struct CullStats {
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
   uint32_t hlods = 0;              // interior nodes accepted at their HLOD
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
+  uint32_t sealed = 0;             // nodes hidden inside solids (Enclosures::hides), no query
 };
 
 // Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
@@ -177,6 +179,7 @@ struct HcChoices {
   HcOrder order = HcOrder::near_first;
   bool adaptive_queries = true;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
   bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
+  bool sealed = true;            // skip what is sealed inside solids (HcOptions::enclosures)
   int visibility_hold = 2;       // frames a node found visible stays in V (VisibilityHold; 0 off)
   // How each box is tested (common/gl/hzb_query.hpp): by the renderer (cpu_pyramid on llvmpipe,
   // queries on a hardware GPU: no per-frame read-back), or as the flag says.
@@ -191,6 +194,7 @@ struct HcOptions {
   bool visible_pixel_lod = false;
   std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
   QuerySkipper* skipper = nullptr;       // choices.adaptive_queries' state (null: query every node)
+  const Enclosures* enclosures = nullptr;  // choices.sealed: nodes it hides for the camera are culled
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
   CullStats* stats = nullptr;
   uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size

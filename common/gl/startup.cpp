@@ -30,6 +30,18 @@ std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, i
   return ctx;
 }
 
+Enclosures find_enclosures(const std::string& who, const Scene& scene, const Hierarchy& h) {
+  const double t0 = now_ms();
+  Enclosures e = Enclosures::find(scene, h);
+  if (e.sealed_items() > 0) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%s: %u items sealed inside %u closed convex solids (HC skips them; found in %.0f ms)",
+                  who.c_str(), e.sealed_items(), e.solids(), now_ms() - t0);
+    std::cerr << buf << "\n";
+  }
+  return e;
+}
+
 SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
                        int width, int height, const std::function<void(const LoadedScene&)>& before_gl) {
   SceneGl s;
@@ -37,6 +49,7 @@ SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool w
   if (before_gl) before_gl(*s.loaded);
   LodData* lod = s.loaded->lod.get();
   s.renderables = std::make_unique<Renderables>(s.loaded->hierarchy, lod);
+  s.sealed = find_enclosures(who, s.loaded->scene, s.loaded->hierarchy);
   s.ctx = start_gl(who, backend, width, height);
   // The driver keeps its own copy of the geometry: the CPU arrays are freed as they are uploaded.
   const double t0 = now_ms();

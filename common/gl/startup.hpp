@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "common/cull/enclosure.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/setup/scene_setup.hpp"
@@ -25,10 +26,15 @@ void add_view_options(Cli& cli, SceneOptions& scene, int* width, int* height, Gl
 // renderer class (GlContext::renderer_class(); the defaults that differ by it: docs/gpu.md).
 std::unique_ptr<GlContext> start_gl(const std::string& who, GlBackend backend, int width, int height);
 
+// Enclosures::find, with one line on stderr when some item is sealed ("<who>: N items sealed inside
+// M closed convex solids ...").
+Enclosures find_enclosures(const std::string& who, const Scene& scene, const Hierarchy& h);
+
 // A process's scene and GL state. The members refer to each other: keep the object in place.
 struct SceneGl {
   std::unique_ptr<LoadedScene> loaded;
   std::unique_ptr<Renderables> renderables;  // with the LOD data when loaded with LODs
+  Enclosures sealed;                         // items sealed inside solids (found before the upload)
   std::unique_ptr<GlContext> ctx;
   std::unique_ptr<SceneRenderer> renderer;
   const Scene& scene() const { return loaded->scene; }
@@ -37,7 +43,8 @@ struct SceneGl {
 };
 
 // load_and_build(scene, who, with_lod), then `before_gl` (e.g. check the camera path against
-// the scene before paying for a context), then start_gl() and a SceneRenderer (with the LODs).
+// the scene before paying for a context), the items sealed inside solids (find_enclosures: one
+// line when there are any), then start_gl() and a SceneRenderer (with the LODs).
 SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
                        int width, int height, const std::function<void(const LoadedScene&)>& before_gl = nullptr);
 

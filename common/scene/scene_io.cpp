@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <glm/gtc/matrix_transform.hpp>
+#include <optional>
 #include <string_view>
 #include <tuple>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "common/cli.hpp"
 #include "common/error.hpp"
 #include "common/scene/plant.hpp"
+#include "common/scene/structures.hpp"
 
 namespace occ {
 namespace {
@@ -85,6 +87,26 @@ Scene hard_scene(const std::string& spec, const std::vector<std::string_view>& f
                    "hard:cracks[:N]");
 }
 
+// bridge[:N], office[:N], pipes[:N] (structures.hpp), or nothing for another kind of spec.
+std::optional<Scene> structure_scene(const std::string& spec) {
+  struct Kind {
+    const char* name;
+    Scene (*make)(int);
+    const char* count;
+    int fallback, max;
+  };
+  static constexpr Kind kinds[] = {{"bridge", bridge, "spans", 16, 200},
+                                   {"office", office, "bays", 16, 100},
+                                   {"pipes", pipes, "modules", 24, 100}};
+  const auto f = split_fields(spec, 3);
+  for (const Kind& k : kinds) {
+    if (f[0] != k.name) continue;
+    if (f.size() > 2) throw InputError("--scene '" + spec + "': expected " + k.name + "[:N]");
+    return k.make(f.size() == 2 ? parse_int(spec, k.count, f[1], 1, k.max) : k.fallback);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Scene load_scene(const std::string& spec) {
@@ -115,6 +137,8 @@ Scene load_scene(const std::string& spec) {
     if (f.size() > 3) p.floors_max = parse_int(spec, "floors", f[3], 1, city::kMaxFloors);
     if (f.size() > 4) p.detail = parse_int(spec, "detail", f[4], 1, city::kMaxDetail);
     scene = generate_city(p);
+  } else if (const std::optional<Scene> st = structure_scene(spec)) {
+    scene = *st;
   } else if (spec.rfind("plant:", 0) == 0) {
     const std::string text = spec.substr(6);
     const std::optional<double> m = parse_finite(text);
@@ -129,7 +153,7 @@ Scene load_scene(const std::string& spec) {
                      "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
                      "(blocks, buildings per block side, max floors, detail), layout:NXxNZ:path.gltf|.glb, "
                      "plant:M (M million triangles), hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate, "
-                     "hard:cracks[:N] or offset:DX,DY,DZ:<spec>");
+                     "hard:cracks[:N], bridge[:N], office[:N], pipes[:N] or offset:DX,DY,DZ:<spec>");
   }
   scene.source = spec;
   return scene;

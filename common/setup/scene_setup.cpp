@@ -15,7 +15,8 @@ namespace occ {
 void add_scene_options(Cli& cli, SceneOptions& o) {
   cli.option("scene", &o.spec, "SPEC",
              "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), plant:M (M million triangles, "
-             "unique meshes), layout:NXxNZ:file");
+             "unique meshes), layout:NXxNZ:file, bridge[:N], office[:N], pipes[:N] (structures: N spans, bays, "
+             "modules), hard:KIND[:N] (hard cases)");
   cli.option("arity", &o.build.arity, 2, 64, "hierarchy: max children per node");
   cli.option("leaf-items", &o.build.leaf_items, 1, 1024, "hierarchy: max items per leaf");
   cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,

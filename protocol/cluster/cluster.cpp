@@ -111,6 +111,8 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "assume nodes whose queries keep coming back visible visible for a while (no query)"},
       {"occluder-fusion", &c.occluder_fusion,
        "HC draws (depth only) what each batch found visible before the next batch's queries"},
+      {"sealed", &c.sealed,
+       "HC skips what is sealed inside closed convex opaque solids (the bars inside concrete), found at start-up"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
   cli.choice<HcTest>("hc-test", &c.test, kHcTests,

@@ -62,6 +62,7 @@ constexpr uint8_t kBackground[3] = {16, 18, 24};
 std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vector<Camera>& path, uint32_t last,
                                          const Options& o, CullStats& last_stats) {
   const Hierarchy& h = ls.hierarchy;
+  const Enclosures sealed = find_enclosures("cull_overview", ls.scene, h);
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
   renderer.set_occluder_offset(true);  // as the switch nodes' OR
@@ -69,8 +70,8 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
   const Viewport vp{o.width, o.height};
-  CullFrame node0(*ctx, renderer, renderables, config, o.hc, vp, "switch node 1");
-  CullFrame node1(*ctx, renderer, renderables, config, o.hc, vp, "switch node 0");
+  CullFrame node0(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 1");
+  CullFrame node1(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 0");
   CullFrame* const nodes[2] = {&node0, &node1};
   std::vector<wire::Message> stream, next;  // HC(f-1)'s messages, as the other node reads them
   for (uint32_t f = 0; f <= last; ++f) {

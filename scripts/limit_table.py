@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""The cluster against the limit (docs/results.md, "cluster / oracle"): for every scene, path and
+viewport given, one after another on the same cameras, at tau 0:
+
+  oracle   a render of exactly the visible objects (render_client --reference --cull none --exact,
+           its oracle_ms column: what no culling can beat on this renderer); the same run's
+           render_ms is brute force (every object, no culling)
+  frustum  render_client --reference --cull frustum (one process, hierarchical frustum culling)
+  cluster  scripts/cluster.sh (two switch nodes and the render client): the frame interval at the
+           render client's display
+
+Repeats run interleaved (oracle frustum cluster, oracle frustum cluster, ...); each figure is the
+median (and p99) of a run's frames from frame --skip on, then the median over the repeats. Wrong
+pixels: the cluster's frames of one more run with images against brute force's (frame_diff).
+PVS/exact: the cluster's triangles per frame over the exactly visible ones. Prints a markdown
+table and writes it to OUT/limit.md (rows also in OUT/limit.csv). Asserts nothing about speed.
+
+  scripts/limit_table.py --scene S --path P [--scene S2 --path P2 ...] [--sizes 512,1024]
+                         [--repeats N] [--skip K] [--out DIR]
+"""
+import argparse
+import csv
+import os
+import re
+import statistics
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+BIN = os.environ.get("OCC_BIN", os.path.join(ROOT, "build", "bin"))
+
+
+def die(msg):
+    sys.exit(f"limit_table: error: {msg}")
+
+
+def run(cmd, log):
+    with open(log, "w") as f:
+        p = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
+    if p.returncode != 0:
+        die(f"{' '.join(cmd)} failed (exit {p.returncode}); its output: {log}")
+
+
+def column(stats, name, skip):
+    with open(stats) as f:
+        rows = list(csv.DictReader(f))
+    if len(rows) <= skip:
+        die(f"{stats}: {len(rows)} frames, fewer than --skip {skip} + 1")
+    if name not in rows[0]:
+        die(f"{stats}: no column {name}")
+    return [float(r[name]) for r in rows[skip:]]
+
+
+def p99(v):
+    s = sorted(v)
+    return s[min(len(s) - 1, int(0.99 * len(s)))]
+
+
+def measure(scene, path, size, args, out):
+    view = ["--width", str(size), "--height", str(size)]
+    ref = [os.path.join(BIN, "render_client"), "--reference", "--scene", scene, "--path", path, *view]
+    runs = {"oracle": [], "none": [], "frustum": [], "cluster": []}
+    for r in range(args.repeats):
+        d = os.path.join(out, f"r{r}")
+        os.makedirs(d, exist_ok=True)
+        print(f"limit_table: {scene} {path} {size}^2, repeat {r + 1} of {args.repeats}", file=sys.stderr)
+        run(ref + ["--cull", "none", "--exact", "--no-images", "--out", f"{d}/none"], f"{d}/none.log")
+        run(ref + ["--cull", "frustum", "--no-images", "--out", f"{d}/frustum"], f"{d}/frustum.log")
+        run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--no-images",
+             "--on-node-failure", "exit", "--out", f"{d}/cluster", *args.cluster_args], f"{d}/cluster.log")
+        runs["oracle"].append(column(f"{d}/none/stats.csv", "oracle_ms", args.skip))
+        runs["none"].append(column(f"{d}/none/stats.csv", "render_ms", args.skip))
+        runs["frustum"].append(column(f"{d}/frustum/stats.csv", "render_ms", args.skip))
+        runs["cluster"].append(column(f"{d}/cluster/stats.csv", "frame_interval_ms", args.skip))
+    exact_tri = statistics.mean(column(f"{out}/r0/none/stats.csv", "exact_triangles", args.skip))
+    drawn_tri = statistics.mean(column(f"{out}/r0/cluster/stats.csv", "triangles", args.skip))
+    # Wrong pixels: one more run of each with images (PNG writing stays out of the timed runs).
+    run(ref + ["--cull", "none", "--out", f"{out}/frames_none"], f"{out}/frames_none.log")
+    run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--on-node-failure", "exit",
+         "--out", f"{out}/frames_cluster", *args.cluster_args], f"{out}/frames_cluster.log")
+    diff = subprocess.run([os.path.join(BIN, "frame_diff"), f"{out}/frames_none", f"{out}/frames_cluster"],
+                          capture_output=True, text=True)
+    m = re.search(r"differing_pixels=(\d+)", diff.stdout)
+    if not m:
+        die(f"frame_diff printed no summary: {diff.stdout[-300:]} {diff.stderr[-300:]}")
+    for d in ("frames_none", "frames_cluster"):
+        for f in os.listdir(f"{out}/{d}"):
+            if f.endswith(".png"):
+                os.remove(f"{out}/{d}/{f}")
+    fig = {k: (statistics.median(statistics.median(v) for v in vs), statistics.median(p99(v) for v in vs))
+           for k, vs in runs.items()}
+    return {"scene": scene, "path": path, "size": size, "repeats": args.repeats,
+            **{f"{k}_median_ms": round(v[0], 2) for k, v in fig.items()},
+            **{f"{k}_p99_ms": round(v[1], 2) for k, v in fig.items()},
+            "cluster_over_oracle": round(fig["cluster"][0] / fig["oracle"][0], 2),
+            "cluster_over_best_single": round(fig["cluster"][0] / min(fig["none"][0], fig["frustum"][0]), 2),
+            "pvs_over_exact": round(drawn_tri / exact_tri, 2) if exact_tri > 0 else float("nan"),
+            "wrong_pixels": int(m.group(1))}
+
+
+def markdown(rows):
+    out = ["| scene, path | size | oracle ms | brute force ms | frustum ms | cluster ms | cluster / oracle "
+           "| cluster / min(brute, frustum) | PVS / exact | wrong px |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        mp = lambda k: f"{r[k + '_median_ms']:.2f} / {r[k + '_p99_ms']:.2f}"
+        out.append(f"| {r['scene']} {r['path']} | {r['size']}^2 | {mp('oracle')} | {mp('none')} | {mp('frustum')} "
+                   f"| {mp('cluster')} | {r['cluster_over_oracle']:.2f} | {r['cluster_over_best_single']:.2f} "
+                   f"| {r['pvs_over_exact']:.2f} | {r['wrong_pixels']} |")
+    return "\n".join(out)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scene", action="append", required=True, help="a --scene spec (repeat with --path)")
+    ap.add_argument("--path", action="append", required=True, help="its camera path (one per --scene)")
+    ap.add_argument("--sizes", default="512,1024", help="viewport sizes, square (default 512,1024)")
+    ap.add_argument("--repeats", type=int, default=1, help="interleaved runs of each (default 1)")
+    ap.add_argument("--skip", type=int, default=3, help="frames left out at the start (default 3)")
+    ap.add_argument("--out", default="out/limit", help="output folder (default out/limit)")
+    ap.add_argument("cluster_args", nargs="*", help="after --: more scripts/cluster.sh flags")
+    args = ap.parse_args()
+    if len(args.scene) != len(args.path):
+        die(f"{len(args.scene)} --scene but {len(args.path)} --path: give one path per scene")
+    if args.repeats < 1 or args.skip < 0:
+        die("--repeats must be >= 1 and --skip >= 0")
+    try:
+        sizes = [int(s) for s in args.sizes.split(",")]
+    except ValueError:
+        die(f"--sizes '{args.sizes}': expected sizes like 512,1024")
+    for b in ("render_client", "switch_node", "frame_diff"):
+        if not os.access(os.path.join(BIN, b), os.X_OK):
+            die(f"{BIN}/{b} not found: build first (scripts/build.sh)")
+    os.environ.setdefault("LP_NUM_THREADS", "1")
+    rows = []
+    for i, (scene, path) in enumerate(zip(args.scene, args.path)):
+        for size in sizes:
+            rows.append(measure(scene, path, size, args, os.path.join(args.out, f"{i}_{size}")))
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "limit.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    table = markdown(rows)
+    with open(os.path.join(args.out, "limit.md"), "w") as f:
+        f.write(table + "\n")
+    print(table)
+
+
+if __name__ == "__main__":
+    main()
