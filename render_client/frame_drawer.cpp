@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "common/cull/culling.hpp"
+#include "common/gl/flush_schedule.hpp"
 #include "common/gl/scene_renderer.hpp"
 
 namespace occ {
@@ -27,6 +28,14 @@ FrameDrawer::Drawn FrameDrawer::draw(const Camera& cam, const std::vector<uint32
   Drawn d;
   d.frustum_set = frustum_set;
   d.two_pass = frustum_set && gate_.occlusion(frames_);
+  // Frames of frustum sets leave the switch nodes idle (no OR; HC only frustum-culls): the render
+  // client has the cores, so its draw is cut into parts as the single-process renderers' are
+  // (llvmpipe rasterises one part while the next is binned); frames with occlusion keep the
+  // cluster's fixed parts (flush_schedule.hpp). Two passes set their own.
+  if (frustum_set)
+    g_.renderer->set_flush_automatic();
+  else
+    g_.renderer->set_flush_triangles(FlushSchedule::kMaxPart);
   if (d.two_pass) {
     // After frames the switch culled, pass 1 starts from its last visible set; after frames
     // drawn in one pass, from everything.
