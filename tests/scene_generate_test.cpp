@@ -165,14 +165,17 @@ TEST(Specs, BadSpecsSayWhatIsWrong) {
 // left out; every triangle with area stays, in order, however thin or small.
 TEST(Mesh, ZeroAreaTrianglesAreLeftOutAndCounted) {
   Mesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {1e-7f, 1e-7f, 0}, {1e6f, 1, 0}, {1e6f, 1.0625f, 0}};
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {1e-7f, 1e-7f, 0}, {1e6f, 1, 0}, {1e6f, 1.0625f, 0},
+                 {1e-3f, 0.5f, 0}, {1e6f, 17, 0}};
   m.indices = {0, 1, 2,   // a triangle
                0, 0, 1,   // repeated index
                0, 1, 3,   // collinear along x
-               0, 4, 2,   // tiny but not zero
+               0, 4, 2,   // 1e-7 high over a unit edge: under 8 float ulps of its coordinates
                1, 3, 1,   // repeated index
-               0, 5, 6};  // a sliver 1e6 long and 1/16 wide
-  EXPECT_EQ(drop_zero_area_triangles(m), 3u);
-  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 4, 2, 0, 5, 6}));
+               0, 5, 6,   // a sliver 1e6 long and 1/16 wide: one ulp at 1e6
+               0, 7, 2,   // 1e-3 high over a unit edge: kept
+               0, 5, 8};  // 1e6 long and 16 wide: 16 ulps at 1e6, kept
+  EXPECT_EQ(drop_zero_area_triangles(m), 5u);
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 7, 2, 0, 5, 8}));
   EXPECT_EQ(drop_zero_area_triangles(m), 0u);
 }

@@ -3,6 +3,7 @@
 #include <meshoptimizer.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <stdexcept>
 
@@ -124,13 +125,21 @@ void compute_normals(Mesh& mesh) {
 }
 
 uint64_t drop_zero_area_triangles(Mesh& mesh) {
+  constexpr double kCollinearUlps = 8;
   size_t kept = 0;
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
-    // Float differences and their products are exact in double: zero only when collinear.
+    // Float differences and their products are exact in double: zero only when collinear. The
+    // height over the longest edge, |n| / longest, below a few float ulps of the coordinates is
+    // rounding noise: collinear at the precision the positions are stored in.
     const glm::dvec3 pa(mesh.positions[a]), pb(mesh.positions[b]), pc(mesh.positions[c]);
     const glm::dvec3 n = glm::cross(pb - pa, pc - pa);
     if (n.x == 0 && n.y == 0 && n.z == 0) continue;
+    const double longest = std::sqrt(std::max({glm::dot(pb - pa, pb - pa), glm::dot(pc - pb, pc - pb),
+                                               glm::dot(pa - pc, pa - pc)}));
+    double magnitude = 0;
+    for (const glm::dvec3& p : {pa, pb, pc}) magnitude = std::max({magnitude, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    if (glm::length(n) <= longest * kCollinearUlps * magnitude * 0x1p-23) continue;
     mesh.indices[kept++] = a;
     mesh.indices[kept++] = b;
     mesh.indices[kept++] = c;

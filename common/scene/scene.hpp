@@ -122,7 +122,9 @@ struct Scene {
 void compute_normals(Mesh& mesh);
 
 // Removes the triangles whose three positions are collinear (repeated indices, coincident or
-// collinear vertices: an exactly zero cross product) and returns how many. They cover no area, yet
+// collinear vertices: an exactly zero cross product), or collinear at the precision of their float
+// positions (their height over the longest edge at most 8 ulps of their largest coordinate: a
+// 5 mm triangle 2 nm high, as exports have them), and returns how many. They cover no area, yet
 // a GPU may rasterise a pixel of one after rounding its transformed vertices, with any depth
 // (llvmpipe: the near plane's, metres in front of the triangle): no culling can foresee that
 // pixel, so brute force and a culled frame would differ there. Real exports have such triangles.

@@ -66,7 +66,7 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   std::cerr << buf << "\n";
   if (ls.scene.zero_area_triangles > 0)
     std::cerr << who << ": " << ls.scene.zero_area_triangles
-              << " zero-area triangles of the file left out (collinear vertices: nothing to draw)\n";
+              << " zero-area triangles of the file left out (collinear vertices, exactly or at float precision: nothing to draw)\n";
   if (use_cache && !from_cache) {
     const auto t3 = std::chrono::steady_clock::now();
     if (auto err = save_scene_cache(cache_path, cache_key, ls.scene, ls.hierarchy)) {
