@@ -91,6 +91,25 @@ TEST(OcclusionGate, NeverTriesWhereOcclusionCullsMostTriangles) {
   EXPECT_EQ(s.off_frames, 0u);
 }
 
+// Where occlusion culls half the triangles (the frustum set 2.1x the visible set), frames
+// without it are still measured, a little later: kept where faster, given up where slower.
+TEST(OcclusionGate, TriesLaterWhereOcclusionCullsSomeButNotMost) {
+  for (bool off_faster : {true, false}) {
+    OcclusionGate g{{}};
+    Sim s{[off_faster](uint32_t, bool occ) { return occ == off_faster ? 18.0 : 13.0; }, 1000, 2100};
+    s.run(g, 400);
+    size_t first_off = 0;
+    while (first_off < s.shown.size() && s.shown[first_off]) ++first_off;
+    EXPECT_GT(first_off, 8u) << "not at once";
+    EXPECT_LT(first_off, 40u) << "but soon";
+    EXPECT_GE(g.trials(), 1u);
+    if (off_faster)
+      EXPECT_GT(s.off_frames, 300u);
+    else
+      EXPECT_LT(s.off_frames, 80u);
+  }
+}
+
 TEST(OcclusionGate, AViewWhereCullingPaysEndsFramesWithoutOcclusionAtOnce) {
   OcclusionGate g{{}};
   // Frames without occlusion are faster until frame 200, when the view turns to where culling

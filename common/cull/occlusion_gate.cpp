@@ -75,10 +75,13 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   }
   if (frustum_triangles && wants_frustum_triangles()) {
     const double ratio = double(*frustum_triangles) / double(std::max<uint64_t>(drawn_triangles, 1));
-    if (ratio < o_.try_below)
+    if (ratio < o_.try_below || (ratio < o_.try_eventually_below && deferred_ >= o_.deferrals)) {
+      deferred_ = 0;
       enter(State::trial_off);
-    else  // culling pays on this view: look again later (much later where it pays much)
+    } else {  // culling pays on this view: look again later (much later where it pays much)
+      deferred_ += ratio < o_.try_eventually_below;
       next_trial_ = n_ + o_.window * (ratio > 2 * o_.try_below ? 4 : 1);
+    }
   }
   if (!settled) return;
   const double med_on = median(on_), med_off = median(off_);

@@ -6,7 +6,8 @@
 // of the three processes (one machine with two cores, three machines) without a model of it:
 //   - frames start with occlusion;
 //   - while occlusion culls little (the frustum set's triangles are fewer than try_below x the
-//     visible set's; checked from the first frame on), a trial runs frames without it (the render
+//     visible set's, checked from the first frame on; or fewer than try_eventually_below x, after
+//     `deferrals` such checks), a trial runs frames without it (the render
 //     client then culls the frustum sets itself where that pays: TwoPassDrawer,
 //     common/gl/two_pass.hpp); after `settle` frames (the pipeline's change of mode) `window`
 //     frames are measured, and the mode with the lower median interval, by `margin`, is kept (a
@@ -45,6 +46,12 @@ class OcclusionGate {
     // otherwise spend a third of it waiting).
     uint32_t trial_after = 0;
     double try_below = 1.6;
+    // Below this ratio (but not under try_below) a trial still comes after `deferrals` checks
+    // found culling paying: it must be measured, not assumed (the engine at 1024^2: the frustum
+    // set 2.1x the visible set, yet frames of it faster on two cores). At or above it a trial
+    // would risk a run of heavy frames (issue 15).
+    double try_eventually_below = 2.5;
+    uint32_t deferrals = 2;
     double margin = 0.95;
     uint32_t first_hold = 32, max_hold = 1024;
     double give_up = 1.5;
@@ -89,6 +96,7 @@ class OcclusionGate {
   uint32_t fresh_ = 0;           // samples of the measured mode since the state began
   uint32_t slow_ = 0;            // consecutive settled frames without occlusion over give_up x median
   uint32_t next_trial_ = 0;      // frame count before which no trial starts
+  uint32_t deferred_ = 0;        // checks since the last trial that found try_below <= ratio < try_eventually_below
   uint32_t off_until_ = 0;       // state off: its end
   uint32_t on_wait_ = 0, off_hold_ = 0;  // current back-off of failed trials / hold of won ones
   uint32_t trials_ = 0, frames_off_ = 0;
