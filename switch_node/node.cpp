@@ -427,7 +427,11 @@ class SwitchNode {
   explicit SwitchNode(const NodeOptions& o) : o_(o), who_("switch_node " + std::to_string(o.id)) {}
 
   int run() {
-    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height);
+    Enclosures sealed;  // found while the geometry is still on the CPU (the upload releases it)
+    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
+      if (o_.hc.sealed) sealed = find_enclosures(who_, ls.scene, ls.hierarchy);
+    });
+    g_.sealed = std::move(sealed);
     g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
     if (o_.hc.test == HcTest::by_renderer)
       std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))

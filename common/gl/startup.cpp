@@ -49,7 +49,6 @@ SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool w
   if (before_gl) before_gl(*s.loaded);
   LodData* lod = s.loaded->lod.get();
   s.renderables = std::make_unique<Renderables>(s.loaded->hierarchy, lod);
-  s.sealed = find_enclosures(who, s.loaded->scene, s.loaded->hierarchy);
   s.ctx = start_gl(who, backend, width, height);
   // The driver keeps its own copy of the geometry: the CPU arrays are freed as they are uploaded.
   const double t0 = now_ms();

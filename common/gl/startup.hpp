@@ -34,7 +34,7 @@ Enclosures find_enclosures(const std::string& who, const Scene& scene, const Hie
 struct SceneGl {
   std::unique_ptr<LoadedScene> loaded;
   std::unique_ptr<Renderables> renderables;  // with the LOD data when loaded with LODs
-  Enclosures sealed;                         // items sealed inside solids (found before the upload)
+  Enclosures sealed;                         // items sealed inside solids (the switch nodes fill it before the upload)
   std::unique_ptr<GlContext> ctx;
   std::unique_ptr<SceneRenderer> renderer;
   const Scene& scene() const { return loaded->scene; }
@@ -43,8 +43,8 @@ struct SceneGl {
 };
 
 // load_and_build(scene, who, with_lod), then `before_gl` (e.g. check the camera path against
-// the scene before paying for a context), the items sealed inside solids (find_enclosures: one
-// line when there are any), then start_gl() and a SceneRenderer (with the LODs).
+// the scene before paying for a context, or find_enclosures while the geometry is on the CPU),
+// then start_gl() and a SceneRenderer (with the LODs), which releases the CPU geometry.
 SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
                        int width, int height, const std::function<void(const LoadedScene&)>& before_gl = nullptr);
 
