@@ -40,7 +40,7 @@ struct CullTotals {
 class CullFrame {
  public:
   // `vp`: the cluster's viewport; `other`: the other node's name, for the stream's errors;
-  // `sealed`: the scene's items sealed inside solids (LoadedScene::enclosures).
+  // `sealed`: the scene's items sealed inside solids (SceneGl::sealed).
   CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
             const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other);
   CullFrame(const CullFrame&) = delete;

@@ -124,14 +124,6 @@ class BoxGrid {
   std::vector<uint32_t> big_;
 };
 
-Aabb world_box(const Aabb& local, const glm::dmat4& t) {
-  Aabb out;
-  for (int i = 0; i < 8; ++i)
-    out.grow(glm::dvec3(t * glm::dvec4(i & 1 ? local.max.x : local.min.x, i & 2 ? local.max.y : local.min.y,
-                                       i & 4 ? local.max.z : local.min.z, 1.0)));
-  return out;
-}
-
 bool strictly_inside(const Aabb& inner, const Aabb& outer) {
   return glm::all(glm::greaterThan(inner.min, outer.min)) && glm::all(glm::lessThan(inner.max, outer.max));
 }
@@ -146,7 +138,7 @@ Enclosures Enclosures::find(const Scene& scene, const Hierarchy& h) {
   for (uint32_t o = 0; o < scene.objects.size(); ++o) {
     const Mesh& m = scene.meshes[scene.objects[o].mesh];
     if (m.released || m.indices.empty() || m.indices.size() / 3 > kMaxSolidTriangles) continue;
-    candidates.emplace_back(world_box(m.box(), scene.objects[o].transform), o);
+    candidates.emplace_back(m.box().transformed(scene.objects[o].transform), o);
   }
   if (candidates.empty()) return e;
   std::vector<Aabb> object_box(scene.objects.size());

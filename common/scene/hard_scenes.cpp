@@ -10,11 +10,6 @@
 namespace occ {
 namespace {
 
-uint32_t add_mesh(Scene& s, Mesh m) {
-  s.meshes.push_back(std::move(m));
-  return uint32_t(s.meshes.size() - 1);
-}
-
 void place(Scene& s, uint32_t mesh, const glm::dvec3& at, const std::string& name,
            const glm::dvec3& scale = glm::dvec3(1.0)) {
   s.objects.push_back(Object{mesh, glm::scale(glm::translate(glm::dmat4(1.0), at), scale), name});

@@ -5,6 +5,11 @@
 
 namespace occ {
 
+uint32_t add_mesh(Scene& s, Mesh m) {
+  s.meshes.push_back(std::move(m));
+  return uint32_t(s.meshes.size() - 1);
+}
+
 void add_grid(Mesh& m, glm::vec3 origin, glm::vec3 u, glm::vec3 v, int rows, int cols) {
   const glm::vec3 normal = glm::normalize(glm::cross(u, v));
   const auto base = uint32_t(m.positions.size());

@@ -7,6 +7,9 @@
 
 namespace occ {
 
+// Appends `m` to the scene's meshes; returns its index.
+uint32_t add_mesh(Scene& s, Mesh m);
+
 // Appends a rows x cols grid of quads spanning origin + [0,1] u + [0,1] v to m, front (CCW) side
 // facing cross(u, v), with that normal at every vertex.
 void add_grid(Mesh& m, glm::vec3 origin, glm::vec3 u, glm::vec3 v, int rows, int cols);

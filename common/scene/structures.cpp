@@ -15,11 +15,6 @@ using glm::dvec3;
 
 constexpr double kPi = 3.14159265358979323846;
 
-uint32_t add_mesh(Scene& s, Mesh m) {
-  s.meshes.push_back(std::move(m));
-  return uint32_t(s.meshes.size() - 1);
-}
-
 void place(Scene& s, uint32_t mesh, const dmat4& transform, std::string name) {
   s.objects.push_back(Object{mesh, transform, std::move(name)});
 }
