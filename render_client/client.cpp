@@ -150,6 +150,8 @@ class Client {
   void draw(Frame& f, const VisibleSet& visible) {
     const Clock::time_point r0 = Clock::now();
     const uint64_t cpu_r0 = process_cpu_us();
+    const GeometryPool* pool = g_.renderer->geometry_pool();
+    const GeometryPool::Stats before = pool ? pool->stats() : GeometryPool::Stats{};
     if (f.served)
       f.ids.assign(visible.ids().begin(), visible.ids().end());
     else
@@ -161,6 +163,10 @@ class Client {
     f.cpu_shown = process_cpu_us();
     f.row.rvg_ms = ms_between(r0, f.shown);
     f.row.rvg_cpu_ms = (f.cpu_shown - cpu_r0) / 1000.0;
+    if (pool) {
+      f.row.geometry_waits = pool->stats().uploads - before.uploads;
+      f.row.geometry_wait_ms = pool->stats().upload_ms - before.upload_ms;
+    }
   }
 
   // The frame to --out and the window.
@@ -249,6 +255,7 @@ class Client {
   void summary() const {
     if (stats_.frames() == 0) return;
     stats_.print(leaf_count_, g_.scene().triangle_count(), receiver_.resyncs(), gate_.frames_off());
+    print_geometry_line(stdout, "render_client", g_.renderer->geometry_pool());
     if (links_.is_switch() && o_.occlusion_gate == OcclusionGate::Policy::automatic && o_.test_alternate == 0)
       std::cerr << "render_client: occlusion gate: " << gate_.describe() << " (frame interval)\n";
     drawer_->print_summary();

@@ -32,6 +32,8 @@ struct FrameStats {
   uint32_t occlusion = 0;  // Camera.occlusion of its camera (0: the frustum set)
   uint32_t two_pass = 0;   // 0: one pass; 1 + redrawn: two passes here
   uint64_t hidden_here = 0;
+  uint64_t geometry_waits = 0;   // pieces this frame's draw uploaded first (--geometry-budget)
+  double geometry_wait_ms = 0;   // and the time that took
   Mode mode = Mode::frustum;
 
   // f(name, value) for every column; `value` a number, or the mode's name (the last column).
@@ -43,7 +45,8 @@ struct FrameStats {
     f("frame_interval_ms", frame_interval_ms); f("hc_cpu_ms", hc_cpu_ms); f("or_cpu_ms", or_cpu_ms);
     f("or_tail_cpu_ms", or_tail_cpu_ms); f("rvg_cpu_ms", rvg_cpu_ms); f("rvg_frame_cpu_ms", rvg_frame_cpu_ms);
     f("or_tail_ms", or_tail_ms); f("camera_gap", camera_gap); f("occlusion", occlusion); f("two_pass", two_pass);
-    f("hidden_here", hidden_here); f("mode", std::string(mode_name(mode)));
+    f("hidden_here", hidden_here); f("geometry_waits", geometry_waits); f("geometry_wait_ms", geometry_wait_ms);
+    f("mode", std::string(mode_name(mode)));
   }
   static std::vector<std::string> columns();  // the header
   void write(FrameOutput& out) const;         // the row

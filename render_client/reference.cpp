@@ -272,6 +272,7 @@ class ReferenceRun {
                 "mtri_per_s=%.2f peak_rss_mb=%ld\n",
                 cull_name(o_.cull), n, total_ms_ / n, frame_ms_[n / 2], 1000.0 * n / total_ms_,
                 double(total_tris_) / n, total_tris_ / total_ms_ / 1000.0, peak_rss_mb());
+    print_geometry_line(stdout, "reference", g_.renderer->geometry_pool());
   }
 
   const ClientOptions& o_;

@@ -394,6 +394,8 @@ class Session {
               << fixed(double(q.pyramid_pixels) / 1e6, 2) << " M pixels of their rectangles) and " << q.shown
               << " shown; of " << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
               << q.builds << " pyramid builds, " << q.refreshes << " refreshes after occluder fusion)\n";
+    std::cerr.flush();
+    print_geometry_line(stderr, who_, g_.renderer->geometry_pool());
     std::cerr << who_ << ": LOD: tau " << o_.config.pixel_error << " px, visible-pixel LOD "
               << (o_.config.visible_pixel_lod ? "on" : "off") << ", front tracking "
               << (o_.config.front_tracking ? "on" : "off") << ": " << t.hlods << " HLODs and " << t.pixel_stops

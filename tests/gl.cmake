@@ -2,7 +2,8 @@
 occ_test(gl_test gl LIBS occ_gl SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/gl_context_test.cpp
   ${CMAKE_CURRENT_SOURCE_DIR}/gl_render_test.cpp
-  ${CMAKE_CURRENT_SOURCE_DIR}/gl_material_test.cpp)
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_material_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_stream_test.cpp)
 
 # PNG files and the frame_diff tool (no GL).
 occ_test(image_test unit LIBS occ_common SOURCES

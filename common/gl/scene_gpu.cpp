@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +14,12 @@
 #include "common/hash.hpp"
 
 namespace occ {
+
+uint32_t gl_detail::pack_rgba8(glm::vec4 c) {
+  uint32_t rgba = 0;
+  for (int k = 0; k < 4; ++k) rgba |= uint32_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f)) << (8 * k);
+  return rgba;
+}
 
 using namespace gl_detail;
 
@@ -30,11 +37,6 @@ glm::vec4 object_color(uint32_t object) {
   return {channel(0), channel(1), channel(2), 1.0f};
 }
 
-uint32_t pack_rgba8(glm::vec4 c) {
-  uint32_t rgba = 0;
-  for (int k = 0; k < 4; ++k) rgba |= uint32_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f)) << (8 * k);
-  return rgba;
-}
 
 // What object o of `scene` draws with: its material's variant bits, texture, face culling and
 // colour (a mild per-object colour without a material).
@@ -46,7 +48,7 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
                              std::to_string(mesh.material) + " of " + std::to_string(scene.materials.size()));
   const Material* mat = scene.material_of(obj.mesh);
   SceneGpu::ObjectLook look;
-  if (!mesh.colors.empty() && mesh.colors.size() == mesh.positions.size()) look.bits |= kVertexColor;
+  if (scene.mesh_has_colors(obj.mesh)) look.bits |= kVertexColor;
   const bool mirrored = glm::determinant(glm::dmat3(obj.transform)) < 0.0;
   if (!mat) {
     look.color = object_color(o);
@@ -59,7 +61,7 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
   if (mat->alpha_mode == AlphaMode::Mask) look.bits |= kMask;
   if (mat->alpha_mode == AlphaMode::Blend) look.bits |= kBlend;
   if (mat->unlit) look.bits |= kUnlit;
-  if (mat->base_color_texture >= 0 && mesh.uvs.size() == mesh.positions.size()) {
+  if (mat->base_color_texture >= 0 && scene.mesh_has_uvs(obj.mesh)) {
     if (size_t(mat->base_color_texture) >= scene.textures.size() ||
         scene.textures[size_t(mat->base_color_texture)].image >= scene.images.size())
       throw std::runtime_error("SceneRenderer: material '" + mat->name + "' has texture " +
@@ -75,20 +77,38 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
 // each mesh's CPU arrays are freed as soon as they are staged, so the CPU geometry shrinks as the
 // driver's copy grows (plant:40: 6.5 GB a process with one buffer and kept arrays, see
 // docs/scale.md).
+// Where each piece goes (SegmentLayout::place): a new segment unless its vertices and indices
+// still fit the current one. The same with or without staging, so streaming keeps the draw order.
+class SegmentLayout {
+ public:
+  explicit SegmentLayout(size_t segment_bytes) : limit_(std::max<size_t>(segment_bytes, 4096)) {}
+  // first_index, base_vertex (within the segment) and segment of nv vertices and ni indices.
+  SceneGpu::ItemDraw place(uint64_t nv, uint64_t ni, uint32_t piece) {
+    if ((nv_ || ni_) && (nv_ + nv) * sizeof(Vertex) + (ni_ + ni) * sizeof(uint32_t) > limit_) {
+      ++segment_;
+      nv_ = ni_ = 0;
+    }
+    if (nv_ + nv > uint64_t(INT32_MAX)) throw std::runtime_error("SceneRenderer: more than 2^31 vertices in a mesh");
+    SceneGpu::ItemDraw at{0, uint32_t(ni_), int32_t(nv_), 0, segment_, piece};
+    nv_ += nv;
+    ni_ += ni;
+    return at;
+  }
+
+ private:
+  const size_t limit_;
+  uint64_t nv_ = 0, ni_ = 0;
+  uint32_t segment_ = 0;
+};
+
 class SegmentStager {
  public:
-  SegmentStager(const GlApi& gl, std::vector<SceneGpu::Segment>& segments, size_t segment_bytes, bool uvs)
-      : gl_(gl), segments_(segments), limit_(std::max<size_t>(segment_bytes, 4096)), with_uvs_(uvs) {}
+  SegmentStager(const GlApi& gl, std::vector<SceneGpu::Segment>& segments, bool uvs)
+      : gl_(gl), segments_(segments), with_uvs_(uvs) {}
 
-  // Starts a new segment unless nv vertices and ni indices still fit the current one; returns
-  // where they go (first_index, base_vertex, segment; index_count and object 0).
-  SceneGpu::ItemDraw make_room(size_t nv, size_t ni) {
-    if ((!vertices.empty() || !indices.empty()) &&
-        (vertices.size() + nv) * sizeof(Vertex) + (indices.size() + ni) * sizeof(uint32_t) > limit_)
-      flush();
-    if (vertices.size() + nv > size_t(INT32_MAX))
-      throw std::runtime_error("SceneRenderer: more than 2^31 vertices in a mesh");
-    return {0, uint32_t(indices.size()), int32_t(vertices.size()), 0, uint32_t(segments_.size())};
+  // Uploads what is staged when the next piece goes to segment s (SegmentLayout).
+  void to_segment(uint32_t s) {
+    if (s != segments_.size()) flush();
   }
   bool with_uvs() const { return with_uvs_; }
   // `bytes` of CPU geometry were freed: the heap gives its pages back now and then.
@@ -129,7 +149,6 @@ class SegmentStager {
 
   const GlApi& gl_;
   std::vector<SceneGpu::Segment>& segments_;
-  const size_t limit_;
   const bool with_uvs_;
   uint64_t freed_since_trim_ = 0;
 };
@@ -197,7 +216,7 @@ struct SceneGpu::Usage {
 SceneGpu::SceneGpu(const GlApi& gl, Scene& scene, const Hierarchy& hierarchy, LodData* lod,
                    const SceneUpload& upload)
     : gl_(gl) {
-  if (scene.geometry_released())
+  if (scene.geometry_released() && !scene.mapped)
     throw std::logic_error("SceneRenderer: the geometry of " + scene.source + " was released after an upload");
   Usage use = read_objects(scene, hierarchy);
   upload_geometry(scene, hierarchy, lod, upload, use);
@@ -256,22 +275,32 @@ void SceneGpu::upload_geometry(Scene& scene, const Hierarchy& hierarchy, LodData
         lod_node.push_back(id);
       }
     for (const LodMesh* m : lod_meshes)
-      if (m->released) throw std::logic_error("SceneRenderer: the LOD data's geometry was released");
+      if (m->released && !lod->mapped()) throw std::logic_error("SceneRenderer: the LOD data's geometry was released");
   }
-  SegmentStager st(gl_, segments, upload.segment_bytes, use.any_textured);
+  const bool stream = streams(scene, lod, upload);
+  std::optional<SegmentStager> st;
+  if (!stream) st.emplace(gl_, segments, use.any_textured);
+  SegmentLayout layout(upload.segment_bytes);
+  // Where a piece goes: its logical segment; streaming, first index and base vertex within the piece.
+  auto place = [&](uint64_t nv, uint64_t ni, uint32_t piece) {
+    ItemDraw at = layout.place(nv, ni, piece);
+    if (stream) at.first_index = 0, at.base_vertex = 0;
+    else st->to_segment(at.segment);
+    return at;
+  };
   std::vector<ItemDraw> mesh_at(scene.meshes.size());  // where each scene mesh starts
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
     Mesh& mesh = scene.meshes[m];
-    mesh_at[m] = st.make_room(mesh.positions.size(), mesh.indices.size());
-    stage_mesh(st, mesh, use.mesh_textured[m] != 0, upload.release);
+    mesh_at[m] = place(mesh.vertex_count(), mesh.triangle_count() * 3, uint32_t(m));
+    if (!stream) stage_mesh(*st, mesh, use.mesh_textured[m] != 0, upload.release);
   }
   if (lod) {
     hlod_of_node.assign(hierarchy.size(), kNoNode);
     for (size_t k = 0; k < lod_meshes.size(); ++k) {
       const LodMesh& m = *lod_meshes[k];
-      ItemDraw d = st.make_room(m.positions.size(), m.indices.size());
-      d.index_count = uint32_t(m.indices.size());
-      stage_lod_mesh(st, m, looks);
+      ItemDraw d = place(m.vertex_count(), m.triangles() * 3, uint32_t(scene.meshes.size() + k));
+      d.index_count = uint32_t(m.triangles() * 3);
+      if (!stream) stage_lod_mesh(*st, m, looks);
       if (lod_node[k] == kNoNode) {
         lod_draws.push_back(d);
       } else {
@@ -287,23 +316,25 @@ void SceneGpu::upload_geometry(Scene& scene, const Hierarchy& hierarchy, LodData
         use.object_box.push_back(hierarchy.node(id).box);
         hlod_draws.push_back(d);
       }
-      if (upload.release) {
+      if (upload.release && !stream) {
         const uint64_t bytes = m.positions.capacity() * 24 + m.objects.capacity() * 4 + m.indices.capacity() * 4;
         lod->release(m);
-        st.released(bytes);
+        st->released(bytes);
       }
     }
     item_slot = lod->item_slots();
   }
-  st.finish();
-  if (upload.release) ::malloc_trim(0);
+  if (st) st->finish();
+  if (upload.release && !stream) ::malloc_trim(0);
   item_draws.reserve(hierarchy.items().size());
   for (const Item& it : hierarchy.items()) {
     const uint32_t mesh = scene.objects[it.object].mesh;
     const MeshCluster& cl = scene.meshes[mesh].clusters[it.cluster];
     const ItemDraw& at = mesh_at[mesh];
-    item_draws.push_back({cl.index_count, at.first_index + cl.first_index, at.base_vertex, it.object, at.segment});
+    item_draws.push_back(
+        {cl.index_count, at.first_index + cl.first_index, at.base_vertex, it.object, at.segment, at.piece});
   }
+  if (stream) start_pool(scene, lod, std::move(lod_meshes), upload, use.mesh_textured, use.any_textured);
 }
 
 // The variants the scene uses, compiled: full detail with its materials; LODs untextured;
@@ -369,6 +400,12 @@ void SceneGpu::create_vertex_array(bool textured) {
 }
 
 void SceneGpu::bind_segment(uint32_t s) const {
+  if (pool) {
+    gl_.VertexArrayVertexBuffer(vao, 0, pool->buffer(), 0, sizeof(Vertex));
+    gl_.VertexArrayElementBuffer(vao, pool->buffer());
+    if (pool->uv_buffer()) gl_.VertexArrayVertexBuffer(vao, 2, pool->uv_buffer(), 0, sizeof(glm::vec2));
+    return;
+  }
   const Segment& sg = segments.at(s);
   gl_.VertexArrayVertexBuffer(vao, 0, sg.vertices, 0, sizeof(Vertex));
   gl_.VertexArrayElementBuffer(vao, sg.indices);

@@ -10,11 +10,13 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "common/gl/geometry_pool.hpp"
 #include "common/gl/gl_api.hpp"
 #include "common/gl/scene_shaders.hpp"
 #include "common/scene/hierarchy.hpp"
@@ -22,6 +24,10 @@
 #include "common/scene/scene.hpp"
 
 namespace occ {
+
+namespace gl_detail {
+uint32_t pack_rgba8(glm::vec4 c);  // RGBA8, r in the low byte
+}  // namespace gl_detail
 
 // How the geometry reaches GL: in segments of about segment_bytes (vertices + indices), each
 // its own vertex and index buffer, staged on the CPU and uploaded when full, never the whole
@@ -32,18 +38,27 @@ namespace occ {
 // what stays on the CPU is what culling needs (objects, clusters and their boxes, triangle
 // counts, the LOD errors and tables). start_scene_gl does this for the processes. Draws keep
 // their order; a run of one batch key is split where the segment changes.
+//
+// With a budget (budget_bytes > 0) the geometry streams instead (GeometryPool): where the scene
+// was loaded lazily (Scene::mapped, LodData::mapped: its arrays in the mapped caches), or where
+// it is larger than the budget (then from the CPU copies, which stay). Nothing is uploaded at
+// construction unless it all fits (then all of it is, at once); every draw names its piece and
+// the renderer makes pieces resident before it draws them. The draw order is unchanged: each
+// draw keeps the segment the upload above would have given it (its logical segment).
 struct SceneUpload {
   size_t segment_bytes = size_t(64) << 20;
   bool release = false;
+  uint64_t budget_bytes = 0;  // 0: everything resident (uploaded here)
 };
 
 class SceneGpu {
  public:
   struct ItemDraw {
-    uint32_t index_count, first_index;  // first_index, base_vertex: within its segment
-    int32_t base_vertex;
+    uint32_t index_count, first_index;  // first_index, base_vertex: within its segment (streaming:
+    int32_t base_vertex;                // within its piece; the pool adds where the piece is)
     uint32_t object;
     uint32_t segment;
+    uint32_t piece;                     // scene mesh, then LOD meshes in upload order
   };
   // A piece of the geometry upload: its own vertex, index (and uv) buffers.
   struct Segment {
@@ -80,8 +95,10 @@ class SceneGpu {
   SceneGpu(const SceneGpu&) = delete;
   SceneGpu& operator=(const SceneGpu&) = delete;
 
-  // Binds segment s's buffers to the vertex array.
+  // Binds segment s's buffers to the vertex array (streaming: the pool's arena).
   void bind_segment(uint32_t s) const;
+  // The segment whose buffers draws of logical segment s read (streaming: always 0, the arena).
+  uint32_t physical_segment(uint32_t s) const { return pool ? 0 : s; }
   // Binds scene texture `texture`'s image and sampler to texture unit 0.
   void bind_texture(size_t texture) const;
   const Program& program(DrawMode mode, unsigned bits) const { return programs[int(mode)][bits]; }
@@ -98,7 +115,8 @@ class SceneGpu {
   std::vector<uint32_t> hlod_of_node;    // per node: HLOD index or kNoNode
   Program programs[3][gl_detail::kVariants];  // [mode][variant bits]; id 0 = not compiled
   GLuint vao = 0;
-  std::vector<Segment> segments;         // the geometry, in upload order (at least one)
+  std::vector<Segment> segments;         // the geometry, in upload order (at least one; streaming: none)
+  std::unique_ptr<GeometryPool> pool;    // streaming only
   bool has_blended = false;
   std::string variants;                  // e.g. "shaded: plain, blended; depth: plain; ids: plain"
 
@@ -107,6 +125,12 @@ class SceneGpu {
   Usage read_objects(const Scene& scene, const Hierarchy& hierarchy);
   void upload_geometry(Scene& scene, const Hierarchy& hierarchy, LodData* lod, const SceneUpload& upload,
                        Usage& use);
+  // Streaming: the pool over every piece (scene meshes, then lod_meshes), with the loader that
+  // reads a piece from the mapped cache or the CPU copy (scene_gpu_stream.cpp).
+  void start_pool(const Scene& scene, const LodData* lod, std::vector<const LodMesh*> lod_meshes,
+                  const SceneUpload& upload, std::vector<uint8_t> mesh_textured, bool any_textured);
+  // Whether the scene streams under upload's budget.
+  static bool streams(const Scene& scene, const LodData* lod, const SceneUpload& upload);
   void compile_variants(const Scene& scene, const Hierarchy& hierarchy, const Usage& use);
   void create_vertex_array(bool textured);
   void upload_textures(const Scene& scene, const std::vector<uint8_t>& used_texture);

@@ -273,9 +273,13 @@ DrawStats SceneRenderer::draw_blended() {
 void SceneRenderer::upload_draws(std::span<const Pending> draws) {
   records_.clear();
   commands_.clear();
+  const GeometryPool* pool = gpu_.pool.get();
   for (const Pending& p : draws) {
     records_.push_back({object_matrices(p.draw.object), p.id_plus_one});
-    commands_.push_back({p.draw.index_count, 1, p.draw.first_index, p.draw.base_vertex, uint32_t(commands_.size())});
+    uint32_t first = p.draw.first_index;
+    int32_t base = p.draw.base_vertex;
+    if (pool) first += pool->first_index(p.draw.piece), base += pool->base_vertex(p.draw.piece);
+    commands_.push_back({p.draw.index_count, 1, first, base, uint32_t(commands_.size())});
   }
   // Buffers keep their storage between calls; they only grow (never a per-frame allocation).
   const size_t record_bytes = records_.size() * sizeof(DrawRecord);
@@ -292,6 +296,7 @@ void SceneRenderer::upload_draws(std::span<const Pending> draws) {
     indirect_capacity_ = std::max(command_bytes + command_bytes / 2, size_t(16) << 10);
     gl_.CreateBuffers(1, &indirect_buf_);
     gl_.NamedBufferStorage(indirect_buf_, GLsizeiptr(indirect_capacity_), nullptr, GL_DYNAMIC_STORAGE_BIT);
+    gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);  // streaming uploads between a call's windows
   }
   gl_.NamedBufferSubData(record_buf_, 0, GLsizeiptr(record_bytes), records_.data());
   gl_.NamedBufferSubData(indirect_buf_, 0, GLsizeiptr(command_bytes), commands_.data());
@@ -308,7 +313,26 @@ void SceneRenderer::draw_runs(std::span<const Pending> draws, size_t first, size
   }
 }
 
+void SceneRenderer::draw_range(std::span<const Pending> draws, size_t first, size_t last, Mode mode,
+                               RunState& bound) {
+  if (!gpu_.pool) {
+    draw_runs(draws, first, last, mode, bound);
+    return;
+  }
+  GeometryPool& pool = *gpu_.pool;
+  for (size_t b = first; b < last;) {
+    pool.begin_window();
+    size_t e = b;
+    while (e < last && pool.acquire(draws[e].draw.piece)) ++e;  // e > b: a fresh window fits one
+    if (e < last) pool.count_extra_window();
+    upload_draws(draws.subspan(b, e - b));
+    draw_runs(draws.subspan(b, e - b), 0, e - b, mode, bound);
+    b = e;
+  }
+}
+
 void SceneRenderer::bind_run(uint64_t key, uint32_t segment, Mode mode, RunState& bound) {
+  segment = gpu_.physical_segment(segment);
   if (segment != bound.segment) {
     gpu_.bind_segment(segment);
     bound.segment = segment;
@@ -359,7 +383,7 @@ void SceneRenderer::reset_cull(const RunState& bound) {
 }
 
 void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool blended) {
-  upload_draws(draws);
+  if (!gpu_.pool) upload_draws(draws);  // streaming: per window (draw_range)
   uint64_t triangles = 0;
   for (const Pending& p : draws) triangles += p.draw.index_count / 3;
   flush_.begin_call(triangles);
@@ -381,7 +405,7 @@ void SceneRenderer::draw_batches(std::span<const Pending> draws, Mode mode, bool
   gl_.BindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect_buf_);
   RunState bound;
   bound.segment = gpu_.segments.size() > 1 ? ~0u : 0;  // bound at construction
-  draw_runs(draws, 0, draws.size(), mode, bound);
+  draw_range(draws, 0, draws.size(), mode, bound);
   // Leave the defaults for other GL users (BoxQuerier, HZB readback).
   if (offset) gl_.Disable(GL_POLYGON_OFFSET_FILL);  // never on query boxes or shaded frames
   reset_cull(bound);

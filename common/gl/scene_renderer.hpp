@@ -188,6 +188,8 @@ class SceneRenderer {
 
   // The scene's shader variants, e.g. "shaded: plain, blended; depth: plain; ids: plain".
   const std::string& variants() const { return gpu_.variants; }
+  // Streaming (SceneUpload::budget_bytes): the pool, with what streaming has cost; else null.
+  const GeometryPool* geometry_pool() const { return gpu_.pool.get(); }
   bool has_blended() const { return gpu_.has_blended; }
 
  private:
@@ -233,6 +235,9 @@ class SceneRenderer {
   void upload_draws(std::span<const Pending> draws);  // draw i = record i = command i
   // Draws uploaded draws [first, last) in runs of equal key and segment.
   void draw_runs(std::span<const Pending> draws, size_t first, size_t last, Mode mode, RunState& bound);
+  // draw_runs over [first, last); streaming, in windows whose pieces are resident together
+  // (GeometryPool), each window's draws uploaded before it is drawn. Same order either way.
+  void draw_range(std::span<const Pending> draws, size_t first, size_t last, Mode mode, RunState& bound);
   // Binds what draws of batch key `key` in segment `segment` need, where `bound` differs.
   void bind_run(uint64_t key, uint32_t segment, Mode mode, RunState& bound);
   // Uploaded draws [first, last) in indirect calls cut where the flush schedule says.

@@ -54,7 +54,7 @@ void SceneRenderer::query_blended_items(std::span<const uint32_t> items, std::sp
 }
 
 void SceneRenderer::query_pending(std::span<const GLuint> queries, GLenum depth_func) {
-  upload_draws(pending_);
+  if (!gpu_.pool) upload_draws(pending_);  // streaming: per window (draw_range)
   flush_.begin_queries();
   gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
   gl_.DepthMask(GL_FALSE);
@@ -67,7 +67,7 @@ void SceneRenderer::query_pending(std::span<const GLuint> queries, GLenum depth_
   size_t b = 0;
   for (size_t k = 0; k < queries.size(); ++k) {
     gl_.BeginQuery(GL_SAMPLES_PASSED, queries[k]);
-    draw_runs(pending_, b, query_ends_[k], Mode::DepthOnly, bound);
+    draw_range(pending_, b, query_ends_[k], Mode::DepthOnly, bound);
     gl_.EndQuery(GL_SAMPLES_PASSED);
     b = query_ends_[k];
   }

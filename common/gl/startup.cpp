@@ -52,11 +52,13 @@ SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool w
   s.ctx = start_gl(who, backend, width, height);
   // The driver keeps its own copy of the geometry: the CPU arrays are freed as they are uploaded.
   const double t0 = now_ms();
-  s.renderer = std::make_unique<SceneRenderer>(*s.ctx, s.loaded->scene, s.loaded->hierarchy, lod,
-                                               SceneRenderer::Upload{.release = true});
+  s.renderer = std::make_unique<SceneRenderer>(
+      *s.ctx, s.loaded->scene, s.loaded->hierarchy, lod,
+      SceneRenderer::Upload{.release = true, .budget_bytes = geometry_budget_bytes(scene)});
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%s: geometry uploaded in %.0f ms, CPU copies released (RSS %ld MB, peak %ld MB)",
-                who.c_str(), now_ms() - t0, rss_mb(), peak_rss_mb());
+  std::snprintf(buf, sizeof buf, "%s: geometry %s in %.0f ms (RSS %ld MB, peak %ld MB)", who.c_str(),
+                s.renderer->geometry_pool() ? "pool ready" : "uploaded, CPU copies released", now_ms() - t0, rss_mb(),
+                peak_rss_mb());
   std::cerr << buf << "\n";
   return s;
 }

@@ -287,6 +287,7 @@ uint64_t LodData::bytes() const {
 void LodMesh::release_geometry() {
   if (released) return;
   released_triangles = indices.size() / 3;
+  released_vertices = positions.size();
   released = true;
   std::vector<glm::vec3>().swap(positions);
   std::vector<glm::vec3>().swap(normals);
@@ -302,6 +303,12 @@ void LodData::release(const LodMesh& m) {
     hlods_[size_t(&m - hlods_.data())].release_geometry();
   else
     throw std::logic_error("LodData::release: not one of this LodData's meshes");
+}
+
+size_t LodData::mapped_index(const LodMesh& m) const {
+  if (!cluster_lods_.empty() && &m >= cluster_lods_.data() && &m < cluster_lods_.data() + cluster_lods_.size())
+    return size_t(&m - cluster_lods_.data());
+  return cluster_lods_.size() + size_t(&m - hlods_.data());
 }
 
 bool LodData::geometry_released() const {

@@ -67,6 +67,14 @@ class Reader {
     off_ += count * sizeof(T);
     return true;
   }
+  // An array left in the file: its place (payload offset), after the same count check as vec.
+  bool ref(MappedArray& a, size_t elem_bytes) {
+    uint64_t count = 0;
+    if (!pod(count) || count > (n_ - off_) / elem_bytes) return false;
+    a = {uint64_t(off_), count, count * elem_bytes};
+    off_ += count * elem_bytes;
+    return true;
+  }
   bool done() const { return off_ == n_; }
   size_t offset() const { return off_; }
 
@@ -96,6 +104,21 @@ bool read_mesh(Reader& r, LodMesh& m, size_t object_count) {
     if (i >= m.positions.size()) return false;
   for (uint32_t o : m.objects)
     if (o >= object_count) return false;
+  return true;
+}
+
+// read_mesh for a lazy load: the arrays' places (file offsets: payload offset + head), the mesh
+// released with its counts; the indices are checked when the upload reads them.
+bool read_lazy_mesh(Reader& r, LodMesh& m, MappedMesh& mm, size_t head) {
+  if (!r.pod(m.origin.x) || !r.pod(m.origin.y) || !r.pod(m.origin.z) || !r.pod(m.error)) return false;
+  if (!r.ref(mm.positions, 12) || !r.ref(mm.normals, 12) || !r.ref(mm.objects, 4) || !r.ref(mm.indices, 4)) return false;
+  for (MappedArray* a : {&mm.positions, &mm.normals, &mm.objects, &mm.indices}) a->offset += head;
+  const uint64_t nv = mm.positions.count;
+  if (mm.normals.count != nv || (mm.objects.count && mm.objects.count != nv)) return false;
+  if (mm.indices.count % 3 != 0 || !std::isfinite(m.error) || m.error < 0) return false;
+  m.released = true;
+  m.released_triangles = mm.indices.count / 3;
+  m.released_vertices = nv;
   return true;
 }
 
@@ -164,7 +187,7 @@ std::optional<std::string> LodData::save(const std::string& path) const {
 }
 
 std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_key, const Scene& scene,
-                                     const Hierarchy& h, std::string* why) {
+                                     const Hierarchy& h, std::string* why, bool lazy) {
   auto fail = [&](const std::string& w) -> std::optional<LodData> {
     if (why) *why = w;
     return std::nullopt;
@@ -172,7 +195,8 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   std::string ignored;
   // Parsed straight from a read-only mapping; the pages already hashed or parsed are dropped as
   // it goes (mapped_file.hpp), so loading costs about the LOD data, not the data plus the file.
-  MappedFile file;
+  auto mapped_file = std::make_shared<MappedFile>();
+  MappedFile& file = *mapped_file;
   if (!file.open(path, why ? why : &ignored)) return std::nullopt;
   CacheHeader head;
   if (auto bad = check_cache_header(file, kCacheMagic, "LOD cache", kCacheVersion, expected_key,
@@ -205,8 +229,14 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   uint64_t nc = 0, nh = 0;
   if (!r.pod(nc) || nc > payload_size) return fail("corrupt cluster LOD count");
   d.cluster_lods_.resize(nc);
+  auto mapped = lazy ? std::make_shared<MappedGeometry>() : nullptr;
+  auto read_one = [&](LodMesh& m) {
+    if (!lazy) return read_mesh(r, m, scene.objects.size());
+    mapped->meshes.emplace_back();
+    return read_lazy_mesh(r, m, mapped->meshes.back(), kHead);
+  };
   for (auto& m : d.cluster_lods_) {
-    if (!read_mesh(r, m, scene.objects.size())) return fail("corrupt cluster LOD mesh");
+    if (!read_one(m)) return fail("corrupt cluster LOD mesh");
     file.drop_before(kHead + r.offset());
   }
   if (!r.vec(d.item_slot_) || d.item_slot_.size() != h.items().size()) return fail("corrupt item table");
@@ -217,7 +247,7 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   if (!r.pod(nh) || nh > payload_size) return fail("corrupt HLOD count");
   d.hlods_.resize(nh);
   for (auto& m : d.hlods_) {
-    if (!read_mesh(r, m, scene.objects.size())) return fail("corrupt HLOD mesh");
+    if (!read_one(m)) return fail("corrupt HLOD mesh");
     file.drop_before(kHead + r.offset());
   }
   if (!r.vec(d.hlod_of_node_) || d.hlod_of_node_.size() != h.size()) return fail("corrupt node table");
@@ -232,6 +262,12 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   }
   if (!r.done()) return fail("trailing bytes");
   d.hash_ = hash;
+  if (lazy) {
+    mapped->path = path;
+    mapped->file = mapped_file;
+    file.advise_random();
+    d.mapped_ = std::move(mapped);
+  }
   return d;
 }
 

@@ -15,6 +15,7 @@
 #include <array>
 #include <limits>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,8 +46,9 @@ struct LodMesh {
   // After release_geometry() (the GL driver holds the only copy) the arrays are empty; the
   // triangle count stays.
   bool released = false;
-  uint64_t released_triangles = 0;
+  uint64_t released_triangles = 0, released_vertices = 0;
   uint64_t triangles() const { return released ? released_triangles : indices.size() / 3; }
+  uint64_t vertex_count() const { return released ? released_vertices : positions.size(); }
   void release_geometry();  // frees positions, normals, objects and indices; idempotent
 };
 
@@ -63,8 +65,10 @@ class LodData {
 
   // load() returns nullopt and says why (missing, truncated, bad magic, version,
   // stale key, checksum, inconsistent data) without ever trusting a size before checking it.
+  // With lazy, the meshes come released and their arrays stay in the mapped file (mapped()):
+  // what a process under --geometry-budget streams from; their indices are checked when read.
   static std::optional<LodData> load(const std::string& path, uint64_t expected_key, const Scene& scene,
-                                     const Hierarchy& h, std::string* why);
+                                     const Hierarchy& h, std::string* why, bool lazy = false);
   // Writes atomically (temporary file + rename). Returns an error message or nullopt.
   std::optional<std::string> save(const std::string& path) const;
 
@@ -100,6 +104,10 @@ class LodData {
   void release(const LodMesh& m);
   bool geometry_released() const;
   uint64_t total_triangles() const;  // in all LODs and HLODs
+  // After a lazy load: where the meshes' arrays lie (cluster LODs, then HLODs); else null.
+  const MappedGeometry* mapped() const { return mapped_.get(); }
+  // Index of one of this data's meshes in mapped()->meshes.
+  size_t mapped_index(const LodMesh& m) const;
 
  private:
   friend struct LodBuilder;  // lod_build.cpp
@@ -111,6 +119,7 @@ class LodData {
   std::vector<uint32_t> hlod_of_node_;  // per node: index into hlods_ or kNoNode
   // per node: leaf: [l] = level-l error (l = 0..3); interior: all four = the HLOD's error.
   std::vector<std::array<double, kLeafLodLevels + 1>> errors_;
+  std::shared_ptr<const MappedGeometry> mapped_;  // lazy loads
 };
 
 }  // namespace occ

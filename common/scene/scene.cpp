@@ -31,6 +31,18 @@ void Mesh::release_geometry() {
   std::vector<uint32_t>().swap(colors);
 }
 
+bool Scene::mesh_has_colors(uint32_t m) const {
+  const Mesh& me = meshes[m];
+  if (me.released && mapped) return mapped->meshes[m].colors.count == me.released_vertices && me.released_vertices;
+  return !me.colors.empty() && me.colors.size() == me.positions.size();
+}
+
+bool Scene::mesh_has_uvs(uint32_t m) const {
+  const Mesh& me = meshes[m];
+  if (me.released && mapped) return mapped->meshes[m].uvs.count == me.released_vertices && me.released_vertices;
+  return !me.uvs.empty() && me.uvs.size() == me.positions.size();
+}
+
 bool Scene::geometry_released() const {
   return std::any_of(meshes.begin(), meshes.end(), [](const Mesh& m) { return m.released; });
 }

@@ -3,6 +3,7 @@
 // asset (see scene_io.hpp).
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 
 #include "common/image.hpp"
 #include "common/math.hpp"
+#include "common/scene/mapped_geometry.hpp"
 
 namespace occ {
 
@@ -103,6 +105,9 @@ struct Scene {
   // Triangles of the source left out of the meshes because they have no area
   // (drop_zero_area_triangles), counted per instance like triangle_count().
   uint64_t zero_area_triangles = 0;
+  // Set when the meshes were loaded released from the scene cache, their arrays left in the
+  // mapped file (load_scene_cache with lazy): mapped->meshes[m] is where mesh m's arrays lie.
+  std::shared_ptr<const MappedGeometry> mapped;
 
   Aabb bounds() const;               // world bounds of all objects
   uint64_t triangle_count() const;   // drawn triangles, counting every instance
@@ -111,6 +116,10 @@ struct Scene {
   // has been released (the hierarchy fingerprint holds the hash from before).
   uint64_t content_hash() const;
   bool geometry_released() const;  // any mesh released
+  // Whether mesh m has COLOR_0 / texture coordinates for every vertex (also a mesh left in the
+  // mapped cache, whose arrays are not in memory).
+  bool mesh_has_colors(uint32_t m) const;
+  bool mesh_has_uvs(uint32_t m) const;
   // The material of mesh m's primitive, or nullptr for kNoMaterial.
   const Material* material_of(uint32_t mesh) const {
     const uint32_t k = meshes[mesh].material;

@@ -96,6 +96,14 @@ class In {
     f_.drop_before(off_);
     return true;
   }
+  // An array left in the file: its place, after the same count check as vec.
+  bool ref(MappedArray& a, size_t elem_bytes) {
+    uint64_t n = 0;
+    if (!pod(n) || n > (f_.size() - off_) / elem_bytes) return false;
+    a = {uint64_t(off_), n, n * elem_bytes};
+    off_ += n * elem_bytes;
+    return true;
+  }
   bool str(std::string& s) {
     uint64_t n = 0;
     if (!pod(n) || n > f_.size() - off_) return false;
@@ -185,6 +193,29 @@ const char* check_mesh(const Mesh& me) {
   return nullptr;
 }
 
+// A mesh read lazily (Scene::mapped): its arrays stay in the file, the mesh is released.
+bool read_lazy_mesh(In& in, Mesh& m, MappedMesh& mm) {
+  return in.str(m.name) && in.ref(mm.positions, 12) && in.ref(mm.normals, 12) && in.ref(mm.indices, 4) &&
+         in.vec(m.clusters) && in.ref(mm.uvs, 8) && in.ref(mm.colors, 4) && in.pod(m.material);
+}
+
+// check_mesh for a lazy mesh, without reading its arrays (the upload checks the indices when it
+// reads them); then marks it released with its counts and box (the union of its clusters').
+const char* check_lazy_mesh(Mesh& me, const MappedMesh& mm) {
+  const uint64_t nv = mm.positions.count;
+  if (mm.normals.count != nv || (mm.uvs.count && mm.uvs.count != nv) || (mm.colors.count && mm.colors.count != nv) ||
+      mm.indices.count % 3 != 0)
+    return "inconsistent array sizes";
+  for (const MeshCluster& cl : me.clusters)
+    if (cl.index_count % 3 != 0 || uint64_t(cl.first_index) + cl.index_count > mm.indices.count)
+      return "cluster out of range";
+  me.released = true;
+  me.released_triangles = mm.indices.count / 3;
+  me.released_vertices = nv;
+  for (const MeshCluster& cl : me.clusters) me.released_box.grow(cl.box);
+  return nullptr;
+}
+
 void write_payload(Out& o, const Scene& s, const BuildParams& p, uint32_t depth, uint64_t fp,
                    const std::vector<HNode>& nodes, const std::vector<Item>& items) {
   o.str(s.source);
@@ -239,12 +270,13 @@ struct SceneCacheIo {
     return commit_cache_file(tmp, path);
   }
 
-  static std::optional<CachedScene> load(const std::string& path, uint64_t key, std::string* why) {
+  static std::optional<CachedScene> load(const std::string& path, uint64_t key, std::string* why, bool lazy) {
     auto fail = [&](const std::string& w) -> std::optional<CachedScene> {
       *why = w;
       return std::nullopt;
     };
-    MappedFile f;
+    auto file = std::make_shared<MappedFile>();
+    MappedFile& f = *file;
     if (!f.open(path, why)) return std::nullopt;
     CacheHeader head;
     if (auto bad = check_cache_header(f, kMagic, "scene cache", kSceneCacheVersion, key,
@@ -266,9 +298,24 @@ struct SceneCacheIo {
     Hierarchy& h = c.hierarchy;
     In in(f, kHead);
     if (!in.str(s.source)) return fail("corrupt source name");
-    if (auto bad = read_records(in, s.meshes, 8 * 7 + 4, "mesh", [](Mesh& m, const auto& f) { mesh_fields(m, f); },
-                                check_mesh))
+    if (lazy) {
+      auto mapped = std::make_shared<MappedGeometry>();
+      uint64_t n = 0;
+      if (!in.count(n, 8 * 7 + 4)) return fail("corrupt mesh count");
+      s.meshes.resize(n);
+      mapped->meshes.resize(n);
+      for (size_t k = 0; k < n; ++k) {
+        if (!read_lazy_mesh(in, s.meshes[k], mapped->meshes[k])) return fail("mesh " + std::to_string(k) + ": truncated");
+        if (const char* bad = check_lazy_mesh(s.meshes[k], mapped->meshes[k]))
+          return fail("mesh " + std::to_string(k) + ": " + bad);
+      }
+      mapped->path = path;
+      mapped->file = file;
+      s.mapped = std::move(mapped);
+    } else if (auto bad = read_records(in, s.meshes, 8 * 7 + 4, "mesh",
+                                       [](Mesh& m, const auto& f) { mesh_fields(m, f); }, check_mesh)) {
       return fail(*bad);
+    }
     if (auto bad = read_records(
             in, s.objects, 4 + 128 + 8, "object", [](Object& ob, const auto& f) { object_fields(ob, f); },
             [&](const Object& ob) { return ob.mesh >= s.meshes.size() ? "mesh out of range" : nullptr; }))
@@ -310,6 +357,7 @@ struct SceneCacheIo {
         return fail("hierarchy: node " + std::to_string(k) + " out of range");
     }
     if (N == 0) return fail("hierarchy: no nodes");
+    if (lazy) f.advise_random();
     return c;
   }
 };
@@ -337,9 +385,9 @@ std::optional<std::string> save_scene_cache(const std::string& path, uint64_t ke
   return SceneCacheIo::save(path, key, scene, h);
 }
 
-std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why) {
+std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why, bool lazy) {
   remove_stale_cache_temps(std::filesystem::path(path).parent_path().string());
-  return SceneCacheIo::load(path, key, why);
+  return SceneCacheIo::load(path, key, why, lazy);
 }
 
 }  // namespace occ

@@ -41,7 +41,11 @@ std::optional<std::string> save_scene_cache(const std::string& path, uint64_t ke
                                             const Hierarchy& h);
 // nullopt and *why (missing, truncated, bad magic, version, stale key, checksum, inconsistent
 // data, with what and where) when the file cannot be used. First removes the stale temporaries
-// of its folder (remove_stale_cache_temps, cache_files.hpp).
-std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why);
+// of its folder (remove_stale_cache_temps, cache_files.hpp). With lazy, the meshes' arrays stay
+// in the mapped file (Scene::mapped; the meshes come released, with their counts, clusters and
+// boxes): what a process under --geometry-budget streams from. Their indices are checked when
+// they are read (the payload's checksum is checked either way).
+std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why,
+                                            bool lazy = false);
 
 }  // namespace occ

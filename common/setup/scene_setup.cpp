@@ -1,11 +1,18 @@
 #include "common/setup/scene_setup.hpp"
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <iostream>
 
+#include "common/error.hpp"
 #include "common/hash.hpp"
 #include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
@@ -25,7 +32,50 @@ void add_scene_options(Cli& cli, SceneOptions& o) {
              "LOD/HLOD and scene cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
   cli.choice<bool>("scene-cache", &o.scene_cache, {{"on", true}, {"off", false}},
                    "keep plant:M scenes and their hierarchy in a binary cache in the --lod-cache folder");
+  cli.option("geometry-budget", &o.geometry_budget, "MB|auto|all",
+             "GPU memory for geometry: scenes with a scene cache (plant:M) stream their meshes and LODs from it "
+             "within MB, the least recently drawn evicted; other scenes stream from their CPU copy where they are "
+             "larger; auto = a 24th of the machine's memory (at least 256); all = everything uploaded at start");
 }
+
+uint64_t geometry_budget_bytes(const SceneOptions& o) {
+  const std::string& v = o.geometry_budget;
+  if (v == "all") return 0;
+  if (v == "auto") {
+    const uint64_t phys = uint64_t(::sysconf(_SC_PHYS_PAGES)) * uint64_t(::sysconf(_SC_PAGESIZE));
+    return std::max<uint64_t>(phys / 24, uint64_t(256) << 20);
+  }
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long mb = std::strtoull(v.c_str(), &end, 10);
+  if (v.empty() || !std::isdigit(static_cast<unsigned char>(v[0])) || *end != '\0' || errno || mb < 1 ||
+      mb > (uint64_t(1) << 30))
+    throw InputError("--geometry-budget: expected a number of MB (1 or more), auto or all, got '" + v + "'");
+  return uint64_t(mb) << 20;
+}
+
+namespace {
+
+// The LOD data for a loaded scene: from the LOD cache, or built and saved. For a scene read
+// lazily (Scene::mapped) the LODs are read lazily too; building them needs the geometry, so then
+// the scene cache is read whole for the build, and the saved LOD cache is read back lazily.
+LodData load_lod(const SceneOptions& opts, const LoadedScene& ls, const std::string& scene_cache,
+                 uint64_t scene_key, const std::string& who) {
+  if (!ls.scene.mapped) return load_or_build_lod(ls.scene, ls.hierarchy, opts.lod, opts.lod_cache, opts.spec, who);
+  const std::string path = lod_cache_path(opts.lod_cache, opts.spec);
+  const uint64_t key = LodData::cache_key(ls.hierarchy, opts.lod);
+  std::string why;
+  if (auto d = LodData::load(path, key, ls.scene, ls.hierarchy, &why, true)) return std::move(*d);
+  {
+    std::optional<CachedScene> whole = load_scene_cache(scene_cache, scene_key, &why, false);
+    if (!whole) throw InputError("scene cache " + scene_cache + " became unusable: " + why);
+    load_or_build_lod(whole->scene, whole->hierarchy, opts.lod, opts.lod_cache, opts.spec, who);
+  }
+  if (auto d = LodData::load(path, key, ls.scene, ls.hierarchy, &why, true)) return std::move(*d);
+  throw InputError("LOD cache " + path + " cannot be read back after it was built: " + why);
+}
+
+}  // namespace
 
 LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, bool with_lod) {
   auto t0 = std::chrono::steady_clock::now();
@@ -33,12 +83,13 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
   char buf[768];
   const bool use_cache = opts.scene_cache && scene_cache_applies(opts.spec);
+  const bool lazy = use_cache && geometry_budget_bytes(opts) > 0;
   const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
   const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build) : 0;
   std::optional<CachedScene> cached;
   if (use_cache) {
     std::string why;
-    cached = load_scene_cache(cache_path, cache_key, &why);
+    cached = load_scene_cache(cache_path, cache_key, &why, lazy);
     if (!cached && why != "missing")
       std::cerr << who << ": scene cache " << cache_path << " is unusable (" << why << "): rebuilding it\n";
   }
@@ -79,10 +130,17 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
       std::cerr << buf << "\n";
     }
   }
+  if (lazy && !from_cache) {  // built now: read back lazily, so the built copy leaves memory
+    std::string why;
+    std::optional<CachedScene> back = load_scene_cache(cache_path, cache_key, &why, true);
+    if (back) {
+      ls.scene = std::move(back->scene);
+      ls.hierarchy = std::move(back->hierarchy);
+    }
+  }
   ls.fingerprint = ls.hierarchy.fingerprint();
   if (with_lod) {
-    ls.lod = std::make_unique<LodData>(
-        load_or_build_lod(ls.scene, ls.hierarchy, opts.lod, opts.lod_cache, opts.spec, who));
+    ls.lod = std::make_unique<LodData>(load_lod(opts, ls, cache_path, cache_key, who));
     Hasher fh;
     fh.u64(ls.hierarchy.fingerprint());
     fh.u64(ls.lod->hash());

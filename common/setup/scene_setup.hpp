@@ -17,9 +17,15 @@ struct SceneOptions {
   LodParams lod;
   std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod_cache.hpp)
   bool scene_cache = true;  // --scene-cache on|off: plant:M scenes + hierarchy (scene_cache.hpp)
+  std::string geometry_budget = "auto";  // --geometry-budget MB|auto|all (geometry_budget_bytes)
 };
 
 void add_scene_options(Cli& cli, SceneOptions& opts);
+
+// The GPU geometry budget of --geometry-budget in bytes: MB (at least 1), auto (a 24th of the
+// machine's memory, at least 256 MiB), or 0 for all (every mesh resident from the start, read
+// whole before the upload). Throws InputError naming the flag for anything else.
+uint64_t geometry_budget_bytes(const SceneOptions& opts);
 
 struct LoadedScene {
   Scene scene;
@@ -30,6 +36,9 @@ struct LoadedScene {
   uint64_t fingerprint = 0;
 };
 
+// With a budget (geometry_budget_bytes > 0) a scene that has a scene cache is read lazily: its
+// meshes' and LODs' arrays stay in the mapped caches (Scene::mapped, LodData::mapped) and are
+// streamed to the GPU as frames need them; a cache built now is written first, then read so.
 // Loads/generates the scene and builds the hierarchy, or reads both from the scene cache
 // (scene_cache.hpp: plant:M specs; a missing, stale or unusable cache is rebuilt and rewritten,
 // saying why); prints one summary line to stderr
