@@ -68,17 +68,9 @@ class MappedFile {
   const uint8_t* data() const { return data_; }
   size_t size() const { return size_; }
 
-  // For a file read here and there (geometry streamed from a cache): no read-ahead.
-  void advise_random() const {
-    if (data_) ::madvise(const_cast<uint8_t*>(data_), size_, MADV_RANDOM);
-  }
-  // Releases the process's pages of [offset, offset + bytes) (whole pages; the page cache keeps
-  // them, and reading there again faults them back in).
-  void drop_range(size_t offset, size_t bytes) const {
-    const size_t page = size_t(::sysconf(_SC_PAGESIZE));
-    const size_t begin = offset / page * page, end = std::min(size_, (offset + bytes + page - 1) / page * page);
-    if (data_ && end > begin) ::madvise(const_cast<uint8_t*>(data_) + begin, end - begin, MADV_DONTNEED);
-  }
+  // After a pass over the whole file that dropped as it went (a checksum), for the next pass:
+  // its drops start again from the file's beginning (else the pages it reads stay mapped).
+  void restart_drops() { dropped_ = 0; }
 
   // Releases the process's pages of [0, offset) once at least `step` bytes are new since the
   // last drop (the file stays mapped; reading there again would fault the pages back in).

@@ -30,8 +30,10 @@ const uint8_t* bytes_of(const std::vector<T>& v) {
   return v.empty() ? nullptr : reinterpret_cast<const uint8_t*>(v.data());
 }
 
-PieceArrays mapped_arrays(const MappedGeometry& g, const MappedMesh& mm) {
-  auto at = [&](const MappedArray& a) { return a.count ? g.at(a) : nullptr; };
+// A mesh left in a cache file, read into `buf` (one read of its arrays' span).
+PieceArrays mapped_arrays(const MappedGeometry& g, const MappedMesh& mm, std::vector<uint8_t>& buf) {
+  const uint64_t base = g.read(mm, buf);
+  auto at = [&](const MappedArray& a) { return a.count ? buf.data() + (a.offset - base) : nullptr; };
   return {at(mm.positions), at(mm.normals), at(mm.colors), at(mm.uvs), at(mm.objects), at(mm.indices),
           mm.positions.count, mm.indices.count};
 }
@@ -86,13 +88,14 @@ void SceneGpu::start_pool(const Scene& scene, const LodData* lod, std::vector<co
   for (const Mesh& m : scene.meshes) sizes.push_back({m.vertex_count(), m.triangle_count() * 3});
   for (const LodMesh* m : lod_meshes) sizes.push_back({m->vertex_count(), m->triangles() * 3});
   const uint32_t M = uint32_t(scene.meshes.size());
-  auto loader = [this, &scene, lod, lod_meshes = std::move(lod_meshes), textured = std::move(mesh_textured), M](
-                    uint32_t p, std::vector<uint8_t>& out, std::vector<glm::vec2>* uvs) {
+  auto loader = [this, &scene, lod, lod_meshes = std::move(lod_meshes), textured = std::move(mesh_textured), M,
+                 buf = std::vector<uint8_t>()](uint32_t p, std::vector<uint8_t>& out,
+                                               std::vector<glm::vec2>* uvs) mutable {
     if (p < M) {
       const Mesh& me = scene.meshes[p];
       PieceArrays a;
       if (me.released && scene.mapped) {
-        a = mapped_arrays(*scene.mapped, scene.mapped->meshes[p]);
+        a = mapped_arrays(*scene.mapped, scene.mapped->meshes[p], buf);
       } else {
         a = {bytes_of(me.positions), bytes_of(me.normals), bytes_of(me.colors), bytes_of(me.uvs), nullptr,
              bytes_of(me.indices), me.positions.size(), me.indices.size()};
@@ -104,17 +107,16 @@ void SceneGpu::start_pool(const Scene& scene, const LodData* lod, std::vector<co
         return c;
       };
       write_piece(a, color_of, out, uvs, textured[p] != 0, scene.source + ": mesh " + std::to_string(p));
-      if (me.released && scene.mapped) scene.mapped->drop(scene.mapped->meshes[p]);
       return;
     }
     const LodMesh& m = *lod_meshes[p - M];
     const MappedGeometry* g = m.released ? lod->mapped() : nullptr;
     const MappedMesh* mm = g ? &g->meshes[lod->mapped_index(m)] : nullptr;
-    const PieceArrays a = g ? mapped_arrays(*g, *mm)
+    const PieceArrays a = g ? mapped_arrays(*g, *mm, buf)
                             : PieceArrays{bytes_of(m.positions), bytes_of(m.normals), nullptr, nullptr,
                                           bytes_of(m.objects), bytes_of(m.indices), m.positions.size(),
                                           m.indices.size()};
-    const std::string what = (g ? g->path : std::string("LOD data")) + ": LOD mesh " + std::to_string(p - M);
+    const std::string what = (g ? g->path() : std::string("LOD data")) + ": LOD mesh " + std::to_string(p - M);
     auto color_of = [&](uint64_t v) {  // leaf LODs white (the object's colour), HLODs their objects'
       if (!a.objects) return 0xffffffffu;
       uint32_t o;
@@ -123,7 +125,6 @@ void SceneGpu::start_pool(const Scene& scene, const LodData* lod, std::vector<co
       return pack_rgba8(glm::vec4(glm::vec3(looks[o].color), 1.0f));
     };
     write_piece(a, color_of, out, uvs, false, what);
-    if (g) g->drop(*mm);
   };
   pool = std::make_unique<GeometryPool>(gl_, upload.budget_bytes, std::move(sizes), any_textured,
                                         std::move(loader));

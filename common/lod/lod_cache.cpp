@@ -31,20 +31,57 @@ namespace {
 constexpr uint32_t kCacheVersion = 2;
 constexpr char kCacheMagic[8] = {'O', 'C', 'C', 'L', 'O', 'D', '\r', '\n'};
 
+// Writes the payload in pieces to a sink (put(data, bytes)): counted, hashed or written to the
+// file as it goes, never the whole payload in memory (1.9 GB at plant:80).
+template <class Put>
 class Writer {
  public:
-  std::vector<uint8_t> buf;
+  explicit Writer(Put& put) : put_(put) {}
   template <class T>
   void pod(const T& v) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&v);
-    buf.insert(buf.end(), p, p + sizeof(T));
+    put_(&v, sizeof(T));
   }
   template <class T>
   void vec(const std::vector<T>& v) {
     pod(uint64_t(v.size()));
-    const auto* p = reinterpret_cast<const uint8_t*>(v.data());
-    buf.insert(buf.end(), p, p + v.size() * sizeof(T));
+    if (!v.empty()) put_(v.data(), v.size() * sizeof(T));
   }
+
+ private:
+  Put& put_;
+};
+
+// Hasher::bytes of a stream whose total size is known in advance: the same value as hashing the
+// whole payload at once (LodData::hash(), the load's check).
+class StreamBytesHash {
+ public:
+  explicit StreamBytesHash(uint64_t total) { h_.u64(total); }
+  void operator()(const void* data, size_t n) {
+    const auto* p = static_cast<const uint8_t*>(data);
+    while (n > 0) {
+      const size_t k = std::min<size_t>(8 - fill_, n);
+      std::memcpy(carry_ + fill_, p, k);
+      fill_ += k, p += k, n -= k;
+      if (fill_ == 8) {
+        uint64_t w;
+        std::memcpy(&w, carry_, 8);
+        h_.u64(w);
+        fill_ = 0;
+      }
+    }
+  }
+  uint64_t value() const {
+    Hasher h = h_;
+    uint64_t tail = 0;
+    std::memcpy(&tail, carry_, fill_);
+    h.u64(tail);
+    return h.value();
+  }
+
+ private:
+  Hasher h_;
+  uint8_t carry_[8] = {};
+  size_t fill_ = 0;
 };
 
 class Reader {
@@ -83,7 +120,8 @@ class Reader {
   size_t n_, off_ = 0;
 };
 
-void write_mesh(Writer& w, const LodMesh& m) {
+template <class W>
+void write_mesh(W& w, const LodMesh& m) {
   w.pod(m.origin.x);
   w.pod(m.origin.y);
   w.pod(m.origin.z);
@@ -122,17 +160,12 @@ bool read_lazy_mesh(Reader& r, LodMesh& m, MappedMesh& mm, size_t head) {
   return true;
 }
 
-uint64_t payload_hash(const uint8_t* p, size_t n) {
-  Hasher h;
-  h.bytes(p, n);
-  return h.value();
-}
-uint64_t payload_hash(const std::vector<uint8_t>& p) { return payload_hash(p.data(), p.size()); }
-
-std::vector<uint8_t> serialize(const std::vector<LodMesh>& clusters, const std::vector<uint32_t>& slots,
-                               const std::vector<LodMesh>& hlods, const std::vector<uint32_t>& hlod_of_node,
-                               const std::vector<std::array<double, kLeafLodLevels + 1>>& errors) {
-  Writer w;
+// The payload to `put` (see Writer).
+template <class Put>
+void serialize(Put& put, const std::vector<LodMesh>& clusters, const std::vector<uint32_t>& slots,
+               const std::vector<LodMesh>& hlods, const std::vector<uint32_t>& hlod_of_node,
+               const std::vector<std::array<double, kLeafLodLevels + 1>>& errors) {
+  Writer<Put> w(put);
   w.pod(uint64_t(clusters.size()));
   for (const auto& m : clusters) write_mesh(w, m);
   w.vec(slots);
@@ -140,7 +173,6 @@ std::vector<uint8_t> serialize(const std::vector<LodMesh>& clusters, const std::
   for (const auto& m : hlods) write_mesh(w, m);
   w.vec(hlod_of_node);
   w.vec(errors);
-  return std::move(w.buf);
 }
 
 }  // namespace
@@ -157,31 +189,42 @@ uint64_t LodData::cache_key(const Hierarchy& h, const LodParams& p) {
 }
 
 void LodData::finish_hash() {
-  hash_ = payload_hash(serialize(cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_));
+  uint64_t total = 0;
+  auto count = [&](const void*, size_t n) { total += n; };
+  serialize(count, cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
+  StreamBytesHash hash(total);
+  serialize(hash, cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
+  hash_ = hash.value();
 }
 
 std::optional<std::string> LodData::save(const std::string& path) const {
   if (geometry_released()) return "its meshes were released after upload";
-  std::vector<uint8_t> payload = serialize(cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
-  Writer head;
-  head.pod(kCacheMagic);
-  head.pod(kCacheVersion);
-  head.pod(key_);
-  head.pod(uint64_t(payload.size()));
-  head.pod(payload_hash(payload));
+  // Three passes over the data, none holding the payload: its size, its hash, then the file
+  // (header first, so a reader of a file still being written finds the header at once).
+  uint64_t total = 0;
+  auto count = [&](const void*, size_t n) { total += n; };
+  serialize(count, cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
+  StreamBytesHash hash(total);
+  serialize(hash, cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
   std::error_code ec;
   std::filesystem::path p(path);
   if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path(), ec);
   const std::string tmp = cache_temp_path(path);
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return "cannot write " + tmp;
-    out.write(reinterpret_cast<const char*>(head.buf.data()), std::streamsize(head.buf.size()));
-    out.write(reinterpret_cast<const char*>(payload.data()), std::streamsize(payload.size()));
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      return "cannot write " + tmp + " (disk full?)";
-    }
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return "cannot write " + tmp;
+  bool ok = true;
+  auto put = [&](const void* data, size_t n) { ok = ok && std::fwrite(data, 1, n, f) == n; };
+  const uint64_t value = hash.value();
+  put(kCacheMagic, 8);
+  put(&kCacheVersion, 4);
+  put(&key_, 8);
+  put(&total, 8);
+  put(&value, 8);
+  serialize(put, cluster_lods_, item_slot_, hlods_, hlod_of_node_, errors_);
+  ok = (std::fclose(f) == 0) && ok;
+  if (!ok) {
+    std::filesystem::remove(tmp, ec);
+    return "cannot write " + tmp + " (disk full?)";
   }
   return commit_cache_file(tmp, path);
 }
@@ -195,8 +238,7 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   std::string ignored;
   // Parsed straight from a read-only mapping; the pages already hashed or parsed are dropped as
   // it goes (mapped_file.hpp), so loading costs about the LOD data, not the data plus the file.
-  auto mapped_file = std::make_shared<MappedFile>();
-  MappedFile& file = *mapped_file;
+  MappedFile file;
   if (!file.open(path, why ? why : &ignored)) return std::nullopt;
   CacheHeader head;
   if (auto bad = check_cache_header(file, kCacheMagic, "LOD cache", kCacheVersion, expected_key,
@@ -222,6 +264,8 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
     if (payload_size > off) std::memcpy(&tail, payload + off, payload_size - off);
     hs.u64(tail);
     if (hs.value() != hash) return fail("checksum mismatch (corrupt)");
+    file.drop_before(file.size(), 0);
+    file.restart_drops();  // the parse below reads the pages again: it drops them again
   }
   LodData d;
   d.key_ = key;
@@ -261,11 +305,14 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
       if (!std::isfinite(e) || e < 0) return fail("bad error value");
   }
   if (!r.done()) return fail("trailing bytes");
+  file.drop_before(file.size(), 0);
   d.hash_ = hash;
   if (lazy) {
-    mapped->path = path;
-    mapped->file = mapped_file;
-    file.advise_random();
+    try {
+      mapped->file = std::make_shared<FileReader>(path);
+    } catch (const std::runtime_error& e) {
+      return fail(e.what());
+    }
     d.mapped_ = std::move(mapped);
   }
   return d;

@@ -275,8 +275,7 @@ struct SceneCacheIo {
       *why = w;
       return std::nullopt;
     };
-    auto file = std::make_shared<MappedFile>();
-    MappedFile& f = *file;
+    MappedFile f;
     if (!f.open(path, why)) return std::nullopt;
     CacheHeader head;
     if (auto bad = check_cache_header(f, kMagic, "scene cache", kSceneCacheVersion, key,
@@ -309,8 +308,11 @@ struct SceneCacheIo {
         if (const char* bad = check_lazy_mesh(s.meshes[k], mapped->meshes[k]))
           return fail("mesh " + std::to_string(k) + ": " + bad);
       }
-      mapped->path = path;
-      mapped->file = file;
+      try {
+        mapped->file = std::make_shared<FileReader>(path);
+      } catch (const std::runtime_error& e) {
+        return fail(e.what());
+      }
       s.mapped = std::move(mapped);
     } else if (auto bad = read_records(in, s.meshes, 8 * 7 + 4, "mesh",
                                        [](Mesh& m, const auto& f) { mesh_fields(m, f); }, check_mesh)) {
@@ -357,7 +359,7 @@ struct SceneCacheIo {
         return fail("hierarchy: node " + std::to_string(k) + " out of range");
     }
     if (N == 0) return fail("hierarchy: no nodes");
-    if (lazy) f.advise_random();
+    f.drop_before(f.size(), 0);
     return c;
   }
 };
