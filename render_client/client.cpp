@@ -229,6 +229,10 @@ class Client {
       if (gate_.wants_frustum_triangles()) frustum = frustum_triangles(f.cam);
       gate_.frame(row.occlusion != 0, row.frame_interval_ms, row.triangles, frustum);
     }
+    if (stats_.frames() == 0)
+      std::fprintf(stderr, "render_client: first frame shown %.1f s after the process started (wall clock %.3f)\n",
+                   process_age_s(),
+                   std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count());
     stats_.add(row, f.shown, f.cpu_shown);
   }
 

@@ -170,15 +170,32 @@ TEST(SceneRendererStreaming, LazyCachesDrawTheFramesOfTheSceneInMemory) {
     EXPECT_EQ(b.geometry_pool()->stats().evictions > 0, !fits);
   }
 
-  // A flipped byte in the geometry is caught by the payload checksum, lazily too.
+  // A lazy read does not hash the whole file; a corrupt index is caught when its mesh is read,
+  // naming the file and the mesh, before anything is drawn with it.
   {
     std::fstream f(scene_path, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(std::streamoff(lazy->scene.mapped->meshes[0].indices.offset + 1));
+    f.seekp(std::streamoff(lazy->scene.mapped->meshes[0].indices.offset + 3));
     f.put(char(0x7f));
   }
+  lazy_lod.reset();
   lazy.reset();
-  EXPECT_FALSE(load_scene_cache(scene_path, 7, &why, true).has_value());
+  lazy = load_scene_cache(scene_path, 7, &why, true);
+  ASSERT_TRUE(lazy) << why;
+  EXPECT_FALSE(load_scene_cache(scene_path, 7, &why, false).has_value());  // read whole: the checksum
   EXPECT_NE(why.find("checksum"), std::string::npos) << why;
+  SceneRenderer c(*ctx, lazy->scene, lazy->hierarchy, nullptr, SceneRenderer::Upload{.budget_bytes = kBudget});
+  std::vector<uint32_t> items;
+  for (uint32_t i = 0; i < lazy->hierarchy.items().size(); ++i)
+    if (lazy->scene.objects[lazy->hierarchy.items()[i].object].mesh == 0) items.push_back(i);
+  ASSERT_FALSE(items.empty());
+  c.begin_frame(view_of(built), true);
+  try {
+    c.draw_items(items, SceneRenderer::Mode::Shaded);
+    ADD_FAILURE() << "drew a mesh with an index out of range";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("mesh 0: index"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("corrupt"), std::string::npos) << e.what();
+  }
   std::filesystem::remove_all(dir);
 }
 

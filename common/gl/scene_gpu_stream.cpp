@@ -106,7 +106,8 @@ void SceneGpu::start_pool(const Scene& scene, const LodData* lod, std::vector<co
         if (colored) std::memcpy(&c, a.colors + v * 4, 4);
         return c;
       };
-      write_piece(a, color_of, out, uvs, textured[p] != 0, scene.source + ": mesh " + std::to_string(p));
+      const std::string& file = me.released && scene.mapped ? scene.mapped->path() : scene.source;
+      write_piece(a, color_of, out, uvs, textured[p] != 0, file + ": mesh " + std::to_string(p));
       return;
     }
     const LodMesh& m = *lod_meshes[p - M];

@@ -250,7 +250,9 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   const uint64_t key = head.key, hash = head.hash;
   const uint8_t* const payload = bytes + kHead;
   const size_t payload_size = file_size - kHead;
-  {  // = payload_hash(payload, payload_size) (Hasher::bytes), in steps that drop what they read
+  // = payload_hash(payload, payload_size) (Hasher::bytes), in steps that drop what they read;
+  // lazy: not the whole file at start (its structure is checked, each mesh's indices when read).
+  if (!lazy) {
     Hasher hs;
     hs.u64(payload_size);
     size_t off = 0;

@@ -65,8 +65,9 @@ class LodData {
 
   // load() returns nullopt and says why (missing, truncated, bad magic, version,
   // stale key, checksum, inconsistent data) without ever trusting a size before checking it.
-  // With lazy, the meshes come released and their arrays stay in the mapped file (mapped()):
-  // what a process under --geometry-budget streams from; their indices are checked when read.
+  // With lazy, the meshes come released and their arrays stay in the file (mapped()): what a
+  // process under --geometry-budget streams from; the payload checksum is not checked then (see
+  // load_scene_cache), each mesh's indices are when the upload reads them.
   static std::optional<LodData> load(const std::string& path, uint64_t expected_key, const Scene& scene,
                                      const Hierarchy& h, std::string* why, bool lazy = false);
   // Writes atomically (temporary file + rename). Returns an error message or nullopt.

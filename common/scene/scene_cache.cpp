@@ -281,7 +281,7 @@ struct SceneCacheIo {
     if (auto bad = check_cache_header(f, kMagic, "scene cache", kSceneCacheVersion, key,
                                       "stale (written for another scene spec, generator or hierarchy parameters)", &head))
       return fail(*bad);
-    {
+    if (!lazy) {  // lazy: not the whole file at start (its structure is checked, each mesh's indices when read)
       StreamHash sh;
       constexpr size_t kStep = size_t(32) << 20;
       for (size_t off = kHead; off < f.size(); off += kStep) {

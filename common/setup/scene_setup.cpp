@@ -1,5 +1,6 @@
 #include "common/setup/scene_setup.hpp"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -81,6 +82,7 @@ LodData load_lod(const SceneOptions& opts, const LoadedScene& ls, const std::str
     if (!whole) throw InputError("scene cache " + scene_cache + " became unusable: " + why);
     load_or_build_lod(whole->scene, whole->hierarchy, opts.lod, opts.lod_cache, opts.spec, who);
   }
+  ::malloc_trim(0);  // the whole scene and the built LODs leave the process
   if (auto d = LodData::load(path, key, ls.scene, ls.hierarchy, &why, true)) return std::move(*d);
   throw InputError("LOD cache " + path + " cannot be read back after it was built: " + why);
 }
@@ -147,6 +149,7 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
       ls.scene = std::move(back->scene);
       ls.hierarchy = std::move(back->hierarchy);
     }
+    ::malloc_trim(0);  // the heap gives the built scene's pages back
   }
   ls.fingerprint = ls.hierarchy.fingerprint();
   if (with_lod) {
