@@ -1,11 +1,8 @@
 // CPU time of the whole process (every thread: llvmpipe's rasteriser threads, the transport's
 // I/O thread), for per-stage costs that do not depend on how many processes share the cores.
 #pragma once
-#include <unistd.h>
-
+#include <chrono>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <ctime>
 
 namespace occ {
@@ -17,24 +14,11 @@ inline uint64_t process_cpu_us() {
   return uint64_t(ts.tv_sec) * 1000000u + uint64_t(ts.tv_nsec) / 1000u;
 }
 
-// Seconds since this process started (its start time in /proc/self/stat against
-// CLOCK_BOOTTIME), or -1 where that cannot be read.
+// When this process's static objects were made (before main: its start, near enough), and the
+// seconds since.
+inline const std::chrono::steady_clock::time_point kProcessStart = std::chrono::steady_clock::now();
 inline double process_age_s() {
-  std::FILE* f = std::fopen("/proc/self/stat", "r");
-  if (!f) return -1;
-  char buf[1024] = {};
-  const size_t n = std::fread(buf, 1, sizeof buf - 1, f);
-  std::fclose(f);
-  const char* p = std::strrchr(buf, ')');  // the command name may hold spaces
-  if (n == 0 || !p) return -1;
-  unsigned long long start = 0;
-  int field = 2;  // ")" ends field 2; starttime is field 22
-  for (++p; *p && field < 21; ++p)
-    if (*p == ' ') ++field;
-  if (std::sscanf(p, "%llu", &start) != 1) return -1;
-  timespec now{};
-  clock_gettime(CLOCK_BOOTTIME, &now);
-  return double(now.tv_sec) + now.tv_nsec / 1e9 - double(start) / double(::sysconf(_SC_CLK_TCK));
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - kProcessStart).count();
 }
 
 }  // namespace occ

@@ -112,7 +112,8 @@ TEST(SceneRendererStreaming, FarBelowTheScenesSizeDrawsTheResidentFrames) {
   ASSERT_EQ(a.geometry_pool(), nullptr);
   const GeometryPool* pool = b.geometry_pool();
   ASSERT_NE(pool, nullptr);
-  EXPECT_LE(pool->capacity_bytes(), kBudget);
+  EXPECT_LE(pool->budget_bytes(), kBudget);
+  EXPECT_LT(pool->capacity_bytes(), pool->budget_bytes());  // grows as frames need it
   EXPECT_GT(pool->total_bytes(), 4 * pool->capacity_bytes());
   EXPECT_FALSE(scene.geometry_released());  // streaming from the CPU copies keeps them
   EXPECT_EQ(pool->stats().uploads, 0u);     // nothing before a frame needs it
@@ -124,6 +125,8 @@ TEST(SceneRendererStreaming, FarBelowTheScenesSizeDrawsTheResidentFrames) {
   EXPECT_GT(s.evictions, 0u);
   EXPECT_GT(s.extra_windows, 0u);        // draw calls larger than the budget were cut
   EXPECT_LE(pool->resident_bytes(), pool->capacity_bytes());
+  EXPECT_EQ(pool->capacity_bytes(), pool->budget_bytes());  // grown to the budget before evicting
+  EXPECT_GT(pool->generation(), 0u);
 }
 
 // From the caches, read lazily: meshes and LODs come released with their counts and boxes, the

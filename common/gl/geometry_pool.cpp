@@ -15,17 +15,12 @@ constexpr uint64_t kMaxUnits = (uint64_t(1) << 32) / 7 - 1;
 
 GeometryPool::GeometryPool(const GlApi& gl, uint64_t budget_bytes, std::vector<PieceSize> sizes, bool uvs,
                            Loader loader)
-    : gl_(gl), sizes_(std::move(sizes)), loader_(std::move(loader)) {
+    : gl_(gl), sizes_(std::move(sizes)), loader_(std::move(loader)), uvs_(uvs) {
   for (uint32_t p = 0; p < sizes_.size(); ++p) total_units_ += units_of(p);
-  const uint64_t unit = kUnitBytes + (uvs ? 8 : 0);
-  capacity_ = std::min({budget_bytes / unit, std::max<uint64_t>(total_units_, 1), kMaxUnits});
-  if (capacity_ == 0) throw std::runtime_error("--geometry-budget: too small for any geometry");
-  gl_.CreateBuffers(1, &buffer_);
-  gl_.NamedBufferStorage(buffer_, GLsizeiptr(capacity_ * kUnitBytes), nullptr, GL_DYNAMIC_STORAGE_BIT);
-  if (uvs) {
-    gl_.CreateBuffers(1, &uv_buffer_);
-    gl_.NamedBufferStorage(uv_buffer_, GLsizeiptr(capacity_ * 8), nullptr, GL_DYNAMIC_STORAGE_BIT);
-  }
+  max_units_ = std::min({budget_bytes / unit_bytes(), std::max<uint64_t>(total_units_, 1), kMaxUnits});
+  if (max_units_ == 0) throw std::runtime_error("--geometry-budget: too small for any geometry");
+  capacity_ = std::max<uint64_t>(1, std::min(max_units_ / 4, kInitialBytes / unit_bytes()));
+  create_buffers(capacity_, &buffer_, &uv_buffer_);
   at_.assign(sizes_.size(), kNone);
   window_of_.assign(sizes_.size(), 0);
   prev_.assign(sizes_.size(), kNone);
@@ -33,6 +28,31 @@ GeometryPool::GeometryPool(const GlApi& gl, uint64_t budget_bytes, std::vector<P
   free_by_start_[0] = capacity_;
   free_by_size_.emplace(capacity_, 0);
   window_ = 1;
+}
+
+void GeometryPool::create_buffers(uint64_t units, GLuint* buffer, GLuint* uv_buffer) const {
+  gl_.CreateBuffers(1, buffer);
+  gl_.NamedBufferStorage(*buffer, GLsizeiptr(units * kUnitBytes), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  if (uvs_) {
+    gl_.CreateBuffers(1, uv_buffer);
+    gl_.NamedBufferStorage(*uv_buffer, GLsizeiptr(units * 8), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  }
+}
+
+bool GeometryPool::grow(uint64_t units) {
+  if (capacity_ >= max_units_) return false;
+  const uint64_t grown = std::min(max_units_, std::max(2 * capacity_, capacity_ + units));
+  GLuint buffer = 0, uv_buffer = 0;
+  create_buffers(grown, &buffer, &uv_buffer);
+  gl_.CopyNamedBufferSubData(buffer_, buffer, 0, 0, GLsizeiptr(capacity_ * kUnitBytes));
+  if (uvs_) gl_.CopyNamedBufferSubData(uv_buffer_, uv_buffer, 0, 0, GLsizeiptr(capacity_ * 8));
+  for (GLuint b : {buffer_, uv_buffer_})  // draws already submitted keep reading the old one
+    if (b) gl_.DeleteBuffers(1, &b);
+  buffer_ = buffer, uv_buffer_ = uv_buffer;
+  release(capacity_, grown - capacity_);
+  capacity_ = grown;
+  ++generation_;
+  return true;
 }
 
 GeometryPool::~GeometryPool() {
@@ -49,12 +69,13 @@ bool GeometryPool::acquire(uint32_t p) {
     return true;
   }
   const uint64_t units = units_of(p);
-  if (units > capacity_)
+  if (units > max_units_)
     throw std::runtime_error("--geometry-budget: a piece of " + std::to_string(units * unit_bytes() >> 10) +
-                             " KiB does not fit in the budget's " + std::to_string(capacity_bytes() >> 20) +
+                             " KiB does not fit in the budget's " + std::to_string(budget_bytes() >> 20) +
                              " MiB; give a larger budget");
   uint64_t start = 0;
   while (!allocate(units, &start)) {
+    if (grow(units)) continue;
     if (tail_ == kNone || window_of_[tail_] == window_) return false;  // only this window's pieces left
     evict(tail_);
   }
@@ -71,9 +92,12 @@ bool GeometryPool::acquire(uint32_t p) {
 
 void GeometryPool::preload() {
   begin_window();
+  if (capacity_ < max_units_) grow(max_units_ - capacity_);  // at once, not doubling
   for (uint32_t p = 0; p < sizes_.size(); ++p) {
     uint64_t start = 0;
-    if (at_[p] != kNone || units_of(p) > capacity_ - used_ || !allocate(units_of(p), &start)) continue;
+    if (at_[p] != kNone) continue;
+    while (!allocate(units_of(p), &start))
+      if (!grow(units_of(p))) return;
     at_[p] = uint32_t(start);
     used_ += units_of(p);
     touch(p);
@@ -171,9 +195,10 @@ void GeometryPool::touch(uint32_t p) {
 void print_geometry_line(std::FILE* out, const std::string& who, const GeometryPool* pool) {
   if (!pool) return;
   const GeometryPool::Stats& s = pool->stats();
-  std::fprintf(out, "%s: geometry: budget_mb=%.0f scene_geometry_mb=%.0f pieces=%zu uploads=%llu upload_mb=%.1f "
+  std::fprintf(out, "%s: geometry: budget_mb=%.0f arena_mb=%.0f scene_geometry_mb=%.0f pieces=%zu uploads=%llu upload_mb=%.1f "
               "upload_ms=%.0f evictions=%llu cut_calls=%llu\n",
-              who.c_str(), pool->capacity_bytes() / 1e6, pool->total_bytes() / 1e6, pool->pieces(),
+              who.c_str(), pool->budget_bytes() / 1e6, pool->capacity_bytes() / 1e6, pool->total_bytes() / 1e6,
+              pool->pieces(),
               static_cast<unsigned long long>(s.uploads), s.upload_bytes / 1e6, s.upload_ms,
               static_cast<unsigned long long>(s.evictions), static_cast<unsigned long long>(s.extra_windows));
   std::fflush(out);

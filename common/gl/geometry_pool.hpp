@@ -32,6 +32,7 @@ namespace occ {
 class GeometryPool {
  public:
   static constexpr uint64_t kUnitBytes = 28;
+  static constexpr uint64_t kInitialBytes = uint64_t(32) << 20;
   static constexpr uint32_t kNone = ~0u;
   struct PieceSize {
     uint64_t vertices = 0, indices = 0;
@@ -48,7 +49,10 @@ class GeometryPool {
   // with uvs its texture coordinates (one per vertex). Throws for unreadable data.
   using Loader = std::function<void(uint32_t piece, std::vector<uint8_t>& bytes, std::vector<glm::vec2>* uvs)>;
 
-  // An arena of at most budget_bytes (all pieces' units if fewer), uv buffer included.
+  // An arena of at most budget_bytes (all pieces' units if fewer), uv buffer included. It starts
+  // at kInitialBytes (a quarter of that at most) and doubles (a new buffer, the old one's contents copied over) whenever a
+  // piece does not fit and the budget allows, before anything is evicted: a process pays for the
+  // geometry it has drawn, up to the budget, not for the budget.
   GeometryPool(const GlApi& gl, uint64_t budget_bytes, std::vector<PieceSize> sizes, bool uvs, Loader loader);
   ~GeometryPool();
   GeometryPool(const GeometryPool&) = delete;
@@ -69,8 +73,11 @@ class GeometryPool {
   uint32_t first_index(uint32_t p) const { return uint32_t((at_[p] + sizes_[p].vertices) * 7); }
   bool resident(uint32_t p) const { return at_[p] != kNone; }
   GLuint buffer() const { return buffer_; }
+  // Changes when the arena moved to a larger buffer (the vertex array must be bound again).
+  uint32_t generation() const { return generation_; }
   GLuint uv_buffer() const { return uv_buffer_; }
-  uint64_t capacity_bytes() const { return capacity_ * unit_bytes(); }
+  uint64_t capacity_bytes() const { return capacity_ * unit_bytes(); }  // now
+  uint64_t budget_bytes() const { return max_units_ * unit_bytes(); }   // at most
   uint64_t resident_bytes() const { return used_ * unit_bytes(); }
   uint64_t total_bytes() const { return total_units_ * unit_bytes(); }  // every piece
   size_t pieces() const { return sizes_.size(); }
@@ -78,8 +85,10 @@ class GeometryPool {
 
  private:
   uint64_t units_of(uint32_t p) const { return sizes_[p].vertices + (sizes_[p].indices + 6) / 7; }
-  uint64_t unit_bytes() const { return kUnitBytes + (uv_buffer_ ? 8 : 0); }
+  uint64_t unit_bytes() const { return kUnitBytes + (uvs_ ? 8 : 0); }
   bool allocate(uint64_t units, uint64_t* start);
+  bool grow(uint64_t units);  // room for `units` more if the budget allows; false if not
+  void create_buffers(uint64_t units, GLuint* buffer, GLuint* uv_buffer) const;
   void release(uint64_t start, uint64_t units);
   void evict(uint32_t p);
   void touch(uint32_t p);  // most recently used
@@ -89,8 +98,10 @@ class GeometryPool {
   const GlApi& gl_;
   std::vector<PieceSize> sizes_;
   Loader loader_;
+  bool uvs_ = false;
   GLuint buffer_ = 0, uv_buffer_ = 0;
-  uint64_t capacity_ = 0, used_ = 0, total_units_ = 0;  // units
+  uint64_t capacity_ = 0, max_units_ = 0, used_ = 0, total_units_ = 0;  // units
+  uint32_t generation_ = 0;
   std::vector<uint32_t> at_;                  // per piece: first unit, or kNone
   std::vector<uint32_t> window_of_;           // per piece: the window it was last acquired in
   std::vector<uint32_t> prev_, next_;         // LRU list (head: most recent)

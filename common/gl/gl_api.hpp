@@ -65,6 +65,7 @@ namespace occ {
   X(NAMEDBUFFERSTORAGE, NamedBufferStorage)                   \
   X(NAMEDBUFFERDATA, NamedBufferData)                         \
   X(NAMEDBUFFERSUBDATA, NamedBufferSubData)                   \
+  X(COPYNAMEDBUFFERSUBDATA, CopyNamedBufferSubData)           \
   X(BINDBUFFER, BindBuffer)                                   \
   X(CREATEVERTEXARRAYS, CreateVertexArrays)                   \
   X(DELETEVERTEXARRAYS, DeleteVertexArrays)                   \

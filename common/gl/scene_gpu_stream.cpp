@@ -129,13 +129,13 @@ void SceneGpu::start_pool(const Scene& scene, const LodData* lod, std::vector<co
   };
   pool = std::make_unique<GeometryPool>(gl_, upload.budget_bytes, std::move(sizes), any_textured,
                                         std::move(loader));
-  const bool fits = pool->total_bytes() <= pool->capacity_bytes();
+  const bool fits = pool->total_bytes() <= pool->budget_bytes();
   if (fits) pool->preload();
   char buf[320];
   std::snprintf(buf, sizeof buf,
                 "%s: geometry %s: %.1f MB in %zu pieces, budget %.1f MB (%s)", program_invocation_short_name,
                 fits ? "resident" : "streams", pool->total_bytes() / 1e6, pool->pieces(),
-                pool->capacity_bytes() / 1e6,
+                pool->budget_bytes() / 1e6,
                 fits ? "all uploaded at start" : scene.mapped ? "read from the mapped caches as frames need it"
                                                                : "from the CPU copies as frames need it");
   std::fprintf(stderr, "%s\n", buf);

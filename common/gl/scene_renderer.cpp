@@ -34,6 +34,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
       gpu_(ctx.gl(), scene, hierarchy, lod, upload),
       flush_(FlushSchedule::from_environment()) {
   static_assert(sizeof(IndirectCommand) == 20);
+  if (gpu_.pool) pool_generation_ = gpu_.pool->generation();  // bound by SceneGpu
   object_frame_.assign(gpu_.transforms.size(), 0);
   object_matrices_.resize(gpu_.transforms.size());
 }
@@ -325,6 +326,10 @@ void SceneRenderer::draw_range(std::span<const Pending> draws, size_t first, siz
     size_t e = b;
     while (e < last && pool.acquire(draws[e].draw.piece)) ++e;  // e > b: a fresh window fits one
     if (e < last) pool.count_extra_window();
+    if (pool.generation() != pool_generation_) {  // the arena grew into a new buffer
+      gpu_.bind_segment(0);
+      pool_generation_ = pool.generation();
+    }
     upload_draws(draws.subspan(b, e - b));
     draw_runs(draws.subspan(b, e - b), 0, e - b, mode, bound);
     b = e;

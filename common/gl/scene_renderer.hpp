@@ -253,6 +253,7 @@ class SceneRenderer {
   SceneGpu gpu_;  // what is on the GPU, constant after construction
   bool occluder_offset_ = false;
   FlushSchedule flush_;
+  uint32_t pool_generation_ = 0;  // streaming: the arena buffer the vertex array has bound
 
   // Per-draw buffers: they keep their storage between frames (they grow, never shrink).
   GLuint record_buf_ = 0, indirect_buf_ = 0;
