@@ -43,8 +43,11 @@ void save_gltf(const Scene& scene, const std::string& gltf_path) {
           << ",\"target\":" << target << "}";
     return n_views++;
   };
+  Mesh read_back;  // a mesh of a scene read lazily from its cache (--geometry-budget)
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
-    const Mesh& mesh = scene.meshes[m];
+    const bool mapped = scene.mapped && scene.meshes[m].released;
+    if (mapped) read_back = read_mapped_mesh(scene, uint32_t(m));
+    const Mesh& mesh = mapped ? read_back : scene.meshes[m];
     if (mesh.indices.size() < 3 || mesh.positions.empty()) continue;
     const Aabb box = mesh.box();
     const int pos = view(append(bin, mesh.positions), mesh.positions.size() * 12, 34962);

@@ -31,6 +31,30 @@ void Mesh::release_geometry() {
   std::vector<uint32_t>().swap(colors);
 }
 
+Mesh read_mapped_mesh(const Scene& scene, uint32_t m) {
+  const Mesh& me = scene.meshes[m];
+  Mesh out;
+  out.name = me.name;
+  out.material = me.material;
+  out.clusters = me.clusters;
+  if (!me.released || !scene.mapped) throw std::logic_error("read_mapped_mesh: mesh " + std::to_string(m) + " is in memory");
+  const MappedMesh& mm = scene.mapped->meshes[m];
+  auto read = [&](const MappedArray& a, auto& v) {
+    v.resize(a.count);
+    if (a.bytes) scene.mapped->file->read(a.offset, a.bytes, reinterpret_cast<uint8_t*>(v.data()));
+  };
+  read(mm.positions, out.positions);
+  read(mm.normals, out.normals);
+  read(mm.indices, out.indices);
+  read(mm.uvs, out.uvs);
+  read(mm.colors, out.colors);
+  for (uint32_t i : out.indices)
+    if (i >= out.positions.size())
+      throw std::runtime_error(scene.mapped->path() + ": mesh " + std::to_string(m) + ": index " + std::to_string(i) +
+                               " out of range: the cache is corrupt; delete it");
+  return out;
+}
+
 bool Scene::mesh_has_colors(uint32_t m) const {
   const Mesh& me = meshes[m];
   if (me.released && mapped) return mapped->meshes[m].colors.count == me.released_vertices && me.released_vertices;
