@@ -1,7 +1,9 @@
 // Cache files' places and temporaries (cache_files.hpp).
 #include "common/cache_files.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cctype>
@@ -10,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <iostream>
 
 #include "common/hash.hpp"
 
@@ -64,6 +67,22 @@ bool writer_gone(const std::string& name, const std::filesystem::path& file) {
 
 std::string cache_temp_path(const std::string& path, long pid) {
   return path + ".tmp." + writer_place() + "." + std::to_string(pid < 0 ? long(::getpid()) : pid);
+}
+
+CacheBuildLock::CacheBuildLock(const std::string& path, const std::string& who) {
+  std::error_code ec;
+  const std::filesystem::path p(path);
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path(), ec);
+  fd_ = ::open((path + ".lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) return;
+  if (::flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+  std::cerr << who << ": waiting for another process that builds " << path << "\n";
+  while (::flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
+  }
+}
+
+CacheBuildLock::~CacheBuildLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the flock
 }
 
 size_t remove_stale_cache_temps(const std::string& dir) {

@@ -18,10 +18,27 @@ std::string cache_temp_path(const std::string& path, long pid = -1);
 // Removes the temporaries of cache files (*.lod.tmp.*, *.scene.tmp.*) in `dir` whose writer is
 // gone: one of this host and pid namespace that no longer runs, or any (of another host on a
 // shared disk, an older name, a pid taken by another process) untouched for kStaleTempSeconds.
-// Live writers' files stay: processes that start together and build the same cache each write
-// their own temporary, and the last rename wins (the contents are equal). Returns how many it
+// Live writers' files stay (processes that start together build a cache once: CacheBuildLock;
+// writers that do not take it each write their own temporary, and the last rename wins). Returns how many it
 // removed; errors are ignored (another process may remove the same file).
 size_t remove_stale_cache_temps(const std::string& dir);
 inline constexpr long kStaleTempSeconds = 3600;
+
+// Held while a process builds a missing cache (an flock on PATH.lock, released when the process
+// ends, however it ends): a process that finds the cache missing too waits for it, then reads
+// what was built instead of building it again (processes that start together would otherwise
+// each hold a whole scene and its LODs at once: 11 GB each at plant:200). Where the lock file
+// cannot be made (a read-only folder) it locks nothing. Says on stderr, prefixed by `who`, when
+// it waits.
+class CacheBuildLock {
+ public:
+  CacheBuildLock(const std::string& path, const std::string& who);
+  ~CacheBuildLock();
+  CacheBuildLock(const CacheBuildLock&) = delete;
+  CacheBuildLock& operator=(const CacheBuildLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 }  // namespace occ

@@ -11,9 +11,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -154,8 +158,8 @@ TEST(LodCacheTemporaries, WritersKilledMidWriteLeaveTemporariesThatTheNextStartR
   fs::remove_all(dir);
 }
 
-// Cluster processes start together: each writes its own temporary and leaves the other's alone
-// (its writer runs); both renames succeed, the last wins, the contents are equal.
+// Cluster processes start together: one builds and writes (the other waits on the build lock,
+// cache_files.hpp, then reads what was written); no temporary is left, both agree on the data.
 TEST(LodCacheTemporaries, WritersThatStartTogetherBuildTheSameCache) {
   const fs::path dir = temp_dir("together"), cache = dir / "cache";
   Writer a(dir, "a"), b(dir, "b");
@@ -212,3 +216,29 @@ TEST(LodCacheTemporaries, WhoseWriterIsGone) {
 }
 
 }  // namespace
+
+// Processes that find a cache missing at the same time build it once: the one that holds the
+// build lock builds, the others wait for it (saying so) and then read what it wrote. Two holders in
+// one process conflict as two processes do (an flock per open file): the second gets the lock only
+// after the first let it go, whatever the threads' timing.
+TEST(CacheBuildLock, ASecondBuilderWaitsUntilTheFirstIsDone) {
+  const fs::path dir = temp_dir("build_lock");
+  const std::string path = (dir / "x.lod").string();
+  std::atomic<bool> first_done{false}, second_saw_done{false}, second_in{false};
+  auto first = std::make_unique<CacheBuildLock>(path, "first");
+  testing::internal::CaptureStderr();
+  std::thread second([&] {
+    CacheBuildLock lock(path, "second");
+    second_saw_done = first_done.load();
+    second_in = true;
+  });
+  for (int i = 0; i < 200 && !second_in; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_FALSE(second_in.load());
+  first_done = true;
+  first.reset();
+  second.join();
+  EXPECT_TRUE(second_saw_done.load());
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("second: waiting for another process that builds " + path), std::string::npos) << err;
+  CacheBuildLock again(path, "third");  // free again
+}

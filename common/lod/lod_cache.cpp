@@ -342,6 +342,11 @@ LodData load_or_build_lod(const Scene& scene, const Hierarchy& h, const LodParam
   const double t0 = now_ms();
   std::string why;
   std::optional<LodData> cached = LodData::load(path, key, scene, h, &why);
+  std::optional<CacheBuildLock> building;  // held until the built data is written
+  if (!cached) {  // another process may be building it: wait for that, then read again
+    building.emplace(path, who);
+    cached = LodData::load(path, key, scene, h, &why);
+  }
   char buf[512];
   if (cached) {
     std::snprintf(buf, sizeof buf, "%s: LOD cache %s: %zu HLODs, %.3f M LOD triangles, %.1f MB (loaded in %.0f ms)",

@@ -13,6 +13,7 @@
 #include <optional>
 #include <iostream>
 
+#include "common/cache_files.hpp"
 #include "common/error.hpp"
 #include "common/hash.hpp"
 #include "common/progress.hpp"
@@ -67,15 +68,21 @@ LodData load_lod(const SceneOptions& opts, const LoadedScene& ls, const std::str
   const std::string path = lod_cache_path(opts.lod_cache, opts.spec);
   const uint64_t key = LodData::cache_key(ls.hierarchy, opts.lod);
   std::string why;
-  const double t0 = now_ms();
-  if (auto d = LodData::load(path, key, ls.scene, ls.hierarchy, &why, true)) {
-    char buf[512];
-    std::snprintf(buf, sizeof buf, "%s: LOD cache %s: %zu HLODs, %.3f M LOD triangles (read in %.0f ms; their arrays "
-                  "stay in the mapped file, streamed as frames need them)", who.c_str(), path.c_str(),
-                  d->hlods().size(), d->total_triangles() / 1e6, now_ms() - t0);
-    std::cerr << buf << "\n";
-    return std::move(*d);
-  }
+  auto read_lazily = [&]() -> std::optional<LodData> {
+    const double t0 = now_ms();
+    std::optional<LodData> d = LodData::load(path, key, ls.scene, ls.hierarchy, &why, true);
+    if (d) {
+      char buf[512];
+      std::snprintf(buf, sizeof buf, "%s: LOD cache %s: %zu HLODs, %.3f M LOD triangles (read in %.0f ms; their "
+                    "arrays stay in the mapped file, streamed as frames need them)", who.c_str(), path.c_str(),
+                    d->hlods().size(), d->total_triangles() / 1e6, now_ms() - t0);
+      std::cerr << buf << "\n";
+    }
+    return d;
+  };
+  if (auto d = read_lazily()) return std::move(*d);
+  { CacheBuildLock wait(path, who); }  // another process may be building it: wait for that
+  if (auto d = read_lazily()) return std::move(*d);
   if (why != "missing") std::cerr << who << ": LOD cache " << path << " is unusable (" << why << "): rebuilding\n";
   {
     std::optional<CachedScene> whole = load_scene_cache(scene_cache, scene_key, &why, false);
@@ -83,7 +90,7 @@ LodData load_lod(const SceneOptions& opts, const LoadedScene& ls, const std::str
     load_or_build_lod(whole->scene, whole->hierarchy, opts.lod, opts.lod_cache, opts.spec, who);
   }
   ::malloc_trim(0);  // the whole scene and the built LODs leave the process
-  if (auto d = LodData::load(path, key, ls.scene, ls.hierarchy, &why, true)) return std::move(*d);
+  if (auto d = read_lazily()) return std::move(*d);
   throw InputError("LOD cache " + path + " cannot be read back after it was built: " + why);
 }
 
@@ -99,9 +106,14 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
   const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build) : 0;
   std::optional<CachedScene> cached;
+  std::optional<CacheBuildLock> building;  // held from a failed read to the written cache
   if (use_cache) {
     std::string why;
     cached = load_scene_cache(cache_path, cache_key, &why, lazy);
+    if (!cached) {  // another process may be building it: wait for that, then read again
+      building.emplace(cache_path, who);
+      cached = load_scene_cache(cache_path, cache_key, &why, lazy);
+    }
     if (!cached && why != "missing")
       std::cerr << who << ": scene cache " << cache_path << " is unusable (" << why << "): rebuilding it\n";
   }
@@ -142,6 +154,7 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
       std::cerr << buf << "\n";
     }
   }
+  building.reset();
   if (lazy && !from_cache) {  // built now: read back lazily, so the built copy leaves memory
     std::string why;
     std::optional<CachedScene> back = load_scene_cache(cache_path, cache_key, &why, true);
