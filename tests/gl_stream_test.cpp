@@ -162,11 +162,13 @@ TEST(SceneRendererStreaming, LazyCachesDrawTheFramesOfTheSceneInMemory) {
 
   auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
   SceneRenderer a(*ctx, built, h, &built_lod);
-  for (uint64_t budget : {kBudget, uint64_t(64) << 20}) {  // streaming, and all of it fitting (preloaded)
+  // Streaming; all of it fitting the budget (uploaded at start); no budget (a tool's renderer: the
+  // same, all of it read from the files at start).
+  for (uint64_t budget : {kBudget, uint64_t(64) << 20, uint64_t(0)}) {
     SceneRenderer b(*ctx, lazy->scene, lazy->hierarchy, &*lazy_lod,
                     SceneRenderer::Upload{.release = true, .budget_bytes = budget});
     ASSERT_NE(b.geometry_pool(), nullptr);
-    const bool fits = budget > kBudget;
+    const bool fits = budget != kBudget;
     EXPECT_EQ(b.geometry_pool()->resident_bytes() == b.geometry_pool()->total_bytes(), fits);
     const Renderables ra(h, &built_lod), rb(lazy->hierarchy, &*lazy_lod);
     expect_same_frames(*ctx, a, ra, b, rb, renderable_sets(h, built_lod, ra), view_of(built));

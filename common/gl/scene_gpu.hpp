@@ -39,9 +39,9 @@ uint32_t pack_rgba8(glm::vec4 c);  // RGBA8, r in the low byte
 // counts, the LOD errors and tables). start_scene_gl does this for the processes. Draws keep
 // their order; a run of one batch key is split where the segment changes.
 //
-// With a budget (budget_bytes > 0) the geometry streams instead (GeometryPool): where the scene
-// was loaded lazily (Scene::mapped, LodData::mapped: its arrays in the mapped caches), or where
-// it is larger than the budget (then from the CPU copies, which stay). Nothing is uploaded at
+// The geometry streams instead (GeometryPool) where the scene was loaded lazily (Scene::mapped,
+// LodData::mapped: its arrays in the cache files; without a budget all of it is read at once), or
+// where it is larger than a budget (budget_bytes > 0; then from the CPU copies, which stay). Nothing is uploaded at
 // construction unless it all fits (then all of it is, at once); every draw names its piece and
 // the renderer makes pieces resident before it draws them. The draw order is unchanged: each
 // draw keeps the segment the upload above would have given it (its logical segment).

@@ -70,8 +70,8 @@ void write_piece(const PieceArrays& a, const ColorOf& color_of, std::vector<uint
 }  // namespace
 
 bool SceneGpu::streams(const Scene& scene, const LodData* lod, const SceneUpload& upload) {
+  if (scene.mapped || (lod && lod->mapped())) return true;  // the arrays are in the file: read as pieces
   if (upload.budget_bytes == 0) return false;
-  if (scene.mapped || (lod && lod->mapped())) return true;
   uint64_t bytes = 0;  // the resident upload's vertices and indices
   for (const Mesh& m : scene.meshes) bytes += m.vertex_count() * GeometryPool::kUnitBytes + m.triangle_count() * 12;
   if (lod) {
@@ -127,7 +127,8 @@ void SceneGpu::start_pool(const Scene& scene, const LodData* lod, std::vector<co
     };
     write_piece(a, color_of, out, uvs, false, what);
   };
-  pool = std::make_unique<GeometryPool>(gl_, upload.budget_bytes, std::move(sizes), any_textured,
+  const uint64_t budget = upload.budget_bytes ? upload.budget_bytes : UINT64_MAX;  // 0: all of it
+  pool = std::make_unique<GeometryPool>(gl_, budget, std::move(sizes), any_textured,
                                         std::move(loader));
   const bool fits = pool->total_bytes() <= pool->budget_bytes();
   if (fits) pool->preload();
