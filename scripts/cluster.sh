@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the occlusion-switch cluster on this machine: switch nodes 0 and 1 and the render client
-# on 127.0.0.1 with ephemeral ports (port files, no fixed ports). Prints the render client's
+# on 127.0.0.1 with free ports (picked here, or by the nodes with --link/--netns: port files), all
+# three started at once on loopback so that their scenes load together. Prints the render client's
 # summary, keeps every process's log in the output folder (and its pid in DIR/NAME.pid), and exits
 # non-zero if the render client failed, a node failed at start, or anything hung (bounded waits):
 # that process is named with its own error line and the others are stopped at once. Ctrl-C stops
@@ -187,6 +188,31 @@ start_node() {
   echo $node_pid >"$out/node$1.pid"
 }
 
+# free_port: a port nobody listens on now (loopback), for a node to take.
+free_port() {
+  python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+}
+
+if [ -z "$link" ] && [ "$netns" = 0 ]; then
+  # On loopback all three start at once, their ports picked here: each loads its scene while the
+  # others load theirs (a process that connects retries until its peer listens, within
+  # --timeout-ms; a missing cache is built once, the others waiting for it). A node still writes
+  # its port file only once it listens, so one that fails at start is named as before.
+  p0=$(free_port) p1=$(free_port)
+  while [ "$p1" = "$p0" ]; do p1=$(free_port); done
+  peer0=$addr_a_from_b:$p0
+  start_node 0 "$p0" "$out/node0.log"
+  node0_pid=$node_pid
+  start_node 1 "$p1" "$out/node1.log"
+  node1_pid=$node_pid
+  "$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "127.0.0.1:$p0" \
+    --connect "127.0.0.1:$p1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
+  rvg_pid=$!
+  pids+=($rvg_pid)
+  echo $rvg_pid >"$out/render_client.pid"
+  wait_port "$out/node0.port" $node0_pid node0 >/dev/null || { cleanup; exit 1; }
+  wait_port "$out/node1.port" $node1_pid node1 >/dev/null || { cleanup; exit 1; }
+else
 start_node 0 0 "$out/node0.log"
 node0_pid=$node_pid
 p0=$(wait_port "$out/node0.port" $node0_pid node0) || { cleanup; exit 1; }
@@ -210,6 +236,7 @@ fi
 rvg_pid=$!
 pids+=($rvg_pid)
 echo $rvg_pid >"$out/render_client.pid"
+fi
 
 # ---- Supervision. A bounded wait for all three (the relays are stopped afterwards). The render
 # client failing, or a node failing before the client has shown a frame (or with --on-node-failure
