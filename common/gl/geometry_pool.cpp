@@ -79,12 +79,9 @@ bool GeometryPool::acquire(uint32_t p) {
     if (tail_ == kNone || window_of_[tail_] == window_) return false;  // only this window's pieces left
     evict(tail_);
   }
-  at_[p] = uint32_t(start);
-  used_ += units;
   window_of_[p] = window_;
-  touch(p);
   const double t0 = now_ms();
-  upload(p);
+  place(p, start);
   stats_.upload_ms += now_ms() - t0;
   ++stats_.uploads;
   return true;
@@ -98,11 +95,15 @@ void GeometryPool::preload() {
     if (at_[p] != kNone) continue;
     while (!allocate(units_of(p), &start))
       if (!grow(units_of(p))) return;
-    at_[p] = uint32_t(start);
-    used_ += units_of(p);
-    touch(p);
-    upload(p);
+    place(p, start);
   }
+}
+
+void GeometryPool::place(uint32_t p, uint64_t start) {
+  at_[p] = uint32_t(start);
+  used_ += units_of(p);
+  touch(p);
+  upload(p);
 }
 
 void GeometryPool::upload(uint32_t p) {

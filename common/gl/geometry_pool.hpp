@@ -94,6 +94,7 @@ class GeometryPool {
   void touch(uint32_t p);  // most recently used
   void unlink(uint32_t p);
   void upload(uint32_t p);
+  void place(uint32_t p, uint64_t start);  // p resident from unit `start`, most recent, uploaded
 
   const GlApi& gl_;
   std::vector<PieceSize> sizes_;

@@ -73,11 +73,11 @@ bool SceneGpu::streams(const Scene& scene, const LodData* lod, const SceneUpload
   if (scene.mapped || (lod && lod->mapped())) return true;  // the arrays are in the file: read as pieces
   if (upload.budget_bytes == 0) return false;
   uint64_t bytes = 0;  // the resident upload's vertices and indices
-  for (const Mesh& m : scene.meshes) bytes += m.vertex_count() * GeometryPool::kUnitBytes + m.triangle_count() * 12;
-  if (lod) {
-    for (const LodMesh& m : lod->cluster_lods()) bytes += m.vertex_count() * GeometryPool::kUnitBytes + m.triangles() * 12;
-    for (const LodMesh& m : lod->hlods()) bytes += m.vertex_count() * GeometryPool::kUnitBytes + m.triangles() * 12;
-  }
+  auto add = [&](uint64_t vertices, uint64_t triangles) { bytes += vertices * GeometryPool::kUnitBytes + triangles * 12; };
+  for (const Mesh& m : scene.meshes) add(m.vertex_count(), m.triangle_count());
+  if (lod)
+    for (const auto* list : {&lod->cluster_lods(), &lod->hlods()})
+      for (const LodMesh& m : *list) add(m.vertex_count(), m.triangles());
   return bytes > upload.budget_bytes;
 }
 
