@@ -142,7 +142,7 @@ TEST(SceneRendererStreaming, LazyCachesDrawTheFramesOfTheSceneInMemory) {
   ASSERT_FALSE(built_lod.save(lod_path).has_value());
 
   std::string why;
-  std::optional<CachedScene> lazy = load_scene_cache(scene_path, 7, &why, true);
+  std::optional<CachedScene> lazy = load_scene_cache(scene_path, 7, &why, 0);
   ASSERT_TRUE(lazy) << why;
   ASSERT_NE(lazy->scene.mapped, nullptr);
   ASSERT_EQ(lazy->scene.meshes.size(), built.meshes.size());
@@ -184,9 +184,9 @@ TEST(SceneRendererStreaming, LazyCachesDrawTheFramesOfTheSceneInMemory) {
   }
   lazy_lod.reset();
   lazy.reset();
-  lazy = load_scene_cache(scene_path, 7, &why, true);
+  lazy = load_scene_cache(scene_path, 7, &why, 0);
   ASSERT_TRUE(lazy) << why;
-  EXPECT_FALSE(load_scene_cache(scene_path, 7, &why, false).has_value());  // read whole: the checksum
+  EXPECT_FALSE(load_scene_cache(scene_path, 7, &why).has_value());  // read whole: the checksum
   EXPECT_NE(why.find("checksum"), std::string::npos) << why;
   SceneRenderer c(*ctx, lazy->scene, lazy->hierarchy, nullptr, SceneRenderer::Upload{.budget_bytes = kBudget});
   std::vector<uint32_t> items;

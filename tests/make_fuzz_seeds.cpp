@@ -195,6 +195,7 @@ void caches(const fs::path& root, const fs::path& gltf_dir) {
                         scene_cache_key("hard:walls:1", kFixtureBuild), f.scene, f.hierarchy));
   Scene s = load_gltf((gltf_dir / "features.gltf").string());
   s.source = "features.gltf";  // not the folder it was written to: the same seed from any folder
+  s.files.clear();             // (nor its files, which a reader would find gone: a stale cache)
   const Hierarchy h = Hierarchy::build(s, kFixtureBuild);
   must(save_scene_cache((root / "scene_cache" / "features.scene").string(),
                         scene_cache_key("features.gltf", kFixtureBuild), s, h));

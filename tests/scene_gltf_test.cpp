@@ -15,6 +15,8 @@
 #include <random>
 
 #include "common/error.hpp"
+#include "common/scene/gltf_reader.hpp"
+#include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
 #include "common/setup/scene_setup.hpp"
 #include "scratch_util.hpp"
@@ -394,4 +396,75 @@ TEST_F(GltfFiles, LowPolySceneSkipsLodSelection) {
   const LoadedScene b = load_and_build(city, "test", true);
   ASSERT_NE(b.lod, nullptr);
   EXPECT_TRUE(lod_benefit(*b.lod, b.hierarchy).worth_selecting());
+}
+
+// A glTF scene's cache (issue 38): written at the first start, read at the next while its files
+// are unchanged, rebuilt when one of them changed; read lazily where its arrays exceed the
+// geometry budget, and then each mesh read back is the mesh of the file.
+TEST_F(GltfFiles, SceneCacheIsReadUntilAFileChangesAndLazilyAboveTheBudget) {
+  Gltf g;  // a 200 x 200 vertex grid: 39,601 x 2 triangles, 1.9 MB of arrays once loaded
+  std::vector<float> xyz;
+  std::vector<uint16_t> idx;
+  constexpr int kN = 200;
+  for (int z = 0; z < kN; ++z)
+    for (int x = 0; x < kN; ++x) xyz.insert(xyz.end(), {float(x), 0.01f * float((x * 7 + z * 3) % 5), float(z)});
+  for (int z = 0; z + 1 < kN; ++z)
+    for (int x = 0; x + 1 < kN; ++x) {
+      const auto v = uint16_t(z * kN + x);
+      idx.insert(idx.end(), {v, uint16_t(v + kN), uint16_t(v + 1), uint16_t(v + 1), uint16_t(v + kN), uint16_t(v + kN + 1)});
+    }
+  const int pos = g.positions(xyz), ind = g.indices(idx);
+  g.j["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", ind}}}}}};
+  g.j["nodes"] = {{{"name", "grid"}, {"mesh", 0}}};
+  SceneOptions o;
+  o.spec = write("grid.gltf", g);
+  o.lod_cache = (dir_ / "cache").string();
+  const Scene file = load_gltf(o.spec);
+  ASSERT_EQ(file.files.size(), 2u);  // the .gltf and its .bin
+  EXPECT_EQ(file.files[1].path, (dir_ / "grid.gltf.bin").string());
+  ASSERT_GT(scene_array_bytes(file), uint64_t(1) << 20);
+  auto start = [&](const std::string& budget, std::string* log) {
+    o.geometry_budget = budget;
+    ::testing::internal::CaptureStderr();
+    LoadedScene ls = load_and_build(o, "test", false);
+    *log = ::testing::internal::GetCapturedStderr();
+    return ls;
+  };
+  std::string log;
+  const LoadedScene built = start("all", &log);
+  EXPECT_NE(log.find("wrote scene cache"), std::string::npos) << log;
+  const LoadedScene read = start("all", &log);
+  EXPECT_NE(log.find("read from scene cache"), std::string::npos) << log;
+  EXPECT_EQ(read.scene.content_hash(), built.scene.content_hash());
+  EXPECT_EQ(read.scene.files, file.files);
+  EXPECT_EQ(read.hierarchy.fingerprint(), built.hierarchy.fingerprint());
+  EXPECT_EQ(read.scene.mapped, nullptr);
+
+  // Under a budget of 1 MB the arrays stay in the file; every mesh read back is the file's.
+  const LoadedScene lazy = start("1", &log);
+  EXPECT_NE(log.find("read from scene cache"), std::string::npos) << log;
+  ASSERT_NE(lazy.scene.mapped, nullptr);
+  EXPECT_EQ(lazy.hierarchy.fingerprint(), built.hierarchy.fingerprint());
+  ASSERT_EQ(lazy.scene.meshes.size(), built.scene.meshes.size());
+  for (uint32_t m = 0; m < built.scene.meshes.size(); ++m) {
+    const Mesh back = read_mapped_mesh(lazy.scene, m);
+    EXPECT_EQ(back.positions, built.scene.meshes[m].positions) << m;
+    EXPECT_EQ(back.indices, built.scene.meshes[m].indices) << m;
+  }
+  // A budget the arrays fit in: read whole.
+  EXPECT_EQ(start("64", &log).scene.mapped, nullptr);
+
+  // The .bin changes (one vertex moves up, the file a second newer): stale, named, rebuilt.
+  std::vector<unsigned char> bin = read_bytes(dir_ / "grid.gltf.bin");
+  const float up = 5.0f;
+  std::memcpy(bin.data() + 4, &up, 4);  // vertex 0's y (positions first in the buffer)
+  write_bytes(dir_ / "grid.gltf.bin", bin);
+  fs::last_write_time(dir_ / "grid.gltf.bin", fs::last_write_time(dir_ / "grid.gltf.bin") + std::chrono::seconds(1));
+  const LoadedScene rebuilt = start("all", &log);
+  EXPECT_NE(log.find("stale (" + (dir_ / "grid.gltf.bin").string() + " changed"), std::string::npos) << log;
+  EXPECT_NE(log.find("wrote scene cache"), std::string::npos) << log;
+  EXPECT_NE(rebuilt.scene.content_hash(), built.scene.content_hash());
+  o.scene_cache = false;
+  EXPECT_EQ(rebuilt.scene.content_hash(), start("all", &log).scene.content_hash());
+  EXPECT_GE(rebuilt.scene.bounds().max.y, 5.0f);
 }

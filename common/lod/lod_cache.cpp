@@ -28,7 +28,7 @@ namespace occ {
 namespace {
 
 // Bump whenever the builder (lod_build.cpp, lod_simplify.cpp) changes its output.
-constexpr uint32_t kCacheVersion = 2;
+constexpr uint32_t kCacheVersion = 3;  // 3: the structure ahead of the arrays
 constexpr char kCacheMagic[8] = {'O', 'C', 'C', 'L', 'O', 'D', '\r', '\n'};
 
 // Writes the payload in pieces to a sink (put(data, bytes)): counted, hashed or written to the
@@ -44,6 +44,10 @@ class Writer {
   template <class T>
   void vec(const std::vector<T>& v) {
     pod(uint64_t(v.size()));
+    raw(v);
+  }
+  template <class T>
+  void raw(const std::vector<T>& v) {  // the elements only (their count is elsewhere)
     if (!v.empty()) put_(v.data(), v.size() * sizeof(T));
   }
 
@@ -104,15 +108,12 @@ class Reader {
     off_ += count * sizeof(T);
     return true;
   }
-  // An array left in the file: its place (payload offset), after the same count check as vec.
-  bool ref(MappedArray& a, size_t elem_bytes) {
-    uint64_t count = 0;
-    if (!pod(count) || count > (n_ - off_) / elem_bytes) return false;
-    a = {uint64_t(off_), count, count * elem_bytes};
-    off_ += count * elem_bytes;
+  // The count of an array stored in the array section: checked against the bytes left.
+  bool count(MappedArray& a, size_t elem_bytes) {
+    if (!pod(a.count) || a.count > (n_ - off_) / elem_bytes) return false;
+    a.bytes = a.count * elem_bytes;
     return true;
   }
-  bool done() const { return off_ == n_; }
   size_t offset() const { return off_; }
 
  private:
@@ -120,24 +121,57 @@ class Reader {
   size_t n_, off_ = 0;
 };
 
+// A mesh's arrays in the order the structure counts them and the array section stores them,
+// each with its place in the file: f(array, place).
+template <class M, class P, class F>
+void mesh_arrays(M& m, P& place, const F& f) {
+  f(m.positions, place.positions), f(m.normals, place.normals), f(m.objects, place.objects),
+      f(m.indices, place.indices);
+}
+
+// A mesh's record in the structure: origin, error and the counts of its arrays.
 template <class W>
-void write_mesh(W& w, const LodMesh& m) {
+void write_mesh_record(W& w, const LodMesh& m) {
   w.pod(m.origin.x);
   w.pod(m.origin.y);
   w.pod(m.origin.z);
   w.pod(m.error);
-  w.vec(m.positions);
-  w.vec(m.normals);
-  w.vec(m.objects);
-  w.vec(m.indices);
+  MappedMesh unused;
+  mesh_arrays(m, unused, [&](const auto& a, const MappedArray&) { w.pod(uint64_t(a.size())); });
 }
 
-bool read_mesh(Reader& r, LodMesh& m, size_t object_count) {
+bool read_mesh_record(Reader& r, LodMesh& m, MappedMesh& place) {
   if (!r.pod(m.origin.x) || !r.pod(m.origin.y) || !r.pod(m.origin.z) || !r.pod(m.error)) return false;
-  if (!r.vec(m.positions) || !r.vec(m.normals) || !r.vec(m.objects) || !r.vec(m.indices)) return false;
-  if (m.normals.size() != m.positions.size()) return false;
-  if (!m.objects.empty() && m.objects.size() != m.positions.size()) return false;
-  if (m.indices.size() % 3 != 0 || !std::isfinite(m.error) || m.error < 0) return false;
+  bool ok = true;
+  mesh_arrays(m, place, [&](const auto& a, MappedArray& p) { ok = ok && r.count(p, sizeof(a[0])); });
+  const uint64_t nv = place.positions.count;
+  return ok && place.normals.count == nv && (place.objects.count == 0 || place.objects.count == nv) &&
+         place.indices.count % 3 == 0 && std::isfinite(m.error) && m.error >= 0;
+}
+
+// After the structure: the array section, [begin, end) of the payload, each mesh's arrays one
+// after the other (cluster LODs, then HLODs). Sets each array's offset (in the file: payload
+// offset + head); false when the counts do not fill the section exactly.
+bool place_arrays(std::vector<MappedMesh>& places, const std::vector<LodMesh>& clusters,
+                  const std::vector<LodMesh>& hlods, uint64_t begin, uint64_t end, size_t head) {
+  uint64_t at = begin;
+  bool fits = true;
+  for (size_t k = 0; k < places.size(); ++k)
+    mesh_arrays(k < clusters.size() ? clusters[k] : hlods[k - clusters.size()], places[k],
+                [&](const auto&, MappedArray& p) {
+                  fits = fits && p.bytes <= end - at;
+                  p.offset = head + at;
+                  at += fits ? p.bytes : 0;
+                });
+  return fits && at == end;
+}
+
+// A mesh's arrays read from the mapped payload (its places from place_arrays), then checked.
+bool read_mesh_arrays(const uint8_t* file, LodMesh& m, const MappedMesh& place, size_t object_count) {
+  mesh_arrays(m, place, [&](auto& a, const MappedArray& p) {
+    a.resize(p.count);
+    if (p.bytes) std::memcpy(a.data(), file + p.offset, p.bytes);
+  });
   for (uint32_t i : m.indices)
     if (i >= m.positions.size()) return false;
   for (uint32_t o : m.objects)
@@ -145,19 +179,11 @@ bool read_mesh(Reader& r, LodMesh& m, size_t object_count) {
   return true;
 }
 
-// read_mesh for a lazy load: the arrays' places (file offsets: payload offset + head), the mesh
-// released with its counts; the indices are checked when the upload reads them.
-bool read_lazy_mesh(Reader& r, LodMesh& m, MappedMesh& mm, size_t head) {
-  if (!r.pod(m.origin.x) || !r.pod(m.origin.y) || !r.pod(m.origin.z) || !r.pod(m.error)) return false;
-  if (!r.ref(mm.positions, 12) || !r.ref(mm.normals, 12) || !r.ref(mm.objects, 4) || !r.ref(mm.indices, 4)) return false;
-  for (MappedArray* a : {&mm.positions, &mm.normals, &mm.objects, &mm.indices}) a->offset += head;
-  const uint64_t nv = mm.positions.count;
-  if (mm.normals.count != nv || (mm.objects.count && mm.objects.count != nv)) return false;
-  if (mm.indices.count % 3 != 0 || !std::isfinite(m.error) || m.error < 0) return false;
+// A lazily loaded mesh: released with its counts (its indices are checked when the upload reads them).
+void release_lazy_mesh(LodMesh& m, const MappedMesh& place) {
   m.released = true;
-  m.released_triangles = mm.indices.count / 3;
-  m.released_vertices = nv;
-  return true;
+  m.released_triangles = place.indices.count / 3;
+  m.released_vertices = place.positions.count;
 }
 
 // The payload to `put` (see Writer).
@@ -167,12 +193,15 @@ void serialize(Put& put, const std::vector<LodMesh>& clusters, const std::vector
                const std::vector<std::array<double, kLeafLodLevels + 1>>& errors) {
   Writer<Put> w(put);
   w.pod(uint64_t(clusters.size()));
-  for (const auto& m : clusters) write_mesh(w, m);
+  for (const auto& m : clusters) write_mesh_record(w, m);
   w.vec(slots);
   w.pod(uint64_t(hlods.size()));
-  for (const auto& m : hlods) write_mesh(w, m);
+  for (const auto& m : hlods) write_mesh_record(w, m);
   w.vec(hlod_of_node);
   w.vec(errors);
+  MappedMesh unused;  // the array section
+  for (const auto* meshes : {&clusters, &hlods})
+    for (const auto& m : *meshes) mesh_arrays(m, unused, [&](const auto& a, const MappedArray&) { w.raw(a); });
 }
 
 }  // namespace
@@ -273,29 +302,22 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   d.key_ = key;
   Reader r(payload, payload_size);
   uint64_t nc = 0, nh = 0;
-  if (!r.pod(nc) || nc > payload_size) return fail("corrupt cluster LOD count");
+  std::vector<MappedMesh> places;  // cluster LODs, then HLODs
+  if (!r.pod(nc) || nc > payload_size / 64) return fail("corrupt cluster LOD count");
   d.cluster_lods_.resize(nc);
-  auto mapped = lazy ? std::make_shared<MappedGeometry>() : nullptr;
-  auto read_one = [&](LodMesh& m) {
-    if (!lazy) return read_mesh(r, m, scene.objects.size());
-    mapped->meshes.emplace_back();
-    return read_lazy_mesh(r, m, mapped->meshes.back(), kHead);
-  };
-  for (auto& m : d.cluster_lods_) {
-    if (!read_one(m)) return fail("corrupt cluster LOD mesh");
-    file.drop_before(kHead + r.offset());
-  }
+  places.resize(nc);
+  for (size_t k = 0; k < nc; ++k)
+    if (!read_mesh_record(r, d.cluster_lods_[k], places[k])) return fail("corrupt cluster LOD mesh");
   if (!r.vec(d.item_slot_) || d.item_slot_.size() != h.items().size()) return fail("corrupt item table");
   for (size_t i = 0; i < d.item_slot_.size(); ++i)  // (slot + 1) in 64 bits: a slot of 2^32 - 1 does not wrap
     if ((uint64_t(d.item_slot_[i]) + 1) * kLeafLodLevels > nc)
       return fail("item " + std::to_string(i) + ": slot " + std::to_string(d.item_slot_[i]) + " out of range (" +
                   std::to_string(nc) + " cluster LODs)");
-  if (!r.pod(nh) || nh > payload_size) return fail("corrupt HLOD count");
+  if (!r.pod(nh) || nh > payload_size / 64) return fail("corrupt HLOD count");
   d.hlods_.resize(nh);
-  for (auto& m : d.hlods_) {
-    if (!read_one(m)) return fail("corrupt HLOD mesh");
-    file.drop_before(kHead + r.offset());
-  }
+  places.resize(nc + nh);
+  for (size_t k = 0; k < nh; ++k)
+    if (!read_mesh_record(r, d.hlods_[k], places[nc + k])) return fail("corrupt HLOD mesh");
   if (!r.vec(d.hlod_of_node_) || d.hlod_of_node_.size() != h.size()) return fail("corrupt node table");
   for (uint32_t x : d.hlod_of_node_)
     if (x != kNoNode && x >= nh) return fail("HLOD index out of range");
@@ -306,10 +328,23 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
     for (double e : d.errors_[id])
       if (!std::isfinite(e) || e < 0) return fail("bad error value");
   }
-  if (!r.done()) return fail("trailing bytes");
+  if (!place_arrays(places, d.cluster_lods_, d.hlods_, r.offset(), payload_size, kHead))
+    return fail("array section does not match the meshes' counts (truncated or trailing bytes)");
+  for (size_t k = 0; k < nc + nh; ++k) {  // lazy: the arrays stay in the file; else read, in file order
+    LodMesh& m = k < nc ? d.cluster_lods_[k] : d.hlods_[k - nc];
+    if (lazy) {
+      release_lazy_mesh(m, places[k]);
+    } else {
+      if (!read_mesh_arrays(bytes, m, places[k], scene.objects.size()))
+        return fail(k < nc ? "corrupt cluster LOD mesh" : "corrupt HLOD mesh");
+      file.drop_before(places[k].indices.offset + places[k].indices.bytes);
+    }
+  }
   file.drop_before(file.size(), 0);
   d.hash_ = hash;
   if (lazy) {
+    auto mapped = std::make_shared<MappedGeometry>();
+    mapped->meshes = std::move(places);
     try {
       mapped->file = std::make_shared<FileReader>(path);
     } catch (const std::runtime_error& e) {

@@ -1,7 +1,10 @@
 // The LOD cache file: where it lives and load-or-build. The format (lod_cache.cpp): a header
 // (magic "OCCLOD\r\n", format version, LodData::cache_key, payload bytes, payload hash) and the
-// payload (every LodMesh and table of LodData, copied in host byte order; its hash is
-// LodData::hash()). LodData::save/load write and read it (lod_data.hpp). No GL.
+// payload (its hash is LodData::hash()): first the structure (each cluster LOD's origin, error
+// and array counts, the item slots, the same of each HLOD, the node and error tables), then the
+// array section (every mesh's arrays one after the other, cluster LODs then HLODs), all copied
+// in host byte order; a lazy start reads the structure only. LodData::save/load write and read
+// it (lod_data.hpp). No GL.
 #pragma once
 #include <string>
 

@@ -50,6 +50,13 @@ std::vector<unsigned char> read_file(const std::string& path) {
   return data;
 }
 
+// tinygltf's file reader, recording each file it reads (its buffers' and images' uris) in the
+// std::vector<SourceFile> behind user_data, as it was just before it was read.
+bool read_and_record(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user_data) {
+  if (auto f = source_file(path)) static_cast<std::vector<SourceFile>*>(user_data)->push_back(*f);
+  return tinygltf::ReadWholeFile(out, err, path, nullptr);
+}
+
 // Images are decoded later, and only those a drawn material uses (GltfReader::image). Here the
 // encoded bytes of uri images (files, data URIs) are kept; bytes of buffer-view images are not
 // touched (tinygltf passes them unchecked: GltfReader reads them through its checked views).
@@ -559,6 +566,8 @@ bool ends_with_ci(const std::string& s, std::string_view suffix) {
 }  // namespace
 
 Scene load_gltf(const std::string& path) {
+  std::vector<SourceFile> files;
+  if (auto f = source_file(path)) files.push_back(*f);
   const std::vector<unsigned char> bytes = read_file(path);
   if (bytes.size() > UINT_MAX) throw InputError(path + ": file larger than 4 GiB");
   // .glb / .gltf by extension, anything else by the binary magic.
@@ -566,6 +575,7 @@ Scene load_gltf(const std::string& path) {
                                                      std::memcmp(bytes.data(), "glTF", 4) == 0);
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_image_bytes, nullptr);
+  loader.SetFsCallbacks({tinygltf::FileExists, tinygltf::ExpandFilePath, read_and_record, tinygltf::WriteWholeFile, &files});
   tinygltf::Model model;
   std::string err, warn;
   const std::string base = std::filesystem::path(path).parent_path().string();
@@ -583,6 +593,7 @@ Scene load_gltf(const std::string& path) {
   if (!warn.empty()) std::cerr << path << ": warning: " << one_line(warn) << "\n";
   Scene scene = GltfReader(model, path).read();
   scene.source = path;
+  scene.files = std::move(files);
   return scene;
 }
 

@@ -1,6 +1,7 @@
 #include "common/scene/scene.hpp"
 
 #include <meshoptimizer.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
@@ -29,6 +30,12 @@ void Mesh::release_geometry() {
   std::vector<uint32_t>().swap(indices);
   std::vector<glm::vec2>().swap(uvs);
   std::vector<uint32_t>().swap(colors);
+}
+
+std::optional<SourceFile> source_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
+  return SourceFile{path, uint64_t(st.st_size), int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
 }
 
 Mesh read_mapped_mesh(const Scene& scene, uint32_t m) {

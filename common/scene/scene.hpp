@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -95,8 +96,19 @@ struct Object {
   std::string name;
 };
 
+// A file a scene was read from, as it was when read: what tells a scene cache of it stale.
+struct SourceFile {
+  std::string path;
+  uint64_t size = 0;
+  int64_t mtime_ns = 0;
+  bool operator==(const SourceFile&) const = default;
+};
+// path as it is now; nullopt when it cannot be stat'ed.
+std::optional<SourceFile> source_file(const std::string& path);
+
 struct Scene {
   std::string source;  // what it was made from, for messages
+  std::vector<SourceFile> files;  // the files it was read from (a glTF, its buffers and images)
   std::vector<Mesh> meshes;
   std::vector<Object> objects;
   std::vector<Material> materials;

@@ -10,13 +10,15 @@
 
 #include "common/cache_files.hpp"
 #include "common/mapped_file.hpp"
+#include "common/scene/gltf_reader.hpp"
 #include "common/scene/plant.hpp"
 
 namespace occ {
 
 namespace {
 
-constexpr uint32_t kSceneCacheVersion = 3;  // 2: welded vertices, vertex cache order; 3: fetch order
+constexpr uint32_t kSceneCacheVersion = 4;  // 2: welded vertices, vertex cache order; 3: fetch order;
+                                            // 4: the structure ahead of the arrays
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
 constexpr size_t kHead = CacheHeader::kSize;
 
@@ -96,14 +98,6 @@ class In {
     f_.drop_before(off_);
     return true;
   }
-  // An array left in the file: its place, after the same count check as vec.
-  bool ref(MappedArray& a, size_t elem_bytes) {
-    uint64_t n = 0;
-    if (!pod(n) || n > (f_.size() - off_) / elem_bytes) return false;
-    a = {uint64_t(off_), n, n * elem_bytes};
-    off_ += n * elem_bytes;
-    return true;
-  }
   bool str(std::string& s) {
     uint64_t n = 0;
     if (!pod(n) || n > f_.size() - off_) return false;
@@ -126,7 +120,7 @@ class In {
   bool count(uint64_t& n, size_t min_bytes_each) {  // a count of records of >= min_bytes_each
     return pod(n) && n <= (f_.size() - off_) / std::max<size_t>(min_bytes_each, 1);
   }
-  bool done() const { return off_ == f_.size(); }
+  size_t offset() const { return off_; }
 
  private:
   MappedFile& f_;
@@ -135,9 +129,18 @@ class In {
 
 // The fields of each record in the order the cache stores them, one list for the writer and the
 // reader: f(field) for each (Out::field / In::field say how each type is stored).
+// A mesh's record in the structure: its name, the counts of its arrays (mesh_arrays), its
+// clusters and material; the arrays themselves follow the whole structure (array section).
 template <class M, class F>
 void mesh_fields(M& m, const F& f) {
-  f(m.name), f(m.positions), f(m.normals), f(m.indices), f(m.clusters), f(m.uvs), f(m.colors), f(m.material);
+  f(m.name), f(m.clusters), f(m.material);
+}
+// The arrays of a mesh in the order the structure counts them and the array section stores
+// them, each with its place in the file (MappedMesh): f(array, place).
+template <class M, class P, class F>
+void mesh_arrays(M& m, P& place, const F& f) {
+  f(m.positions, place.positions), f(m.normals, place.normals), f(m.indices, place.indices), f(m.uvs, place.uvs),
+      f(m.colors, place.colors);
 }
 template <class O, class F>
 void object_fields(O& ob, const F& f) {
@@ -147,6 +150,10 @@ template <class M, class F>
 void material_fields(M& m, const F& f) {
   f(m.name), f(m.base_color), f(m.base_color_texture), f(m.alpha_mode), f(m.alpha_cutoff), f(m.double_sided),
       f(m.unlit), f(m.object_color);
+}
+template <class S, class F>
+void source_file_fields(S& sf, const F& f) {
+  f(sf.path), f(sf.size), f(sf.mtime_ns);
 }
 static_assert(sizeof(Image::width) == 4 && sizeof(Image::height) == 4);  // stored as int32
 template <class I, class F>
@@ -193,10 +200,36 @@ const char* check_mesh(const Mesh& me) {
   return nullptr;
 }
 
-// A mesh read lazily (Scene::mapped): its arrays stay in the file, the mesh is released.
-bool read_lazy_mesh(In& in, Mesh& m, MappedMesh& mm) {
-  return in.str(m.name) && in.ref(mm.positions, 12) && in.ref(mm.normals, 12) && in.ref(mm.indices, 4) &&
-         in.vec(m.clusters) && in.ref(mm.uvs, 8) && in.ref(mm.colors, 4) && in.pod(m.material);
+// A mesh's record in the structure: its fields, and its arrays' counts into `place` (their
+// offsets come with the array section, place_arrays).
+bool read_mesh_record(In& in, Mesh& m, MappedMesh& place) {
+  bool ok = true;
+  mesh_fields(m, [&](auto& field) { ok = ok && in.field(field); });
+  mesh_arrays(m, place, [&](const auto& a, MappedArray& p) {
+    constexpr size_t kElem = sizeof(a[0]);
+    ok = ok && in.count(p.count, kElem);
+    p.bytes = p.count * kElem;
+  });
+  return ok;
+}
+
+// The array section, [begin, end) of the file: the meshes' arrays one after the other, in mesh
+// order. Sets each array's offset; nullopt, or what is wrong when the counts do not fill the
+// section exactly.
+std::optional<std::string> place_arrays(std::vector<MappedMesh>& places, const std::vector<Mesh>& meshes,
+                                        uint64_t begin, uint64_t end) {
+  uint64_t at = begin;
+  for (size_t k = 0; k < places.size(); ++k) {
+    bool fits = true;
+    mesh_arrays(meshes[k], places[k], [&](const auto&, MappedArray& p) {
+      fits = fits && p.bytes <= end - at;
+      p.offset = at;
+      at += fits ? p.bytes : 0;
+    });
+    if (!fits) return "mesh " + std::to_string(k) + ": arrays past the end of the file";
+  }
+  if (at != end) return "trailing bytes";
+  return std::nullopt;
 }
 
 // check_mesh for a lazy mesh, without reading its arrays (the upload checks the indices when it
@@ -219,7 +252,14 @@ const char* check_lazy_mesh(Mesh& me, const MappedMesh& mm) {
 void write_payload(Out& o, const Scene& s, const BuildParams& p, uint32_t depth, uint64_t fp,
                    const std::vector<HNode>& nodes, const std::vector<Item>& items) {
   o.str(s.source);
-  write_records(o, s.meshes, [](const Mesh& m, const auto& f) { mesh_fields(m, f); });
+  write_records(o, s.files, [](const SourceFile& sf, const auto& f) { source_file_fields(sf, f); });
+  o.pod(s.zero_area_triangles);
+  o.pod(uint64_t(s.meshes.size()));
+  MappedMesh unused;
+  for (const Mesh& m : s.meshes) {
+    mesh_fields(m, [&](const auto& field) { o.field(field); });
+    mesh_arrays(m, unused, [&](const auto& a, const MappedArray&) { o.pod(uint64_t(a.size())); });
+  }
   write_records(o, s.objects, [](const Object& ob, const auto& f) { object_fields(ob, f); });
   write_records(o, s.materials, [](const Material& m, const auto& f) { material_fields(m, f); });
   o.vec(s.textures);
@@ -229,6 +269,8 @@ void write_payload(Out& o, const Scene& s, const BuildParams& p, uint32_t depth,
   o.pod(fp);
   o.vec(nodes);
   o.vec(items);
+  for (const Mesh& m : s.meshes)  // the array section
+    mesh_arrays(m, unused, [&](const auto& a, const MappedArray&) { o.raw(a.data(), a.size() * sizeof(a[0])); });
 }
 
 }  // namespace
@@ -270,7 +312,8 @@ struct SceneCacheIo {
     return commit_cache_file(tmp, path);
   }
 
-  static std::optional<CachedScene> load(const std::string& path, uint64_t key, std::string* why, bool lazy) {
+  static std::optional<CachedScene> load(const std::string& path, uint64_t key, std::string* why,
+                                         uint64_t lazy_above_bytes) {
     auto fail = [&](const std::string& w) -> std::optional<CachedScene> {
       *why = w;
       return std::nullopt;
@@ -281,43 +324,40 @@ struct SceneCacheIo {
     if (auto bad = check_cache_header(f, kMagic, "scene cache", kSceneCacheVersion, key,
                                       "stale (written for another scene spec, generator or hierarchy parameters)", &head))
       return fail(*bad);
-    if (!lazy) {  // lazy: not the whole file at start (its structure is checked, each mesh's indices when read)
+    // The payload's checksum, unless read lazily: not the whole file at start (its structure is
+    // checked, each mesh's indices when read). Before the parse where that is known now.
+    auto checksum_fits = [&] {
       StreamHash sh;
       constexpr size_t kStep = size_t(32) << 20;
+      f.restart_drops();
       for (size_t off = kHead; off < f.size(); off += kStep) {
         sh.feed(f.data() + off, std::min(kStep, f.size() - off));
         f.drop_before(off + std::min(kStep, f.size() - off), 0);
       }
-      if (sh.value() != head.hash) return fail("checksum mismatch (corrupt)");
-      f.close();  // parse from a fresh mapping (the dropped pages come back from the page cache)
-      if (!f.open(path, why)) return std::nullopt;
-    }
+      f.restart_drops();  // the parse reads pages again: it drops them again
+      return sh.value() == head.hash;
+    };
+    const bool never_lazy = lazy_above_bytes == UINT64_MAX;
+    if (never_lazy && !checksum_fits()) return fail("checksum mismatch (corrupt)");
     CachedScene c;
     Scene& s = c.scene;
     Hierarchy& h = c.hierarchy;
     In in(f, kHead);
     if (!in.str(s.source)) return fail("corrupt source name");
-    if (lazy) {
-      auto mapped = std::make_shared<MappedGeometry>();
-      uint64_t n = 0;
-      if (!in.count(n, 8 * 7 + 4)) return fail("corrupt mesh count");
-      s.meshes.resize(n);
-      mapped->meshes.resize(n);
-      for (size_t k = 0; k < n; ++k) {
-        if (!read_lazy_mesh(in, s.meshes[k], mapped->meshes[k])) return fail("mesh " + std::to_string(k) + ": truncated");
-        if (const char* bad = check_lazy_mesh(s.meshes[k], mapped->meshes[k]))
-          return fail("mesh " + std::to_string(k) + ": " + bad);
-      }
-      try {
-        mapped->file = std::make_shared<FileReader>(path);
-      } catch (const std::runtime_error& e) {
-        return fail(e.what());
-      }
-      s.mapped = std::move(mapped);
-    } else if (auto bad = read_records(in, s.meshes, 8 * 7 + 4, "mesh",
-                                       [](Mesh& m, const auto& f) { mesh_fields(m, f); }, check_mesh)) {
+    if (auto bad = read_records(in, s.files, 24, "source file",
+                                [](SourceFile& sf, const auto& f) { source_file_fields(sf, f); },
+                                [](const SourceFile&) { return nullptr; }))
       return fail(*bad);
-    }
+    for (const SourceFile& was : s.files)
+      if (source_file(was.path) != was)
+        return fail("stale (" + was.path + " changed or is gone since the cache was written)");
+    if (!in.pod(s.zero_area_triangles)) return fail("corrupt zero-area triangle count");
+    uint64_t n = 0;
+    if (!in.count(n, 8 * 7 + 4)) return fail("corrupt mesh count");
+    s.meshes.resize(n);
+    std::vector<MappedMesh> places(n);
+    for (size_t k = 0; k < n; ++k)
+      if (!read_mesh_record(in, s.meshes[k], places[k])) return fail("mesh " + std::to_string(k) + ": truncated");
     if (auto bad = read_records(
             in, s.objects, 4 + 128 + 8, "object", [](Object& ob, const auto& f) { object_fields(ob, f); },
             [&](const Object& ob) { return ob.mesh >= s.meshes.size() ? "mesh out of range" : nullptr; }))
@@ -345,7 +385,34 @@ struct SceneCacheIo {
         return fail("mesh " + std::to_string(m) + ": material out of range");
     if (!in.pod(h.params_) || !in.pod(h.depth_) || !in.pod(h.fingerprint_) || !in.vec(h.nodes_) || !in.vec(h.items_))
       return fail("hierarchy: truncated");
-    if (!in.done()) return fail("trailing bytes");
+    if (auto bad = place_arrays(places, s.meshes, in.offset(), f.size())) return fail(*bad);
+    const bool lazy = !never_lazy && f.size() - in.offset() > lazy_above_bytes;
+    if (!lazy && !never_lazy && !checksum_fits()) return fail("checksum mismatch (corrupt)");
+    for (size_t k = 0; k < n; ++k) {  // lazy: the arrays stay in the file; else read, in file order
+      Mesh& m = s.meshes[k];
+      const char* bad = nullptr;
+      if (lazy) {
+        bad = check_lazy_mesh(m, places[k]);
+      } else {
+        mesh_arrays(m, places[k], [&](auto& a, const MappedArray& p) {
+          a.resize(p.count);
+          if (p.bytes) std::memcpy(a.data(), f.data() + p.offset, p.bytes);
+        });
+        f.drop_before(places[k].colors.offset + places[k].colors.bytes);
+        bad = check_mesh(m);
+      }
+      if (bad) return fail("mesh " + std::to_string(k) + ": " + bad);
+    }
+    if (lazy) {
+      auto mapped = std::make_shared<MappedGeometry>();
+      mapped->meshes = std::move(places);
+      try {
+        mapped->file = std::make_shared<FileReader>(path);
+      } catch (const std::runtime_error& e) {
+        return fail(e.what());
+      }
+      s.mapped = std::move(mapped);
+    }
     const uint64_t N = h.nodes_.size(), I = h.items_.size();
     for (size_t k = 0; k < I; ++k) {
       const Item& it = h.items_[k];
@@ -364,7 +431,17 @@ struct SceneCacheIo {
   }
 };
 
-bool scene_cache_applies(const std::string& spec) { return spec.rfind("plant:", 0) == 0; }
+bool scene_cache_applies(const std::string& spec) {
+  return spec.rfind("plant:", 0) == 0 || (is_gltf_path(spec) && spec.rfind("layout:", 0) != 0);
+}
+
+uint64_t scene_array_bytes(const Scene& s) {
+  uint64_t bytes = 0;
+  MappedMesh unused;
+  for (const Mesh& m : s.meshes)
+    mesh_arrays(m, unused, [&](const auto& a, const MappedArray&) { bytes += a.size() * sizeof(a[0]); });
+  return bytes;
+}
 
 std::string scene_cache_path(const std::string& cache_dir, const std::string& spec) {
   std::string p = lod_cache_path(cache_dir, spec);  // ".../<name>-<hash>.lod"
@@ -375,7 +452,12 @@ uint64_t scene_cache_key(const std::string& spec, const BuildParams& params) {
   Hasher k;
   k.u32(kSceneCacheVersion);
   k.u32(plant::kGeneratorVersion);
+  k.u32(kGltfReaderVersion);
   k.str(spec);
+  if (is_gltf_path(spec)) {  // the same relative path from another folder is another file
+    std::error_code ec;
+    k.str(std::filesystem::weakly_canonical(spec, ec).string());
+  }
   k.u32(params.arity);
   k.u32(params.leaf_items);
   k.u32(params.cluster_triangles);
@@ -387,9 +469,10 @@ std::optional<std::string> save_scene_cache(const std::string& path, uint64_t ke
   return SceneCacheIo::save(path, key, scene, h);
 }
 
-std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why, bool lazy) {
+std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why,
+                                            uint64_t lazy_above_bytes) {
   remove_stale_cache_temps(std::filesystem::path(path).parent_path().string());
-  return SceneCacheIo::load(path, key, why, lazy);
+  return SceneCacheIo::load(path, key, why, lazy_above_bytes);
 }
 
 }  // namespace occ

@@ -5,16 +5,20 @@
 // their own cache, keyed by the hierarchy fingerprint this one restores.
 //
 // Format: a header (magic "OCCSCN\r\n", format version, cache key, payload bytes, payload
-// StreamHash) and the payload: the Scene (meshes with their clusters, objects, materials,
-// textures, images, source) and the Hierarchy (parameters, depth, fingerprint, nodes, items),
-// arrays copied in host byte order. Written atomically (temporary file + rename), streamed (never
+// StreamHash) and the payload: first the structure, the Scene (source, each mesh's name,
+// clusters, material and the counts of its arrays, objects, materials, textures, images) and the
+// Hierarchy (parameters, depth, fingerprint, nodes, items); then the array section, every
+// mesh's vertex and index arrays one after the other, in mesh order. Arrays are copied in host
+// byte order. A lazy start reads the structure only: one short read, however big the scene. Written atomically (temporary file + rename), streamed (never
 // the whole payload in memory). Read from a memory mapping, every size checked before it is
 // trusted, the parsed pages dropped as it goes (mapped_file.hpp). No GL.
 //
-// Only `plant:` specs are cached: the other generated scenes are instanced and load in well
-// under a second, and files would need their own staleness check. The key covers the spec, the
-// hierarchy parameters, the cache format and plant::kGeneratorVersion (bump it when the plant
-// generator's output changes).
+// `plant:` specs and glTF files are cached: the other generated scenes are instanced and load in
+// well under a second. The key covers the spec (a file's canonical path too), the hierarchy
+// parameters, the cache format, plant::kGeneratorVersion and kGltfReaderVersion (bump them when
+// the generator's or the reader's output changes). The structure also lists the files a glTF
+// scene was read from (Scene::files: path, size, modification time): a file that changed or is
+// gone makes the cache stale.
 #pragma once
 #include <optional>
 #include <string>
@@ -41,12 +45,15 @@ std::optional<std::string> save_scene_cache(const std::string& path, uint64_t ke
                                             const Hierarchy& h);
 // nullopt and *why (missing, truncated, bad magic, version, stale key, checksum, inconsistent
 // data, with what and where) when the file cannot be used. First removes the stale temporaries
-// of its folder (remove_stale_cache_temps, cache_files.hpp). With lazy, the meshes' arrays stay
-// in the mapped file (Scene::mapped; the meshes come released, with their counts, clusters and
-// boxes): what a process under --geometry-budget streams from. Then the payload's checksum is
-// not checked (it would read the whole file at every start: 6 GB at plant:200); the structure
-// is, every count and range as always, and each mesh's indices when the upload reads it.
+// of its folder (remove_stale_cache_temps, cache_files.hpp). Read lazily where the meshes'
+// arrays take more than lazy_above_bytes (scene_array_bytes; UINT64_MAX: never): they stay in
+// the file (Scene::mapped; the meshes come released, with their counts, clusters and boxes),
+// what a process under --geometry-budget streams from. Then the payload's checksum is not
+// checked (it would read the whole file at every start: 6 GB at plant:200); the structure is,
+// every count and range as always, and each mesh's indices when the upload reads it.
 std::optional<CachedScene> load_scene_cache(const std::string& path, uint64_t key, std::string* why,
-                                            bool lazy = false);
+                                            uint64_t lazy_above_bytes = UINT64_MAX);
+// The bytes of the scene's vertex and index arrays (the cache's array section).
+uint64_t scene_array_bytes(const Scene& s);
 
 }  // namespace occ

@@ -17,6 +17,7 @@
 #include "common/error.hpp"
 #include "common/hash.hpp"
 #include "common/progress.hpp"
+#include "common/scene/gltf_reader.hpp"
 #include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
 
@@ -34,11 +35,12 @@ void add_scene_options(Cli& cli, SceneOptions& o) {
   cli.option("lod-cache", &o.lod_cache, "DIR",
              "LOD/HLOD and scene cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
   cli.choice<bool>("scene-cache", &o.scene_cache, {{"on", true}, {"off", false}},
-                   "keep plant:M scenes and their hierarchy in a binary cache in the --lod-cache folder");
+                   "keep plant:M and glTF scenes and their hierarchy in a binary cache in the --lod-cache folder "
+                   "(a glTF's is rebuilt when any of its files changed)");
   cli.option("geometry-budget", &o.geometry_budget, "MB|auto|all",
-             "GPU memory for geometry: scenes with a scene cache (plant:M) stream their meshes and LODs from it "
-             "within MB, the least recently drawn evicted; other scenes stream from their CPU copy where they are "
-             "larger; auto = a 24th of the machine's memory (at least 256); all = everything uploaded at start");
+             "GPU memory for geometry: scenes with a scene cache stream their meshes and LODs from it within MB "
+             "(plant:M always, a glTF where larger), the least recently drawn evicted; other scenes stream from "
+             "their CPU copy where they are larger; auto = a 24th of the machine's memory (at least 256); all = everything uploaded at start");
 }
 
 uint64_t geometry_budget_bytes(const SceneOptions& o) {
@@ -85,7 +87,7 @@ LodData load_lod(const SceneOptions& opts, const LoadedScene& ls, const std::str
   if (auto d = read_lazily()) return std::move(*d);
   if (why != "missing") std::cerr << who << ": LOD cache " << path << " is unusable (" << why << "): rebuilding\n";
   {
-    std::optional<CachedScene> whole = load_scene_cache(scene_cache, scene_key, &why, false);
+    std::optional<CachedScene> whole = load_scene_cache(scene_cache, scene_key, &why);
     if (!whole) throw InputError("scene cache " + scene_cache + " became unusable: " + why);
     load_or_build_lod(whole->scene, whole->hierarchy, opts.lod, opts.lod_cache, opts.spec, who);
   }
@@ -102,17 +104,21 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
   char buf[768];
   const bool use_cache = opts.scene_cache && scene_cache_applies(opts.spec);
-  const bool lazy = use_cache && geometry_budget_bytes(opts) > 0;
+  // Read lazily (the arrays left in the cache, streamed within the budget): a plant always under
+  // a budget (its start reads the structure only), a glTF scene where its arrays exceed it (else
+  // it is read whole, as fast, and the switch nodes can look for sealed objects in it).
+  const uint64_t budget = geometry_budget_bytes(opts);
+  const uint64_t lazy_above = budget == 0 ? UINT64_MAX : is_gltf_path(opts.spec) ? budget : 0;
   const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
   const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build) : 0;
   std::optional<CachedScene> cached;
   std::optional<CacheBuildLock> building;  // held from a failed read to the written cache
   if (use_cache) {
     std::string why;
-    cached = load_scene_cache(cache_path, cache_key, &why, lazy);
+    cached = load_scene_cache(cache_path, cache_key, &why, lazy_above);
     if (!cached) {  // another process may be building it: wait for that, then read again
       building.emplace(cache_path, who);
-      cached = load_scene_cache(cache_path, cache_key, &why, lazy);
+      cached = load_scene_cache(cache_path, cache_key, &why, lazy_above);
     }
     if (!cached && why != "missing")
       std::cerr << who << ": scene cache " << cache_path << " is unusable (" << why << "): rebuilding it\n";
@@ -155,9 +161,10 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
     }
   }
   building.reset();
-  if (lazy && !from_cache) {  // built now: read back lazily, so the built copy leaves memory
+  if (use_cache && !from_cache && scene_array_bytes(ls.scene) > lazy_above) {
+    // built now: read back lazily, so the built copy leaves memory
     std::string why;
-    std::optional<CachedScene> back = load_scene_cache(cache_path, cache_key, &why, true);
+    std::optional<CachedScene> back = load_scene_cache(cache_path, cache_key, &why, lazy_above);
     if (back) {
       ls.scene = std::move(back->scene);
       ls.hierarchy = std::move(back->hierarchy);

@@ -36,11 +36,12 @@ struct LoadedScene {
   uint64_t fingerprint = 0;
 };
 
-// With a budget (geometry_budget_bytes > 0) a scene that has a scene cache is read lazily: its
+// With a budget (geometry_budget_bytes > 0) a scene that has a scene cache is read lazily (a
+// plant:M always, a glTF scene where its arrays are larger than the budget): its
 // meshes' and LODs' arrays stay in the mapped caches (Scene::mapped, LodData::mapped) and are
 // streamed to the GPU as frames need them; a cache built now is written first, then read so.
 // Loads/generates the scene and builds the hierarchy, or reads both from the scene cache
-// (scene_cache.hpp: plant:M specs; a missing, stale or unusable cache is rebuilt and rewritten,
+// (scene_cache.hpp: plant:M specs and glTF files; a missing, stale or unusable cache is rebuilt and rewritten,
 // saying why); prints one summary line to stderr
 // prefixed by `who` ("scene: city: 6400 objects, 2.1M triangles, ..."). With `with_lod`, also
 // loads the LOD cache or builds it (progress bar on a terminal, a summary line). Throws InputError.
