@@ -342,16 +342,7 @@ std::optional<LodData> LodData::load(const std::string& path, uint64_t expected_
   }
   file.drop_before(file.size(), 0);
   d.hash_ = hash;
-  if (lazy) {
-    auto mapped = std::make_shared<MappedGeometry>();
-    mapped->meshes = std::move(places);
-    try {
-      mapped->file = std::make_shared<FileReader>(path);
-    } catch (const std::runtime_error& e) {
-      return fail(e.what());
-    }
-    d.mapped_ = std::move(mapped);
-  }
+  if (lazy && !(d.mapped_ = MappedGeometry::open(path, std::move(places), why ? why : &ignored))) return std::nullopt;
   return d;
 }
 

@@ -60,6 +60,21 @@ class FileReader {
 };
 
 struct MappedGeometry {
+  // The meshes' places in the file at `path`, opened for reading; nullptr and *why when it
+  // cannot be opened.
+  static std::shared_ptr<const MappedGeometry> open(const std::string& path, std::vector<MappedMesh> meshes,
+                                                    std::string* why) {
+    auto g = std::make_shared<MappedGeometry>();
+    g->meshes = std::move(meshes);
+    try {
+      g->file = std::make_shared<FileReader>(path);
+    } catch (const std::runtime_error& e) {
+      *why = e.what();
+      return nullptr;
+    }
+    return g;
+  }
+
   std::shared_ptr<const FileReader> file;  // open for as long as anything streams from it
   std::vector<MappedMesh> meshes;          // per mesh of the owner: Scene::meshes, or LodData's
                                            // cluster LODs followed by its HLODs

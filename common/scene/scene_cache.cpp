@@ -403,16 +403,7 @@ struct SceneCacheIo {
       }
       if (bad) return fail("mesh " + std::to_string(k) + ": " + bad);
     }
-    if (lazy) {
-      auto mapped = std::make_shared<MappedGeometry>();
-      mapped->meshes = std::move(places);
-      try {
-        mapped->file = std::make_shared<FileReader>(path);
-      } catch (const std::runtime_error& e) {
-        return fail(e.what());
-      }
-      s.mapped = std::move(mapped);
-    }
+    if (lazy && !(s.mapped = MappedGeometry::open(path, std::move(places), why))) return std::nullopt;
     const uint64_t N = h.nodes_.size(), I = h.items_.size();
     for (size_t k = 0; k < I; ++k) {
       const Item& it = h.items_[k];
