@@ -150,6 +150,26 @@ TEST(OcclusionGate, OneSlowFrameDoesNotEndFramesWithoutOcclusion) {
   EXPECT_LT(s.off_frames, calm - 100);
 }
 
+// On a path whose cost drifts (a walk into a heavier part of the scene, or out of it), the
+// frames of a trial come later than those it is compared with. Each mode is measured on both sides
+// of the other's window (A B A), so the drift cancels and the mode faster on the same view wins,
+// whichever way the cost drifts.
+TEST(OcclusionGate, ATrialIsBracketedSoADriftingPathDoesNotDecideIt) {
+  for (double slope : {1.5, -1.5})
+    for (bool off_faster : {true, false}) {
+      OcclusionGate g{{}};
+      // 100 ms at frame 0 rising 1.5 ms a frame, or 300 ms falling as fast: over the 11 frames
+      // between two windows more than the 10 % by which the faster mode beats the other on the
+      // same view (0.9x).
+      Sim s{[=](uint32_t f, bool occ) { return ((slope > 0 ? 100.0 : 300.0) + slope * f) * (occ == off_faster ? 1.0 : 0.9); }};
+      s.run(g, 100);
+      if (off_faster)
+        EXPECT_GT(s.off_frames, 60u) << "slope " << slope;
+      else
+        EXPECT_LT(s.off_frames, 45u) << "slope " << slope;  // the trial's two windows without occlusion
+    }
+}
+
 TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
   for (auto [policy, expect_off] : {std::pair{OcclusionGate::Policy::on, 0u}, {OcclusionGate::Policy::off, 100u}}) {
     OcclusionGate g{{.policy = policy}};

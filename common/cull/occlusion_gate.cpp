@@ -13,7 +13,7 @@ bool OcclusionGate::occlusion(uint32_t camera) const {
     case Policy::off: return false;
     case Policy::automatic: break;
   }
-  return state_ == State::on || state_ == State::trial_on;
+  return state_ == State::on || state_ == State::trial_on || state_ == State::confirm_on;
 }
 
 bool OcclusionGate::wants_frustum_triangles() const {
@@ -36,11 +36,17 @@ void OcclusionGate::enter(State s) {
   state_ = s;
   fresh_ = 0;
   slow_ = 0;
-  if (s == State::trial_off) {
-    ++trials_;
-    off_.clear();
+  switch (s) {
+    case State::trial_off:
+      ++trials_;
+      off_.clear();
+      break;
+    case State::trial_on: on_.clear(); break;
+    case State::confirm_on: on_.clear(); break;
+    case State::confirm_off: off_.clear(); break;
+    case State::on:
+    case State::off: break;
   }
-  if (s == State::trial_on) on_.clear();
 }
 
 uint32_t OcclusionGate::doubled(uint32_t v) const { return std::min(2 * (v ? v : o_.first_hold), o_.max_hold); }
@@ -48,6 +54,13 @@ uint32_t OcclusionGate::doubled(uint32_t v) const { return std::min(2 * (v ? v :
 void OcclusionGate::back_off() {
   on_wait_ = doubled(on_wait_);
   next_trial_ = n_ + on_wait_;
+  enter(State::on);
+}
+
+void OcclusionGate::keep_on() {
+  off_hold_ = 0;
+  on_wait_ = 0;
+  next_trial_ = n_ + o_.first_hold;
   enter(State::on);
 }
 
@@ -69,8 +82,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   const bool settled = same_ > o_.settle;
   if (settled) {
     push(occlusion ? on_ : off_, interval_ms);
-    const bool measured = (occlusion && (state_ == State::on || state_ == State::trial_on)) ||
-                          (!occlusion && (state_ == State::off || state_ == State::trial_off));
+    const bool measured = occlusion == this->occlusion(0);  // the state's own mode (no test_alternate here)
     if (measured) ++fresh_;
   }
   if (frustum_triangles && wants_frustum_triangles()) {
@@ -90,32 +102,59 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
     slow_ = interval_ms > o_.give_up * reference_ms ? slow_ + 1 : 0;
     return slow_ >= std::max(o_.give_up_frames, 1u);
   };
-  if (state_ == State::trial_off && !occlusion && on_.size() < o_.window) {
-    // A trial that came early (trial_after): occlusion is measured next, then compared.
-    if (fresh_ >= o_.window) enter(State::trial_on);
-  } else if (state_ == State::trial_off && !occlusion) {
-    // Much slower than with occlusion stops the trial at once; otherwise a full window decides.
-    if (gave_up(med_on) || (fresh_ >= o_.window && !(med_off < o_.margin * med_on)))
+  if (state_ == State::trial_off && !occlusion) {
+    // Much slower than with occlusion before it stops the trial at once; a full window is then
+    // bracketed by occlusion measured again.
+    const bool full_before = on_.size() >= o_.window;
+    if (full_before && gave_up(med_on)) {
       back_off();
-    else if (fresh_ >= o_.window)
+    } else if (fresh_ >= o_.window) {
+      trial_ = med_off;
+      before_ = full_before ? med_on : 0;
+      enter(State::confirm_on);
+    }
+  } else if (state_ == State::confirm_on && occlusion && fresh_ >= o_.window) {
+    if (before_ == 0) {  // an early trial (no full window with occlusion before it): B A, then B again
+      before_ = trial_;
+      trial_ = med_on;
+      enter(State::confirm_off);
+    } else if (trial_ < o_.margin * bracket(med_on))
       go_off(off_hold_ ? off_hold_ : o_.first_hold);
+    else
+      back_off();
   } else if (state_ == State::off && !occlusion) {
-    if (gave_up(med_off) || n_ >= off_until_) enter(State::trial_on);
+    const bool slow = gave_up(med_off);
+    if (slow || n_ >= off_until_) {
+      confirm_ = !slow;  // the view changed: frames without occlusion are not measured again
+      enter(State::trial_on);
+    }
   } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
-    if (med_on < o_.margin * med_off) {  // occlusion pays again
-      off_hold_ = 0;
-      on_wait_ = 0;
-      next_trial_ = n_ + o_.first_hold;
-      enter(State::on);
+    if (!confirm_) {  // the view changed under frames without occlusion: this window decides
+      if (med_on < o_.margin * med_off)
+        keep_on();
+      else
+        go_off(doubled(off_hold_));
     } else {
-      go_off(doubled(off_hold_));
+      trial_ = med_on;
+      before_ = off_.size() >= o_.window ? med_off : 0;
+      enter(State::confirm_off);
+    }
+  } else if (state_ == State::confirm_off && !occlusion) {
+    if (gave_up(trial_)) {
+      keep_on();
+    } else if (fresh_ >= o_.window) {
+      if (trial_ < o_.margin * bracket(med_off))
+        keep_on();
+      else
+        go_off(doubled(off_hold_));
     }
   }
 }
 
 std::string OcclusionGate::describe(const std::string& mode) const {
   std::ostringstream s;
-  const std::string state[] = {"on", "trial without " + mode, "off", "trial with " + mode};
+  const std::string state[] = {"on", "trial without " + mode, "off", "trial with " + mode,
+                               "measuring with " + mode + " after a trial", "measuring without " + mode + " after a trial"};
   const auto ms = [](const std::deque<double>& ring) {
     return ring.empty() ? std::string("not measured") : std::to_string(median(ring)) + " ms";
   };

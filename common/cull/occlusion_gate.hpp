@@ -10,12 +10,16 @@
 //     `deferrals` such checks), a trial runs frames without it (the render
 //     client then culls the frustum sets itself where that pays: TwoPassDrawer,
 //     common/gl/two_pass.hpp); after `settle` frames (the pipeline's change of mode) `window`
-//     frames are measured, and the mode with the lower median interval, by `margin`, is kept (a
-//     first trial with fewer than `window` frames with occlusion measured measures them next); a
+//     frames are measured; then the first mode is measured again (`settle` + `window` frames),
+//     and the trial's median is compared, by `margin`, with the mean of the other mode's medians
+//     before and after it (A B A: on a camera path whose cost drifts, the two windows of A
+//     bracket B's, so a walk getting heavier does not make the later mode look slower); a
 //     failed trial doubles the wait before the next (first_hold .. max_hold);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
-//     occlusion is tried again the same way; give_up_frames frames in a row without it that take
-//     give_up x the median (the view changed: culling may pay now) end them at once. One slow frame
+//     occlusion is tried again the same way (B A B; a first trial that came before a full window
+//     of occlusion, B A B too); give_up_frames frames in a row without it that take give_up x
+//     the median (the view changed: culling may pay now) end them at once, and then the window
+//     with occlusion after them decides alone. One slow frame
 //     does not: on two cores a scheduling hiccup doubles a frame now and then (a 30-frame saw orbit at
 //     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
 // The render client's choice between two passes and one for those frustum sets (--two-pass) is a
@@ -72,7 +76,8 @@ class OcclusionGate {
              std::optional<uint64_t> frustum_triangles = std::nullopt);
 
   // For logs and tests.
-  enum class State { on, trial_off, off, trial_on };
+  // confirm_on / confirm_off: after a trial, the mode before it measured again (A B A).
+  enum class State { on, trial_off, off, trial_on, confirm_on, confirm_off };
   State state() const { return state_; }
   uint32_t trials() const { return trials_; }           // trials of frames without occlusion
   uint32_t frames_off() const { return frames_off_; }   // displayed frames without occlusion
@@ -86,6 +91,10 @@ class OcclusionGate {
   uint32_t doubled(uint32_t v) const;  // twice v (first_hold when 0), at most max_hold
   void back_off();                     // a trial without occlusion lost: occlusion, next trial later
   void go_off(uint32_t hold);          // frames without occlusion for `hold` frames
+  void keep_on();                      // occlusion pays: occlusion, the next trial after first_hold
+  // The trial's median against the other mode's: the mean of its medians before and after the
+  // trial (after only when the trial started before it had a full window).
+  double bracket(double after) const { return before_ > 0 ? 0.5 * (before_ + after) : after; }
 
   Options o_;
   State state_ = State::on;
@@ -100,6 +109,9 @@ class OcclusionGate {
   uint32_t off_until_ = 0;       // state off: its end
   uint32_t on_wait_ = 0, off_hold_ = 0;  // current back-off of failed trials / hold of won ones
   uint32_t trials_ = 0, frames_off_ = 0;
+  double before_ = 0;   // a trial's end: the other mode's median before it (0: not a full window)
+  double trial_ = 0;    // a trial's median, while the mode before it is measured again
+  bool confirm_ = true; // whether the trial's end measures the mode before it again
 };
 
 }  // namespace occ
