@@ -447,7 +447,9 @@ TEST(TwoPassDrawer, FramesEqualOnePassFramesAndHideWhatTheDepthHides) {
       two.seed(seeded);
     }
     const TwoPassDrawer::Frame tf = two.draw(cam, ids);
-    if (f % 5 == 4) EXPECT_EQ(tf.first, seeded.size()) << "frame " << f;
+    if (f % 5 == 4) {
+      EXPECT_EQ(tf.first, seeded.size()) << "frame " << f;
+    }
     const Image image = p.ctx->read_rgba();
     p.renderer->begin_frame(cam, true);
     const DrawStats one = p.renderer->draw_renderables(r, ids, SceneRenderer::Mode::Shaded);
