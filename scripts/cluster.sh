@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the occlusion-switch cluster on this machine: switch nodes 0 and 1 and the render client
-# on 127.0.0.1 with free ports (picked here, or by the nodes with --link/--netns: port files), all
-# three started at once on loopback so that their scenes load together. Prints the render client's
+# on 127.0.0.1 with free ports (each node binds one and writes a port file; with
+# OCC_START_AT_ONCE=1 on plain loopback the ports are picked here and all three start at once, so
+# that their scenes load together). Prints the render client's
 # summary, keeps every process's log in the output folder (and its pid in DIR/NAME.pid), and exits
 # non-zero if the render client failed, a node failed at start, or anything hung (bounded waits):
 # that process is named with its own error line and the others are stopped at once. Ctrl-C stops
@@ -193,8 +194,10 @@ free_port() {
   python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
 }
 
-if [ -z "$link" ] && [ "$netns" = 0 ]; then
-  # On loopback all three start at once, their ports picked here: each loads its scene while the
+if [ -z "$link" ] && [ "$netns" = 0 ] && [ "${OCC_START_AT_ONCE:-0}" = 1 ]; then
+  # OCC_START_AT_ONCE=1 (a machine running one cluster at a time: scale_budget.sh): on loopback
+  # all three start at once, their ports picked here (a port picked free can be taken by another
+  # process before the node listens, so not by default): each loads its scene while the
   # others load theirs (a process that connects retries until its peer listens, within
   # --timeout-ms; a missing cache is built once, the others waiting for it). A node still writes
   # its port file only once it listens, so one that fails at start is named as before.
