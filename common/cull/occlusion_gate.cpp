@@ -13,6 +13,10 @@ bool OcclusionGate::occlusion(uint32_t camera) const {
     case Policy::off: return false;
     case Policy::automatic: break;
   }
+  return state_occlusion();
+}
+
+bool OcclusionGate::state_occlusion() const {
   return state_ == State::on || state_ == State::trial_on || state_ == State::confirm_on;
 }
 
@@ -36,17 +40,8 @@ void OcclusionGate::enter(State s) {
   state_ = s;
   fresh_ = 0;
   slow_ = 0;
-  switch (s) {
-    case State::trial_off:
-      ++trials_;
-      off_.clear();
-      break;
-    case State::trial_on: on_.clear(); break;
-    case State::confirm_on: on_.clear(); break;
-    case State::confirm_off: off_.clear(); break;
-    case State::on:
-    case State::off: break;
-  }
+  trials_ += s == State::trial_off;
+  if (s != State::on && s != State::off) (state_occlusion() ? on_ : off_).clear();  // what it measures, afresh
 }
 
 uint32_t OcclusionGate::doubled(uint32_t v) const { return std::min(2 * (v ? v : o_.first_hold), o_.max_hold); }
@@ -82,7 +77,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   const bool settled = same_ > o_.settle;
   if (settled) {
     push(occlusion ? on_ : off_, interval_ms);
-    const bool measured = occlusion == this->occlusion(0);  // the state's own mode (no test_alternate here)
+    const bool measured = occlusion == state_occlusion();
     if (measured) ++fresh_;
   }
   if (frustum_triangles && wants_frustum_triangles()) {

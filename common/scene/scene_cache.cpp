@@ -128,9 +128,8 @@ class In {
 };
 
 // The fields of each record in the order the cache stores them, one list for the writer and the
-// reader: f(field) for each (Out::field / In::field say how each type is stored).
-// A mesh's record in the structure: its name, the counts of its arrays (mesh_arrays), its
-// clusters and material; the arrays themselves follow the whole structure (array section).
+// reader: f(field) for each (Out::field / In::field say how each type is stored). A mesh's record
+// also holds the counts of its arrays (mesh_arrays); the arrays follow the whole structure.
 template <class M, class F>
 void mesh_fields(M& m, const F& f) {
   f(m.name), f(m.clusters), f(m.material);
