@@ -170,6 +170,25 @@ TEST(OcclusionGate, ATrialIsBracketedSoADriftingPathDoesNotDecideIt) {
     }
 }
 
+// Where occlusion makes frames clearly slower (Sponza at 512^2: the OR draws nearly the whole
+// frustum set again on the same two cores), each window with it ends early, as frames without
+// occlusion do the other way: at its second settled frame over give_up x the other mode's
+// median, or its third over lose x. A 120-frame walk spent 29 frames with occlusion without this.
+TEST(OcclusionGate, AClearlySlowerTrialOfOcclusionEndsEarly) {
+  auto frames_with_occlusion = [](double occlusion_ms) {
+    OcclusionGate g{{}};
+    Sim s{[=](uint32_t, bool occ) { return occ ? occlusion_ms : 10.0; }};
+    s.run(g, 120);
+    EXPECT_FALSE(g.occlusion(120)) << occlusion_ms << " ms: frames without occlusion won";
+    return 120u - s.off_frames;
+  };
+  const uint32_t first = 3, settle = 3, lag = 2;  // the first frames; two windows of occlusion follow
+  EXPECT_LE(frames_with_occlusion(20.0), first + 2 * (settle + 2 + lag)) << "give_up x: two frames";
+  EXPECT_LE(frames_with_occlusion(13.0), first + 2 * (settle + 3 + lag)) << "lose x: three frames";
+  // Slower by less than lose x: both windows are measured in full.
+  EXPECT_GE(frames_with_occlusion(12.0), first + 2 * (settle + 8 + lag) - 2);
+}
+
 TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
   for (auto [policy, expect_off] : {std::pair{OcclusionGate::Policy::on, 0u}, {OcclusionGate::Policy::off, 100u}}) {
     OcclusionGate g{{.policy = policy}};

@@ -40,6 +40,7 @@ void OcclusionGate::enter(State s) {
   state_ = s;
   fresh_ = 0;
   slow_ = 0;
+  lagging_ = 0;
   trials_ += s == State::trial_off;
   if (s != State::on && s != State::off) (state_occlusion() ? on_ : off_).clear();  // what it measures, afresh
 }
@@ -97,17 +98,26 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
     slow_ = interval_ms > o_.give_up * reference_ms ? slow_ + 1 : 0;
     return slow_ >= std::max(o_.give_up_frames, 1u);
   };
+  // A window that is measuring one mode against the other's median: it also ends once
+  // lose_frames in a row take lose x that median (a clear loss needs no full window).
+  auto lost = [&](double reference_ms) {
+    lagging_ = interval_ms > o_.lose * reference_ms ? lagging_ + 1 : 0;
+    const bool slow = gave_up(reference_ms);
+    return slow || lagging_ >= std::max(o_.lose_frames, 1u);
+  };
   if (state_ == State::trial_off && !occlusion) {
     // Much slower than with occlusion before it stops the trial at once; a full window is then
     // bracketed by occlusion measured again.
     const bool full_before = on_.size() >= o_.window;
-    if (full_before && gave_up(med_on)) {
+    if (full_before && lost(med_on)) {
       back_off();
     } else if (fresh_ >= o_.window) {
       trial_ = med_off;
       before_ = full_before ? med_on : 0;
       enter(State::confirm_on);
     }
+  } else if (state_ == State::confirm_on && occlusion && lost(trial_)) {
+    go_off(off_hold_ ? off_hold_ : o_.first_hold);  // the trial won by give_up x: no full window needed
   } else if (state_ == State::confirm_on && occlusion && fresh_ >= o_.window) {
     if (before_ == 0) {  // an early trial (no full window with occlusion before it): B A, then B again
       before_ = trial_;
@@ -123,6 +133,8 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       confirm_ = !slow;  // the view changed: frames without occlusion are not measured again
       enter(State::trial_on);
     }
+  } else if (state_ == State::trial_on && occlusion && confirm_ && off_.size() >= o_.window && lost(med_off)) {
+    go_off(doubled(off_hold_));  // occlusion lost by give_up x: no full window needed
   } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
     if (!confirm_) {  // the view changed under frames without occlusion: this window decides
       if (med_on < o_.margin * med_off)
@@ -135,7 +147,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       enter(State::confirm_off);
     }
   } else if (state_ == State::confirm_off && !occlusion) {
-    if (gave_up(trial_)) {
+    if (lost(trial_)) {
       keep_on();
     } else if (fresh_ >= o_.window) {
       if (trial_ < o_.margin * bracket(med_off))

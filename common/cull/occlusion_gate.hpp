@@ -14,7 +14,11 @@
 //     and the trial's median is compared, by `margin`, with the mean of the other mode's medians
 //     before and after it (A B A: on a camera path whose cost drifts, the two windows of A
 //     bracket B's, so a walk getting heavier does not make the later mode look slower); a
-//     failed trial doubles the wait before the next (first_hold .. max_hold);
+//     failed trial doubles the wait before the next (first_hold .. max_hold); any of these
+//     windows ends early at a clear loss: give_up_frames settled frames in a row over give_up x
+//     the other mode's median, or lose_frames over lose x (a window of the slower mode costs
+//     settle + 3 frames, not settle + window: Sponza's walk, where occlusion frames take
+//     1.3-1.8x, spent 29 of 120 frames with occlusion, now 17);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
 //     occlusion is tried again the same way (B A B; a first trial that came before a full window
 //     of occlusion, B A B too); give_up_frames frames in a row without it that take give_up x
@@ -60,6 +64,10 @@ class OcclusionGate {
     uint32_t first_hold = 32, max_hold = 1024;
     double give_up = 1.5;
     uint32_t give_up_frames = 2;
+    // A window measuring one mode against the other (a trial, or the mode before it measured
+    // again) also ends at lose_frames in a row over lose x the other's median: a clear loss.
+    double lose = 1.25;
+    uint32_t lose_frames = 3;
   };
   explicit OcclusionGate(const Options& o) : o_(o) {}
 
@@ -104,7 +112,8 @@ class OcclusionGate {
   bool last_mode_ = true;
   std::deque<double> on_, off_;  // settled intervals of each mode, the newest `window`
   uint32_t fresh_ = 0;           // samples of the measured mode since the state began
-  uint32_t slow_ = 0;            // consecutive settled frames without occlusion over give_up x median
+  uint32_t slow_ = 0;            // consecutive settled frames over give_up x the reference median
+  uint32_t lagging_ = 0;         // consecutive settled frames over lose x it (a trial's windows)
   uint32_t next_trial_ = 0;      // frame count before which no trial starts
   uint32_t deferred_ = 0;        // checks since the last trial that found try_below <= ratio < try_eventually_below
   uint32_t off_until_ = 0;       // state off: its end
