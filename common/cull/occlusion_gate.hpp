@@ -16,9 +16,10 @@
 //     bracket B's, so a walk getting heavier does not make the later mode look slower); a
 //     failed trial doubles the wait before the next (first_hold .. max_hold); any of these
 //     windows ends early at a clear loss: give_up_frames settled frames in a row over give_up x
-//     the other mode's median, or lose_frames over lose x (a window of the slower mode costs
-//     settle + 3 frames, not settle + window: Sponza's walk, where occlusion frames take
-//     1.3-1.8x, spent 29 of 120 frames with occlusion, now 17);
+//     the other mode's median, or lose_frames over lose x (a window of the clearly slower mode
+//     costs settle + 2 or 3 frames, not settle + window: 120 frames where occlusion takes 1.3-2x
+//     spend 17-19 frames with it instead of 29; where the path's own cost drifts by as much,
+//     as on Sponza's walk, the windows still run in full and the bracket decides);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
 //     occlusion is tried again the same way (B A B; a first trial that came before a full window
 //     of occlusion, B A B too); give_up_frames frames in a row without it that take give_up x
