@@ -12,7 +12,9 @@ viewport given, one after another on the same cameras, at tau 0:
 Repeats run interleaved (oracle frustum cluster, oracle frustum cluster, ...); each figure is the
 median (and p99) of a run's frames from frame --skip on, then the median over the repeats. Wrong
 pixels: the cluster's frames of one more run with images against brute force's (frame_diff).
-PVS/exact: the cluster's triangles per frame over the exactly visible ones. Prints a markdown
+PVS/exact: on the frames the switch culled with occlusion (the gate sends frustum sets where that
+pays, and those are not its visible set), the triangles the render client drew over the exactly
+visible ones on the same cameras, all repeats together; beside it the share of such frames. Prints a markdown
 table and writes it to OUT/limit.md (rows also in OUT/limit.csv). Asserts nothing about speed.
 
   scripts/limit_table.py --scene S --path P [--scene S2 --path P2 ...] [--sizes 512,1024]
@@ -57,6 +59,17 @@ def p99(v):
     return s[min(len(s) - 1, int(0.99 * len(s)))]
 
 
+def pvs_over_exact(d, skip):
+    """Triangles drawn over exactly visible ones on the cluster's frames with occlusion from frame
+    `skip` on (matched by camera: the reference's frame f is camera f), and those frames' count
+    and the frames'."""
+    exact = dict(zip(column(f"{d}/none/stats.csv", "frame", 0), column(f"{d}/none/stats.csv", "exact_triangles", 0)))
+    cam, occ, tri = (column(f"{d}/cluster/stats.csv", c, skip) for c in ("camera", "occlusion", "triangles"))
+    pvs = sum(t for c, o, t in zip(cam, occ, tri) if o == 1 and c in exact)
+    ex = sum(exact[c] for c, o in zip(cam, occ) if o == 1 and c in exact)
+    return pvs, ex, sum(1 for o in occ if o == 1), len(occ)
+
+
 def measure(scene, path, size, args, out):
     view = ["--width", str(size), "--height", str(size)]
     ref = [os.path.join(BIN, "render_client"), "--reference", "--scene", scene, "--path", path, *view]
@@ -73,8 +86,8 @@ def measure(scene, path, size, args, out):
         runs["none"].append(column(f"{d}/none/stats.csv", "render_ms", args.skip))
         runs["frustum"].append(column(f"{d}/frustum/stats.csv", "render_ms", args.skip))
         runs["cluster"].append(column(f"{d}/cluster/stats.csv", "frame_interval_ms", args.skip))
-    exact_tri = statistics.mean(column(f"{out}/r0/none/stats.csv", "exact_triangles", args.skip))
-    drawn_tri = statistics.mean(column(f"{out}/r0/cluster/stats.csv", "triangles", args.skip))
+    pvs = [pvs_over_exact(os.path.join(out, f"r{r}"), args.skip) for r in range(args.repeats)]
+    drawn_tri, exact_tri, occlusion_frames, frames = (sum(p[k] for p in pvs) for k in range(4))
     # Wrong pixels: one more run of each with images (PNG writing stays out of the timed runs).
     run(ref + ["--cull", "none", "--out", f"{out}/frames_none"], f"{out}/frames_none.log")
     run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--on-node-failure", "exit",
@@ -96,18 +109,19 @@ def measure(scene, path, size, args, out):
             "cluster_over_oracle": round(fig["cluster"][0] / fig["oracle"][0], 2),
             "cluster_over_best_single": round(fig["cluster"][0] / min(fig["none"][0], fig["frustum"][0]), 2),
             "pvs_over_exact": round(drawn_tri / exact_tri, 2) if exact_tri > 0 else float("nan"),
+            "occlusion_frames_pct": round(100.0 * occlusion_frames / frames),
             "wrong_pixels": int(m.group(1))}
 
 
 def markdown(rows):
     out = ["| scene, path | size | oracle ms | brute force ms | frustum ms | cluster ms | cluster / oracle "
-           "| cluster / min(brute, frustum) | PVS / exact | wrong px |",
+           "| cluster / min(brute, frustum) | PVS / exact (frames with occlusion) | wrong px |",
            "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         mp = lambda k: f"{r[k + '_median_ms']:.2f} / {r[k + '_p99_ms']:.2f}"
         out.append(f"| {r['scene']} {r['path']} | {r['size']}^2 | {mp('oracle')} | {mp('none')} | {mp('frustum')} "
                    f"| {mp('cluster')} | {r['cluster_over_oracle']:.2f} | {r['cluster_over_best_single']:.2f} "
-                   f"| {r['pvs_over_exact']:.2f} | {r['wrong_pixels']} |")
+                   f"| {r['pvs_over_exact']:.2f} ({r['occlusion_frames_pct']} %) | {r['wrong_pixels']} |")
     return "\n".join(out)
 
 
