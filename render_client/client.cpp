@@ -158,7 +158,7 @@ class Client {
       f.ids = frustum_cull(g_.hierarchy(), f.cam);  // leaves at full detail: renderable id = node id
     // A frustum set (the switch culled without occlusion, or no node serves) is culled here,
     // in two passes against the frame's own depth, where that pays (two_pass.hpp).
-    f.drawn = drawer_->draw(f.cam, f.ids, !f.served || !f.served->wcam.occlusion);
+    f.drawn = drawer_->draw(f.cam, f.ids, !f.served || !f.served->wcam.occlusion, gate_.measuring_without());
     f.shown = Clock::now();
     f.cpu_shown = process_cpu_us();
     f.row.rvg_ms = ms_between(r0, f.shown);
@@ -227,7 +227,7 @@ class Client {
     if (row.mode == Mode::switch_) {
       std::optional<uint64_t> frustum;
       if (gate_.wants_frustum_triangles()) frustum = frustum_triangles(f.cam);
-      gate_.frame(row.occlusion != 0, row.frame_interval_ms, row.triangles, frustum);
+      gate_.frame(row.occlusion != 0, row.frame_interval_ms, row.triangles, frustum, f.drawn.representative);
     }
     if (stats_.frames() == 0)
       std::fprintf(stderr, "render_client: first frame shown %.1f s after the process started (wall clock %.3f)\n",

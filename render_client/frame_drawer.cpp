@@ -21,13 +21,16 @@ OcclusionGate::Policy two_pass_policy(OcclusionGate::Policy flag, RendererClass 
 FrameDrawer::FrameDrawer(const ClientOptions& o, SceneGl& g)
     : g_(g),
       gate_({.policy = two_pass_policy(o.two_pass, g.ctx->renderer_class()), .test_alternate = o.test_alternate,
-             .trial_after = 3}),
+             .trial_after = 3, .start_on = false}),
       two_pass_(*g.ctx, *g.renderer, g.hierarchy(), *g.renderables) {}
 
-FrameDrawer::Drawn FrameDrawer::draw(const Camera& cam, const std::vector<uint32_t>& ids, bool frustum_set) {
+FrameDrawer::Drawn FrameDrawer::draw(const Camera& cam, const std::vector<uint32_t>& ids, bool frustum_set,
+                                     bool hold) {
   Drawn d;
   d.frustum_set = frustum_set;
-  d.two_pass = frustum_set && gate_.occlusion(frames_);
+  d.held = frustum_set && hold;
+  d.two_pass = frustum_set && (d.held ? gate_.decided_occlusion() : gate_.occlusion(frames_));
+  d.representative = !frustum_set || d.two_pass == gate_.decided_occlusion();
   // Frames of frustum sets leave the switch nodes idle (no OR; HC only frustum-culls): the render
   // client has the cores, so its draw is cut into parts as the single-process renderers' are
   // (llvmpipe rasterises one part while the next is binned); frames with occlusion keep the
@@ -58,7 +61,7 @@ FrameDrawer::Drawn FrameDrawer::draw(const Camera& cam, const std::vector<uint32
 void FrameDrawer::measured(const Drawn& d, double render_ms) {
   if (!d.frustum_set) return;
   const uint64_t set_triangles = d.two_pass ? d.tp.set_triangles : d.st.triangles;
-  gate_.frame(d.two_pass, render_ms, d.st.triangles, set_triangles);
+  gate_.frame(d.two_pass, render_ms, d.st.triangles, set_triangles, !d.held);
   ++frames_;
 }
 

@@ -25,10 +25,16 @@ class FrameDrawer {
     TwoPassDrawer::Frame tp;  // two passes: what each did (else empty)
     bool frustum_set = false;
     bool two_pass = false;
+    bool held = false;  // a frustum set drawn the way the --two-pass gate last decided, its trials held
+    // Whether the frame shows what its set costs the way the --two-pass gate last decided (not a
+    // trial of the other way): a sample for the occlusion gate.
+    bool representative = true;
   };
   // Draws `ids` (renderables) with camera `cam`, finished (glFinish); `frustum_set`: a set the
-  // switch did not cull with occlusion.
-  Drawn draw(const Camera& cam, const std::vector<uint32_t>& ids, bool frustum_set);
+  // switch did not cull with occlusion. `hold`: the occlusion gate is measuring frames without
+  // occlusion (OcclusionGate::measuring_without): frustum sets are drawn the way the --two-pass
+  // gate last decided, and its trials wait (one experiment at a time).
+  Drawn draw(const Camera& cam, const std::vector<uint32_t>& ids, bool frustum_set, bool hold = false);
   // A frame drawn by draw() took `render_ms` to show: the --two-pass gate's measure.
   void measured(const Drawn& d, double render_ms);
   // What the last draw() drew: `ids` less what two passes proved hidden.
@@ -47,7 +53,8 @@ class FrameDrawer {
  private:
   SceneGl& g_;
   // Frustum sets culled here (--two-pass): on = two passes, off = one; measured by render time.
-  // Its first frame draws everything in pass 1 (nothing showed before): the trial waits for 3.
+  // It starts with one pass (what the occlusion gate's first windows measure frames without
+  // occlusion in) and tries two passes after a full window of it.
   OcclusionGate gate_;
   TwoPassDrawer two_pass_;
   std::unique_ptr<BoxOverlay> overlay_;  // --window, O

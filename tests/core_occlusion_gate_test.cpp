@@ -20,6 +20,9 @@ struct Sim {
   uint32_t off_frames = 0;
   std::vector<bool> shown = {};  // per displayed frame: with occlusion
   std::vector<uint8_t> modes = {};
+  // Whether a frame is a sample of its mode (OcclusionGate::frame's `measured`); all by default.
+  std::function<bool(uint32_t, uint8_t)> measured = nullptr;
+  std::vector<bool> measuring_without = {};  // per displayed frame, before it is fed
 
   void run(OcclusionGate& g, uint32_t frames) {
     std::deque<uint8_t> in_flight;
@@ -32,7 +35,8 @@ struct Sim {
       const uint64_t drawn = mode == 0 ? frustum_triangles : visible_triangles;
       std::optional<uint64_t> ft;
       if (g.wants_frustum_triangles()) ft = frustum_triangles;
-      g.frame(mode, interval(f, mode), drawn, ft);
+      measuring_without.push_back(g.measuring_without());
+      g.frame(mode, interval(f, mode), drawn, ft, measured ? measured(f, mode) : true);
       off_frames += mode == 0;
       shown.push_back(mode != 0);
       modes.push_back(mode);
@@ -187,6 +191,61 @@ TEST(OcclusionGate, AClearlySlowerTrialOfOcclusionEndsEarly) {
   EXPECT_LE(frames_with_occlusion(13.0), first + 2 * (settle + 3 + lag)) << "lose x: three frames";
   // Slower by less than lose x: both windows are measured in full.
   EXPECT_GE(frames_with_occlusion(12.0), first + 2 * (settle + 8 + lag) - 2);
+}
+
+// The --two-pass gate's start: one pass (the mode "without"), then a trial of two passes after
+// a full window of one, bracketed by one pass again (A B A); kept where faster.
+TEST(OcclusionGate, StartsWithoutAndTriesItAfterAFullWindow) {
+  for (bool on_faster : {true, false}) {
+    OcclusionGate g{{.start_on = false}};
+    EXPECT_FALSE(g.occlusion(0));
+    EXPECT_FALSE(g.decided_occlusion());
+    Sim s{[on_faster](uint32_t, bool occ) { return occ == on_faster ? 13.0 : 18.0; }};
+    s.lag = 1;  // the drawer's mode takes effect in the frame it is chosen
+    s.run(g, 200);
+    size_t first_on = 0;
+    while (first_on < s.shown.size() && !s.shown[first_on]) ++first_on;
+    EXPECT_GE(first_on, 3u + 8u) << "a full window without it first";
+    EXPECT_LT(first_on, 20u);
+    EXPECT_EQ(g.decided_occlusion(), on_faster);
+    if (on_faster)
+      EXPECT_LT(s.off_frames, 60u);
+    else
+      EXPECT_GT(s.off_frames, 170u);
+  }
+}
+
+// Frames that are not samples of their mode (the render client's frustum sets while its
+// --two-pass gate tries the other way) count for settling but not as measurements: frames
+// without occlusion are faster, but two of every three of them, unmeasured, take 3x; the gate
+// goes without occlusion as if they were not there. Measured, they keep it on occlusion.
+TEST(OcclusionGate, FramesThatAreNotSamplesDoNotDecide) {
+  auto off_frames = [](bool flagged) {
+    OcclusionGate g{{}};
+    Sim s{[](uint32_t f, bool occ) { return occ ? 18.0 : (f % 3 != 0 ? 39.0 : 13.0); }};
+    if (flagged) s.measured = [](uint32_t f, uint8_t occ) { return occ != 0 || f % 3 == 0; };
+    s.run(g, 400);
+    return s.off_frames;
+  };
+  EXPECT_GT(off_frames(true), 320u);
+  EXPECT_LT(off_frames(false), 200u);
+}
+
+// measuring_without(): exactly the windows that measure frames without occlusion against it.
+TEST(OcclusionGate, MeasuringWithoutIsTheWindowsWithoutOcclusionOfATrial) {
+  OcclusionGate g{{}};
+  Sim s{[](uint32_t, bool occ) { return occ ? 14.0 : 13.0; }};  // within lose x: full windows
+  s.run(g, 300);
+  uint32_t measuring = 0, windows = 0, measuring_with_occlusion_shown = 0;
+  for (size_t f = 0; f < s.shown.size(); ++f) {
+    measuring += s.measuring_without[f];
+    windows += s.measuring_without[f] && (f == 0 || !s.measuring_without[f - 1]);
+    measuring_with_occlusion_shown += s.measuring_without[f] && s.shown[f];
+  }
+  EXPECT_GE(windows, 2u) << "a trial's window and the one after the trial with occlusion";
+  EXPECT_GE(measuring, windows * 8u);
+  EXPECT_LE(measuring_with_occlusion_shown, windows * s.lag) << "only the pipeline's lag at a window's start";
+  EXPECT_FALSE(g.measuring_without() && g.steady());
 }
 
 TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {

@@ -6,6 +6,23 @@
 
 namespace occ {
 
+OcclusionGate::OcclusionGate(const Options& o) : o_(o) {
+  if (o_.start_on) return;
+  state_ = State::off;
+  last_mode_ = false;
+  off_until_ = o_.settle + o_.window + 1;  // a full window before the first trial: A B A
+}
+
+bool OcclusionGate::measuring_without() const {
+  return o_.policy == Policy::automatic && o_.test_alternate == 0 &&
+         (state_ == State::trial_off || state_ == State::confirm_off);
+}
+
+bool OcclusionGate::decided_occlusion() const {
+  if (o_.policy != Policy::automatic || o_.test_alternate > 0) return occlusion(0);
+  return state_ == State::on || state_ == State::trial_off || state_ == State::confirm_on;
+}
+
 bool OcclusionGate::occlusion(uint32_t camera) const {
   if (o_.test_alternate > 0) return (camera / o_.test_alternate) % 2 == 0;
   switch (o_.policy) {
@@ -67,7 +84,7 @@ void OcclusionGate::go_off(uint32_t hold) {
 }
 
 void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
-                          std::optional<uint64_t> frustum_triangles) {
+                          std::optional<uint64_t> frustum_triangles, bool measured) {
   ++n_;
   same_ = occlusion == last_mode_ ? same_ + 1 : 1;
   last_mode_ = occlusion;
@@ -75,13 +92,12 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   if (o_.policy != Policy::automatic || o_.test_alternate > 0) return;
   // Only settled frames are measured: the first frames of a mode still carry the other's work
   // (the OR of the first frame with occlusion draws a whole frustum set).
-  const bool settled = same_ > o_.settle;
+  const bool settled = same_ > o_.settle && measured;
   if (settled) {
     push(occlusion ? on_ : off_, interval_ms);
-    const bool measured = occlusion == state_occlusion();
-    if (measured) ++fresh_;
+    if (occlusion == state_occlusion()) ++fresh_;
   }
-  if (frustum_triangles && wants_frustum_triangles()) {
+  if (measured && frustum_triangles && wants_frustum_triangles()) {
     const double ratio = double(*frustum_triangles) / double(std::max<uint64_t>(drawn_triangles, 1));
     if (ratio < o_.try_below || (ratio < o_.try_eventually_below && deferred_ >= o_.deferrals)) {
       deferred_ = 0;

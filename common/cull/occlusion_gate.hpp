@@ -69,8 +69,12 @@ class OcclusionGate {
     // again) also ends at lose_frames in a row over lose x the other's median: a clear loss.
     double lose = 1.25;
     uint32_t lose_frames = 3;
+    // false: frames start without occlusion, and the first trial of it comes after a full
+    // window without it (A B A; the --two-pass gate: one pass is the baseline that frames of
+    // frustum sets are measured in, below).
+    bool start_on = true;
   };
-  explicit OcclusionGate(const Options& o) : o_(o) {}
+  explicit OcclusionGate(const Options& o);
 
   // Whether the next camera sent (number `camera`) is culled with occlusion.
   bool occlusion(uint32_t camera) const;
@@ -81,8 +85,19 @@ class OcclusionGate {
   bool wants_frustum_triangles() const;
   // A frame was displayed: whether its camera had occlusion, the interval since the previous
   // frame, the triangles drawn, and (when asked) the frustum set's triangles.
+  // `measured` false: the frame counts (modes, settling) but its interval is not a sample of
+  // its mode (the render client's frustum sets drawn while its --two-pass gate tried the other
+  // way: not what frames without occlusion cost).
   void frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
-             std::optional<uint64_t> frustum_triangles = std::nullopt);
+             std::optional<uint64_t> frustum_triangles = std::nullopt, bool measured = true);
+  // Whether a window is measuring frames without occlusion against occlusion (a trial without
+  // it, or frames without it measured again after a trial with it): the render client's
+  // --two-pass gate holds still meanwhile, one experiment at a time.
+  bool measuring_without() const;
+  // Whether no trial is in progress (on or off, as last decided).
+  bool steady() const { return state_ == State::on || state_ == State::off; }
+  // The mode of the last decision, that a trial in progress is measured against.
+  bool decided_occlusion() const;
 
   // For logs and tests.
   // confirm_on / confirm_off: after a trial, the mode before it measured again (A B A).
