@@ -72,8 +72,9 @@ int main(int argc, char** argv) {
     gate_option(cli, "two-pass", &o.two_pass,
                 "frames of frustum sets (the switch culled without occlusion, or no node serves) culled here: drawn in "
                 "two passes, first what showed last time, then what that depth does not prove hidden (one depth "
-                "read-back; exact). auto = where measured faster than one pass, tried where it hides little (off on a "
-                "hardware GPU, where the read-back stalls it); on; off");
+                "read-back; exact). auto = one pass first, two where measured faster (tried after a window of one, "
+                "not while the occlusion gate measures frames without occlusion; off on a hardware GPU, where the "
+                "read-back stalls it); on; off");
     cli.choice<bool>("on-node-failure", &o.degrade, {{"degrade", true}, {"exit", false}},
                      "a switch node dies, stalls past --timeout-ms or sends something invalid: degrade (go on "
                      "with the other node alone or frustum culling here, and take the node back when it is "
