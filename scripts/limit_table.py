@@ -60,14 +60,13 @@ def p99(v):
 
 
 def pvs_over_exact(d, skip):
-    """Triangles drawn over exactly visible ones on the cluster's frames with occlusion from frame
-    `skip` on (matched by camera: the reference's frame f is camera f), and those frames' count
-    and the frames'."""
+    """On the cluster's frames from `skip` on that the switch culled with occlusion: the triangles
+    drawn and the exactly visible ones on the same cameras (the reference's frame f is camera f);
+    then the count of those frames and of all frames."""
     exact = dict(zip(column(f"{d}/none/stats.csv", "frame", 0), column(f"{d}/none/stats.csv", "exact_triangles", 0)))
     cam, occ, tri = (column(f"{d}/cluster/stats.csv", c, skip) for c in ("camera", "occlusion", "triangles"))
-    pvs = sum(t for c, o, t in zip(cam, occ, tri) if o == 1 and c in exact)
-    ex = sum(exact[c] for c, o in zip(cam, occ) if o == 1 and c in exact)
-    return pvs, ex, sum(1 for o in occ if o == 1), len(occ)
+    culled = [(c, t) for c, o, t in zip(cam, occ, tri) if o == 1 and c in exact]
+    return sum(t for _, t in culled), sum(exact[c] for c, _ in culled), sum(1 for o in occ if o == 1), len(occ)
 
 
 def measure(scene, path, size, args, out):

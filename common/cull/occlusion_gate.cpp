@@ -59,7 +59,7 @@ void OcclusionGate::enter(State s) {
   slow_ = 0;
   lagging_ = 0;
   trials_ += s == State::trial_off;
-  if (s != State::on && s != State::off) (state_occlusion() ? on_ : off_).clear();  // what it measures, afresh
+  if (!steady()) (state_occlusion() ? on_ : off_).clear();  // what a trial's window measures, afresh
 }
 
 uint32_t OcclusionGate::doubled(uint32_t v) const { return std::min(2 * (v ? v : o_.first_hold), o_.max_hold); }
@@ -133,7 +133,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       enter(State::confirm_on);
     }
   } else if (state_ == State::confirm_on && occlusion && lost(trial_)) {
-    go_off(off_hold_ ? off_hold_ : o_.first_hold);  // the trial won by give_up x: no full window needed
+    go_off(off_hold_ ? off_hold_ : o_.first_hold);  // occlusion lost clearly: no full window needed
   } else if (state_ == State::confirm_on && occlusion && fresh_ >= o_.window) {
     if (before_ == 0) {  // an early trial (no full window with occlusion before it): B A, then B again
       before_ = trial_;
@@ -150,7 +150,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       enter(State::trial_on);
     }
   } else if (state_ == State::trial_on && occlusion && confirm_ && off_.size() >= o_.window && lost(med_off)) {
-    go_off(doubled(off_hold_));  // occlusion lost by give_up x: no full window needed
+    go_off(doubled(off_hold_));  // occlusion lost clearly: no full window needed
   } else if (state_ == State::trial_on && occlusion && fresh_ >= o_.window) {
     if (!confirm_) {  // the view changed under frames without occlusion: this window decides
       if (med_on < o_.margin * med_off)

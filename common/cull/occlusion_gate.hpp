@@ -115,8 +115,8 @@ class OcclusionGate {
   uint32_t doubled(uint32_t v) const;  // twice v (first_hold when 0), at most max_hold
   void back_off();                     // a trial without occlusion lost: occlusion, next trial later
   void go_off(uint32_t hold);          // frames without occlusion for `hold` frames
-  void keep_on();
-  bool state_occlusion() const;        // whether state_ asks for occlusion (the automatic policy)                      // occlusion pays: occlusion, the next trial after first_hold
+  void keep_on();                      // occlusion pays: occlusion, the next trial after first_hold
+  bool state_occlusion() const;        // whether state_ asks for occlusion (the automatic policy)
   // The trial's median against the other mode's: the mean of its medians before and after the
   // trial (after only when the trial started before it had a full window).
   double bracket(double after) const { return before_ > 0 ? 0.5 * (before_ + after) : after; }
