@@ -26,6 +26,7 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
 
 void CullFrame::restart() {
   visible_.clear();
+  v_frustum_set_ = or_deferred_ = false;
   stream_ = DiffReceiver{};
   // The hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
   hold_.reset();
@@ -37,9 +38,22 @@ void CullFrame::begin_or(const Camera& cam, bool occlusion) {
   drawn_.assign(r_.count(), 0);
   if (!occlusion_) return;
   renderer_.begin_frame(cam, false);
-  std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
+  // V a frustum set (the frame before was culled without occlusion): not drawn; HC draws what
+  // it finds visible, nearest first (occluder fusion), unless the stream brings a culled V.
+  or_deferred_ = v_frustum_set_ && choices_.occluder_fusion;
+  totals_.ors_after_frustum_sets += or_deferred_;
+  if (!or_deferred_) draw_v();
+}
+
+void CullFrame::draw_v() {
+  std::vector<uint32_t> ids;
+  ids.reserve(visible_.size());
+  for (uint32_t id : visible_.ids())
+    if (!drawn_[id]) {
+      drawn_[id] = 1;
+      ids.push_back(id);
+    }
   std::sort(ids.begin(), ids.end());
-  for (uint32_t id : ids) drawn_[id] = 1;
   renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
   // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
   // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for the
@@ -86,6 +100,7 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
     in_.have_camera = true;
     if (auto err = viewport_mismatch(*c, vp_)) return lost(f + "sent " + *err);
     in_.expected_front = step_.coarsen(visible_, from_wire(*c));
+    v_frustum_set_ = c->occlusion == 0;  // what V is once the stream is in
     return Stream::more;
   }
   if (const auto* d = std::get_if<wire::NodeDiff>(&m)) {
@@ -96,7 +111,7 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
       for (uint32_t id : d->added)
         if (!config_.full_sets || !std::binary_search(in_.before.begin(), in_.before.end(), id))
           hold_->seen(r_.node_of(id), in_.frame);
-    if (occlusion_ && !draw_new_occluders(d->added).empty()) ctx_.gl().Flush();  // as in begin_or
+    if (occlusion_ && !or_deferred_ && !draw_new_occluders(d->added).empty()) ctx_.gl().Flush();  // as in draw_v
     return Stream::more;
   }
   if (const auto* e = std::get_if<wire::EndOfFrame>(&m)) {
@@ -108,6 +123,11 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
     if (e->front_hash != in_.expected_front)
       return lost("desync: " + f + "front hash " + hex(e->front_hash) + " from " + other_ + ", " +
                   hex(in_.expected_front) + " here");
+    // The OR left out a frustum set V; the other node's HC culled this one: the OR draws it now.
+    if (occlusion_ && or_deferred_ && !v_frustum_set_) {
+      or_deferred_ = false;
+      draw_v();
+    }
     return Stream::done;
   }
   return lost(f + "sent an unexpected " + std::string(wire::type_name(wire::type_of(m))));
@@ -136,6 +156,8 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
     hc = step_.hc(frame, visible_, cam, querier_, o, out, hold_ ? &*hold_ : nullptr);
     querier_.end();
   }
+  v_frustum_set_ = !occlusion_;
+  or_deferred_ = false;
   count(hc);
   return hc;
 }

@@ -35,6 +35,7 @@ struct CullTotals {
   uint64_t tests_above_fronts = 0;  // node tests front tracking saved (HcFrame::tests_above_fronts)
   uint64_t pixel_stops = 0, hlods = 0;
   uint64_t held = 0;                // renderables kept in V by the visibility hold
+  uint64_t ors_after_frustum_sets = 0;  // ORs that left out V, a frustum set (begin_or)
 };
 
 class CullFrame {
@@ -52,7 +53,10 @@ class CullFrame {
 
   // OR(frame) for `cam`: clears depth and draws V depth only (V_{frame-2} in the switch,
   // V_{frame-1} alone). With occlusion false (a frustum-set frame) it draws nothing, and hc()
-  // sends the frustum set.
+  // sends the frustum set. Where V is a frustum set (the first frames with occlusion after
+  // frames without: drawing it cost the OR a whole frustum render, depth only) and occluder
+  // fusion is on, V is not drawn: HC builds the depth nearest first from what it finds visible,
+  // and a culled V from the other node's stream is drawn once that stream is in.
   void begin_or(const Camera& cam, bool occlusion);
 
   // The other node's stream of frame `frame` (its HC), one message at a time: its camera (V is
@@ -71,6 +75,7 @@ class CullFrame {
   const HcQuerier& querier() const { return querier_; }
 
  private:
+  void draw_v();  // what of V is not in the depth buffer yet, depth only
   std::vector<uint32_t> draw_new_occluders(std::span<const uint32_t> ids);
   void count(const HcFrame& hc);
 
@@ -90,6 +95,8 @@ class CullFrame {
   DiffReceiver stream_;          // the other node's HC frames
   std::vector<uint8_t> drawn_;   // renderables in this frame's depth buffer
   bool occlusion_ = true;        // this frame's camera asks for occlusion
+  bool v_frustum_set_ = false;   // V is a frustum set (its frame was culled without occlusion)
+  bool or_deferred_ = false;     // this OR left V out (a frustum set) until the stream is in
   // The stream of one frame (begin_stream).
   struct Incoming {
     uint32_t frame = 0;

@@ -376,7 +376,8 @@ class Session {
     const CullTotals& t = cull_.totals();
     std::cerr << who_ << ": " << t.frames << " HC frames, " << t.queries << " queries (" << t.assumed_visible
               << " more skipped by adaptive queries; " << t.held << " renderables kept by the visibility hold); "
-              << t.frustum_frames << " frames without occlusion (the render client's gate), sent "
+              << t.frustum_frames << " frames without occlusion (the render client's gate; " << t.ors_after_frustum_sets
+              << " ORs after them drew no frustum set), sent "
               << links_.rvg().stats().sent.bytes << " B to the render client and " << links_.peer_sent_bytes()
               << " B to the other node, peak_rss_mb=" << peak_rss_mb() << "\n";
     const net::ConnectionStats r = links_.rvg().stats();  // on the wire: with TLS's records (docs/security.md)
