@@ -38,8 +38,48 @@ bool OcclusionGate::state_occlusion() const {
 }
 
 bool OcclusionGate::wants_frustum_triangles() const {
-  return o_.policy == Policy::automatic && o_.test_alternate == 0 && state_ == State::on && n_ >= next_trial_ &&
+  return o_.policy == Policy::automatic && o_.test_alternate == 0;
+}
+
+bool OcclusionGate::may_try() const {
+  return wants_frustum_triangles() && state_ == State::on && n_ >= next_trial_ &&
          on_.size() >= std::min(o_.trial_after, o_.window);
+}
+
+namespace {
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+}  // namespace
+
+std::optional<OcclusionGate::Compared> OcclusionGate::compare() const {
+  std::vector<Sample> with, without;
+  for (const Sample& s : trial_samples_) {
+    if (s.cost == 0) return std::nullopt;
+    (s.occlusion ? with : without).push_back(s);
+  }
+  if (with.size() < 3 || without.size() < 3) return std::nullopt;
+  // Slopes between frames whose T differ by over 5 %: T that barely varies says nothing of b.
+  std::vector<double> slopes;
+  for (size_t i = 0; i < without.size(); ++i)
+    for (size_t j = i + 1; j < without.size(); ++j) {
+      const double dx = double(without[j].cost) - double(without[i].cost);
+      if (std::abs(dx) > 0.05 * double(std::max(without[i].cost, without[j].cost)))
+        slopes.push_back((without[j].ms - without[i].ms) / dx);
+    }
+  const double b = slopes.size() >= 3 ? std::max(0.0, median_of(slopes)) : 0.0;
+  std::vector<double> rest, fitted, actual;
+  for (const Sample& s : without) rest.push_back(s.ms - b * double(s.cost));
+  const double a = median_of(rest);
+  for (const Sample& s : with) {
+    fitted.push_back(std::max(0.0, a + b * double(s.cost)));
+    actual.push_back(s.ms);
+  }
+  return Compared{median_of(actual), median_of(fitted)};
 }
 
 double OcclusionGate::median(const std::deque<double>& v) {
@@ -54,6 +94,11 @@ void OcclusionGate::push(std::deque<double>& ring, double v) const {
 }
 
 void OcclusionGate::enter(State s) {
+  if (s == State::trial_off || s == State::trial_on) {  // a new experiment, from the window before it
+    trial_samples_.clear();
+    for (const Sample& x : recent_)
+      if (x.occlusion == state_occlusion()) trial_samples_.push_back(x);
+  }
   state_ = s;
   fresh_ = 0;
   slow_ = 0;
@@ -96,8 +141,12 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   if (settled) {
     push(occlusion ? on_ : off_, interval_ms);
     if (occlusion == state_occlusion()) ++fresh_;
+    const Sample x{occlusion, interval_ms, frustum_triangles.value_or(occlusion ? 0 : drawn_triangles)};
+    recent_.push_back(x);
+    while (recent_.size() > o_.window) recent_.pop_front();
+    if (!steady()) trial_samples_.push_back(x);
   }
-  if (measured && frustum_triangles && wants_frustum_triangles()) {
+  if (measured && occlusion && frustum_triangles && may_try()) {
     const double ratio = double(*frustum_triangles) / double(std::max<uint64_t>(drawn_triangles, 1));
     if (ratio < o_.try_below || (ratio < o_.try_eventually_below && deferred_ >= o_.deferrals)) {
       deferred_ = 0;
@@ -139,13 +188,17 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       before_ = trial_;
       trial_ = med_on;
       enter(State::confirm_off);
-    } else if (trial_ < o_.margin * bracket(med_on))
+    } else if (const std::optional<Compared> c = compare(); c ? c->without < o_.margin * c->with
+                                                               : trial_ < o_.margin * bracket(med_on))
       go_off(off_hold_ ? off_hold_ : o_.first_hold);
     else
       back_off();
   } else if (state_ == State::off && !occlusion) {
+    // A trial waits for a full window of fresh samples without occlusion, its baseline (frames
+    // that were not samples count for the hold but measure nothing: the --two-pass gate's while
+    // the occlusion gate measured): against it a clear loss ends the trial early.
     const bool slow = gave_up(med_off);
-    if (slow || n_ >= off_until_) {
+    if (slow || (n_ >= off_until_ && fresh_ >= o_.window)) {
       confirm_ = !slow;  // the view changed: frames without occlusion are not measured again
       enter(State::trial_on);
     }
@@ -166,7 +219,8 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
     if (lost(trial_)) {
       keep_on();
     } else if (fresh_ >= o_.window) {
-      if (trial_ < o_.margin * bracket(med_off))
+      if (const std::optional<Compared> c = compare(); c ? c->with < o_.margin * c->without
+                                                         : trial_ < o_.margin * bracket(med_off))
         keep_on();
       else
         go_off(doubled(off_hold_));

@@ -27,6 +27,13 @@
 //     with occlusion after them decides alone. One slow frame
 //     does not: on two cores a scheduling hiccup doubles a frame now and then (a 30-frame saw orbit at
 //     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
+// A trial is decided on the frames' own content, not only on their time: where both modes' frames
+// carry the frustum set's triangles T, the frames without occlusion of the trial and the windows
+// around it are fitted as ms = a + b T (Theil-Sen: b the median of the pairwise slopes, at least
+// 0), and the median with occlusion is compared with that fit's median at the same frames' T.
+// So a path whose cost falls or rises unevenly (Sponza's walk: 147 k triangles in view, then 15 k)
+// does not make the later window look faster; the bracket's means decide only where T is not
+// known or does not vary.
 // The render client's choice between two passes and one for those frustum sets (--two-pass) is a
 // second gate of this kind, fed the render time: "occlusion" there means two passes.
 // Either way is conservative: the frustum set holds the visible set, so frames never change.
@@ -36,6 +43,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace occ {
 
@@ -80,11 +88,14 @@ class OcclusionGate {
   bool occlusion(uint32_t camera) const;
   // Camera.occlusion for the next camera sent: 0 (the frustum set) or 1.
   uint8_t wire_occlusion(uint32_t camera) const { return occlusion(camera) ? 1 : 0; }
-  // Whether the next frame() should carry the frustum set's triangles (computed only when asked:
-  // automatic policy, occlusion on, and a trial may start).
+  // Whether frame() of a frame with occlusion should carry the frustum set's triangles (computed
+  // only when asked: the automatic policy).
   bool wants_frustum_triangles() const;
   // A frame was displayed: whether its camera had occlusion, the interval since the previous
-  // frame, the triangles drawn, and (when asked) the frustum set's triangles.
+  // frame, the triangles drawn, and the frustum set's triangles: for a frame with occlusion when
+  // asked, for a frame without it always (the set's, also where the frame drew fewer; without
+  // it, the drawn triangles stand in). They start trials (how much occlusion culls) and are each
+  // frame's cost measure (below).
   // `measured` false: the frame counts (modes, settling) but its interval is not a sample of
   // its mode (the render client's frustum sets drawn while its --two-pass gate tried the other
   // way: not what frames without occlusion cost).
@@ -109,6 +120,19 @@ class OcclusionGate {
   std::string describe(const std::string& mode = "occlusion") const;
 
  private:
+  // A settled sample of a trial's windows (the window before it included).
+  struct Sample {
+    bool occlusion = false;
+    double ms = 0;
+    uint64_t cost = 0;  // the frustum set's triangles (0: not known)
+  };
+  // The median with occlusion of the trial's samples and the fit of those without it at the
+  // same frames (above); nullopt where the samples do not allow the fit.
+  struct Compared {
+    double with = 0, without = 0;
+  };
+  std::optional<Compared> compare() const;
+  bool may_try() const;  // a trial of frames without occlusion may start at this frame
   static double median(const std::deque<double>& v);
   void push(std::deque<double>& ring, double v) const;
   void enter(State s);
@@ -127,6 +151,8 @@ class OcclusionGate {
   uint32_t same_ = 0;          // consecutive displayed frames with this frame's mode
   bool last_mode_ = true;
   std::deque<double> on_, off_;  // settled intervals of each mode, the newest `window`
+  std::deque<Sample> recent_;          // the newest `window` settled samples, either mode
+  std::vector<Sample> trial_samples_;  // since the trial began, and the window before it
   uint32_t fresh_ = 0;           // samples of the measured mode since the state began
   uint32_t slow_ = 0;            // consecutive settled frames over give_up x the reference median
   uint32_t lagging_ = 0;         // consecutive settled frames over lose x it (a trial's windows)
