@@ -67,7 +67,9 @@ int main(int argc, char** argv) {
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a node or a message");
     gate_option(cli, "occlusion-gate", &o.occlusion_gate,
                 "occlusion only where it pays: auto = frames without occlusion (the switch sends frustum sets: no OR, "
-                "no queries) while they are measured faster at the display, tried where culling removes little; on = "
+                "no queries) while they are measured faster at the display (each frame against its frustum set's "
+                "triangles, so a path that gets lighter or heavier does not decide), tried where culling removes "
+                "little; on = "
                 "always occlusion; off = never");
     gate_option(cli, "two-pass", &o.two_pass,
                 "frames of frustum sets (the switch culled without occlusion, or no node serves) culled here: drawn in "
