@@ -365,6 +365,10 @@ struct Connection::Impl {
     if (tls && !tls_ready) return;  // `writing` stays set: start_tls() calls back
     {
       std::lock_guard lk(m);
+      // A write is in flight: its completion goes on with the outbox. (The TLS handshake's end
+      // and a start_write the owner posted meanwhile both call this; the second wrote the first's
+      // bytes again.)
+      if (!inflight.empty()) return;
       inflight_bytes = 0;
       for (auto& b : outbox) {
         inflight_bytes += b.size();
