@@ -38,11 +38,11 @@ bool OcclusionGate::state_occlusion() const {
 }
 
 bool OcclusionGate::wants_frustum_triangles() const {
-  return o_.policy == Policy::automatic && o_.test_alternate == 0;
+  return may_try() || (o_.policy == Policy::automatic && o_.test_alternate == 0 && !steady());
 }
 
 bool OcclusionGate::may_try() const {
-  return wants_frustum_triangles() && state_ == State::on && n_ >= next_trial_ &&
+  return o_.policy == Policy::automatic && o_.test_alternate == 0 && state_ == State::on && n_ >= next_trial_ &&
          on_.size() >= std::min(o_.trial_after, o_.window);
 }
 
@@ -58,10 +58,8 @@ double median_of(std::vector<double> v) {
 
 std::optional<OcclusionGate::Compared> OcclusionGate::compare() const {
   std::vector<Sample> with, without;
-  for (const Sample& s : trial_samples_) {
-    if (s.cost == 0) return std::nullopt;
-    (s.occlusion ? with : without).push_back(s);
-  }
+  for (const Sample& s : trial_samples_)
+    if (s.cost > 0) (s.occlusion ? with : without).push_back(s);
   if (with.size() < 3 || without.size() < 3) return std::nullopt;
   // Slopes between frames whose T differ by over 5 %: T that barely varies says nothing of b.
   std::vector<double> slopes;
@@ -82,11 +80,7 @@ std::optional<OcclusionGate::Compared> OcclusionGate::compare() const {
   return Compared{median_of(actual), median_of(fitted)};
 }
 
-double OcclusionGate::median(const std::deque<double>& v) {
-  std::vector<double> s(v.begin(), v.end());
-  std::sort(s.begin(), s.end());
-  return s.empty() ? 0 : s.size() % 2 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
-}
+double OcclusionGate::median(const std::deque<double>& v) { return median_of({v.begin(), v.end()}); }
 
 void OcclusionGate::push(std::deque<double>& ring, double v) const {
   ring.push_back(v);

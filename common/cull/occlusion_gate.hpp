@@ -28,8 +28,9 @@
 //     does not: on two cores a scheduling hiccup doubles a frame now and then (a 30-frame saw orbit at
 //     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
 // A trial is decided on the frames' own content, not only on their time: where both modes' frames
-// carry the frustum set's triangles T, the frames without occlusion of the trial and the windows
-// around it are fitted as ms = a + b T (Theil-Sen: b the median of the pairwise slopes, at least
+// carry the frustum set's triangles T (frames with occlusion: those of the trial's windows, and of
+// the window before it where a trial could start), the frames without occlusion of the trial and
+// the windows around it are fitted as ms = a + b T (Theil-Sen: b the median of the pairwise slopes, at least
 // 0), and the median with occlusion is compared with that fit's median at the same frames' T.
 // So a path whose cost falls or rises unevenly (Sponza's walk: 147 k triangles in view, then 15 k)
 // does not make the later window look faster; the bracket's means decide only where T is not
@@ -88,8 +89,9 @@ class OcclusionGate {
   bool occlusion(uint32_t camera) const;
   // Camera.occlusion for the next camera sent: 0 (the frustum set) or 1.
   uint8_t wire_occlusion(uint32_t camera) const { return occlusion(camera) ? 1 : 0; }
-  // Whether frame() of a frame with occlusion should carry the frustum set's triangles (computed
-  // only when asked: the automatic policy).
+  // Whether frame() of a frame with occlusion should carry the frustum set's triangles (a frustum
+  // cull on the render client: 2 ms a frame on the bridge's 25,600 objects, so computed only when
+  // asked: while a trial may start, and during a trial's windows).
   bool wants_frustum_triangles() const;
   // A frame was displayed: whether its camera had occlusion, the interval since the previous
   // frame, the triangles drawn, and the frustum set's triangles: for a frame with occlusion when
