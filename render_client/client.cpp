@@ -226,8 +226,8 @@ class Client {
     drawer_->measured(f.drawn, row.rvg_ms);
     if (row.mode == Mode::switch_) {
       std::optional<uint64_t> frustum;
-      if (!row.occlusion)  // the set's triangles, also where two passes drew fewer
-        frustum = f.drawn.two_pass ? f.drawn.tp.set_triangles : f.drawn.st.triangles;
+      if (!row.occlusion)
+        frustum = f.drawn.set_triangles();
       else if (gate_.wants_frustum_triangles())
         frustum = frustum_triangles(f.cam);
       gate_.frame(row.occlusion != 0, row.frame_interval_ms, row.triangles, frustum, f.drawn.representative);

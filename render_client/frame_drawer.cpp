@@ -60,8 +60,7 @@ FrameDrawer::Drawn FrameDrawer::draw(const Camera& cam, const std::vector<uint32
 
 void FrameDrawer::measured(const Drawn& d, double render_ms) {
   if (!d.frustum_set) return;
-  const uint64_t set_triangles = d.two_pass ? d.tp.set_triangles : d.st.triangles;
-  gate_.frame(d.two_pass, render_ms, d.st.triangles, set_triangles, !d.held);
+  gate_.frame(d.two_pass, render_ms, d.st.triangles, d.set_triangles(), !d.held);
   ++frames_;
 }
 

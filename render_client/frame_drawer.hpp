@@ -29,6 +29,8 @@ class FrameDrawer {
     // Whether the frame shows what its set costs the way the --two-pass gate last decided (not a
     // trial of the other way): a sample for the occlusion gate.
     bool representative = true;
+    // The set's triangles: what one pass draws (two passes may draw fewer).
+    uint64_t set_triangles() const { return two_pass ? tp.set_triangles : st.triangles; }
   };
   // Draws `ids` (renderables) with camera `cam`, finished (glFinish); `frustum_set`: a set the
   // switch did not cull with occlusion. `hold`: the occlusion gate is measuring frames without

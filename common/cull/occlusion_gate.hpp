@@ -30,8 +30,9 @@
 // A trial is decided on the frames' own content, not only on their time: where both modes' frames
 // carry the frustum set's triangles T (frames with occlusion: those of the trial's windows, and of
 // the window before it where a trial could start), the frames without occlusion of the trial and
-// the windows around it are fitted as ms = a + b T (Theil-Sen: b the median of the pairwise slopes, at least
-// 0), and the median with occlusion is compared with that fit's median at the same frames' T.
+// the windows around it are fitted as ms = a + b T (Theil-Sen: b the median of the pairwise
+// slopes, at least 0), and the median with occlusion is compared with that fit's median at the
+// same frames' T.
 // So a path whose cost falls or rises unevenly (Sponza's walk: 147 k triangles in view, then 15 k)
 // does not make the later window look faster; the bracket's means decide only where T is not
 // known or does not vary.
