@@ -166,6 +166,7 @@ void CullFrame::count(const HcFrame& hc) {
   ++totals_.frames;
   totals_.queries += hc.stats.queries;
   totals_.assumed_visible += hc.stats.skipped;
+  totals_.skipped_occluded += hc.stats.skipped_occluded;
   totals_.pixel_stops += hc.stats.pixel_stops;
   totals_.hlods += hc.stats.hlods;
   totals_.tests_above_fronts += hc.tests_above_fronts;

@@ -32,6 +32,7 @@ struct CullTotals {
   uint64_t frustum_frames = 0;      // of those, sent as frustum sets (the render client's gate)
   uint64_t queries = 0;             // occlusion queries (CullStats::queries)
   uint64_t assumed_visible = 0;     // queries skipped by adaptive queries (CullStats::skipped)
+  uint64_t skipped_occluded = 0;    // skipped ones the depth pyramid proved occluded (CullStats::skipped_occluded)
   uint64_t tests_above_fronts = 0;  // node tests front tracking saved (HcFrame::tests_above_fronts)
   uint64_t pixel_stops = 0, hlods = 0;
   uint64_t held = 0;                // renderables kept in V by the visibility hold

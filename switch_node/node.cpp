@@ -375,7 +375,9 @@ class Session {
   void print_summary() const {
     const CullTotals& t = cull_.totals();
     std::cerr << who_ << ": " << t.frames << " HC frames, " << t.queries << " queries (" << t.assumed_visible
-              << " more skipped by adaptive queries; " << t.held << " renderables kept by the visibility hold); "
+              << " more skipped by adaptive queries, " << t.skipped_occluded
+              << " others they skipped proven occluded by the depth pyramid; " << t.held
+              << " renderables kept by the visibility hold); "
               << t.frustum_frames << " frames without occlusion (the render client's gate; " << t.ors_after_frustum_sets
               << " ORs after them drew no frustum set), sent "
               << links_.rvg().stats().sent.bytes << " B to the render client and " << links_.peer_sent_bytes()
@@ -393,7 +395,8 @@ class Session {
               << q.occluded << " occluded): " << q.queries << " occlusion queries issued, " << q.batched << " boxes in "
               << q.draws << " batch draws, " << q.pyramid_occluded << " proven occluded by the depth pyramid ("
               << fixed(double(q.pyramid_pixels) / 1e6, 2) << " M pixels of their rectangles) and " << q.shown
-              << " shown; of " << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
+              << " shown, " << q.assumed << " of " << q.cheap << " skipped by adaptive queries assumed visible; of "
+              << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
               << q.builds << " pyramid builds, " << q.refreshes << " refreshes after occluder fusion)\n";
     std::cerr.flush();
     print_geometry_line(stderr, who_, g_.renderer->geometry_pool());

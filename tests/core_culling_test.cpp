@@ -194,6 +194,48 @@ TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
   EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
 }
 
+// A querier with a cheap test (HcQuerier's depth pyramid) that proves every occluded box: the
+// leaves adaptive queries skip are tested that way, so one that becomes occluded leaves V in the
+// same frame, while the full tests stay as few as without it.
+struct CheapFakeQueries : FakeQueries {
+  uint32_t cheap = 0;
+  bool cheap_tests() const override { return true; }
+  uint32_t issue_cheap(const Aabb& b) override {
+    ++cheap;
+    return issue(b);  // the fake's answer: exact (0 where occluded), and 1 or more otherwise
+  }
+};
+
+TEST(QuerySkipper, CheapTestsDropASkippedLeafTheFrameItBecomesOccluded) {
+  Scene s = cube_grid(8, 3);
+  Hierarchy h = Hierarchy::build(s, {});
+  Renderables r(h, nullptr);
+  Camera cam = overview(h.node(0).box);
+  LodSelector sel(r, cam, 480, 0.0);
+  FakeQueries truth_q;
+  CheapFakeQueries cheap_q;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; j += 2) truth_q.visible_points.push_back({3.0 * i + 0.5, 0.5, 3.0 * j + 0.5});
+  cheap_q.visible_points = truth_q.visible_points;
+  QuerySkipper skipper(h.size());
+  CullStats plain_stats, skip_stats;
+  for (int frame = 0; frame < 30; ++frame) {
+    if (frame == 15) {
+      truth_q.visible_points.resize(16);
+      cheap_q.visible_points.resize(16);
+    }
+    const uint32_t cheap_before = cheap_q.cheap;
+    auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain_stats});
+    auto v = hardware_cull_lod(h, cam, cheap_q, sel, {.skipper = &skipper, .stats = &skip_stats});
+    EXPECT_EQ(v, truth) << "frame " << frame;
+    if (frame == 15) EXPECT_GT(cheap_q.cheap, cheap_before) << "the skipped leaves were tested cheaply";
+  }
+  EXPECT_GT(skip_stats.skipped, 0u);
+  EXPECT_GT(skip_stats.skipped_occluded, 0u);
+  EXPECT_EQ(skip_stats.skipped + skip_stats.skipped_occluded, cheap_q.cheap);
+  EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
+}
+
 TEST(QuerySkipper, HeavyLeavesAreQueriedEveryTime) {
   // Mesh 1: the cube's triangles repeated, over kMaxSkippedLeafTriangles; every other cube uses it.
   Scene s = cube_grid(4, 3);

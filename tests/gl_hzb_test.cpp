@@ -256,14 +256,18 @@ TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
 }
 
 // The switch step over a walk, as a switch node runs it (near-first batches, occluder fusion
-// between batches, adaptive queries, visibility hold), once per --hc-test: the visible sets of
-// every frame are those of queries only (tau = 0), and the pyramid did prove boxes occluded.
+// between batches, visibility hold; adaptive queries where asked), once per --hc-test.
+// Without adaptive queries the visible sets of every frame are those of queries only (tau = 0),
+// and the pyramid did prove boxes occluded. With them the pyramid tests what they skip
+// (cheap_tests()): every set holds the leaves that show (the item buffer), and fewer leaves are
+// kept than by queries,
+// which take what they skip on trust.
 TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
   const int w = 256, hgt = 192, frames = 24;
   Plant p(w, hgt, "plant:0.3", frames);
   const Renderables renderables(p.h, nullptr);
   ClusterConfig config;
-  auto replay = [&](HcTest test, HcQuerier::Stats* stats) {
+  auto replay = [&](HcTest test, HcQuerier::Stats* stats, bool adaptive = false) {
     HcQuerier querier(*p.ctx, test, false);  // tau = 0: no sample counts needed
     const SwitchStep step(renderables, config, hgt);
     QuerySkipper skipper(p.h.size());
@@ -280,7 +284,7 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       for (uint32_t id : occluders) drawn[id] = 1;
       p.renderer->begin_frame(cam, false);
       p.renderer->draw_renderables(renderables, occluders, SceneRenderer::Mode::DepthOnly);
-      HcOptions o{.choices = {.order = HcOrder::near_first}, .skipper = &skipper};
+      HcOptions o{.choices = {.order = HcOrder::near_first, .adaptive_queries = adaptive}, .skipper = &skipper};
       o.occluders = [&](std::span<const uint32_t> found) {
         std::vector<uint32_t> fresh;
         for (uint32_t id : found)
@@ -329,6 +333,40 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
               (unsigned long long)py.pyramid_occluded, (unsigned long long)py.builds, (unsigned long long)cp.batched,
               (unsigned long long)cp.queries, (unsigned long long)cp.pyramid_occluded, (unsigned long long)cp.shown,
               (unsigned long long)cp.builds, (unsigned long long)cp.refreshes);
+
+  HcQuerier::Stats qa{}, pya{}, cpa{};
+  const auto trusting = replay(HcTest::queries, &qa, true);
+  size_t kept_by_queries = 0, kept[2] = {0, 0};
+  for (int f = 0; f < frames; ++f) kept_by_queries += trusting[size_t(f)].size();
+  const auto cheap_pyramid = replay(HcTest::pyramid, &pya, true);
+  const auto cheap_cpu = replay(HcTest::cpu_pyramid, &cpa, true);
+  std::vector<uint32_t> leaves;
+  for (uint32_t id = 0; id < p.h.size(); ++id)
+    if (p.h.node(id).leaf() && p.h.node(id).item_count > 0) leaves.push_back(id);
+  for (int f = 0; f < frames; ++f) {
+    p.renderer->begin_id_frame(p.path[size_t(f)]);  // the item buffer: the leaves that show
+    p.renderer->draw_nodes_ids(leaves);
+    const std::vector<uint32_t> exact = ids_in_image(p.ctx->read_rgba());
+    ASSERT_FALSE(exact.empty());
+    ASSERT_TRUE(std::includes(trusting[size_t(f)].begin(), trusting[size_t(f)].end(), exact.begin(), exact.end()));
+    for (int k = 0; k < 2; ++k) {
+      const auto& v = (k ? cheap_cpu : cheap_pyramid)[size_t(f)];
+      ASSERT_TRUE(std::includes(v.begin(), v.end(), exact.begin(), exact.end()))
+          << (k ? "cpu-pyramid" : "pyramid") << " with adaptive queries lost a visible leaf in frame " << f;
+      kept[k] += v.size();
+    }
+  }
+  EXPECT_EQ(qa.cheap, 0u) << "queries: skipped leaves are not tested";
+  for (const HcQuerier::Stats* s : {&pya, &cpa}) {
+    EXPECT_GT(s->assumed, 0u) << "the pyramid could not prove some skipped leaves occluded";
+    EXPECT_LT(s->assumed, s->cheap) << "and proved others occluded";
+  }
+  EXPECT_EQ(cpa.batched + cpa.queries + cpa.pyramid_occluded + cpa.shown + cpa.assumed, cpa.tests);
+  std::printf("adaptive queries: leaves kept over the walk: queries %zu, pyramid %zu, cpu-pyramid %zu (%llu of %llu "
+              "skipped boxes proven occluded)\n", kept_by_queries, kept[0], kept[1],
+              (unsigned long long)(cpa.cheap - cpa.assumed), (unsigned long long)cpa.cheap);
+  EXPECT_LT(kept[0], kept_by_queries) << "pyramid: leaves kept over the walk";
+  EXPECT_LT(kept[1], kept_by_queries) << "cpu-pyramid: leaves kept over the walk";
 }
 
 // cpu-pyramid where its pyramid decides nothing (nothing drawn, sample counts wanted: no box is

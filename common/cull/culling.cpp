@@ -147,10 +147,14 @@ class LodTraversal {
         ++st_.near_visible;
         visible_.emplace_back(id, kNoQuery);
       } else if (skipper_ && QuerySkipper::may_skip(n) && skipper_->skip(id)) {
-        ++st_.skipped;
-        visible_.emplace_back(id, kNoQuery);
+        if (q_.cheap_tests()) {
+          pending_.push_back({id, q_.issue_cheap(n.box), true});
+        } else {
+          ++st_.skipped;
+          visible_.emplace_back(id, kNoQuery);
+        }
       } else {
-        pending_.emplace_back(id, q_.issue(n.box));
+        pending_.push_back({id, q_.issue(n.box), false});
         ++st_.queries;
       }
     }
@@ -158,13 +162,20 @@ class LodTraversal {
   }
 
   void read_results() {
-    for (auto [id, handle] : pending_) {
-      const uint64_t samples = q_.result(handle);
-      if (skipper_) skipper_->record(id, samples > 0);
-      if (samples > 0)
-        visible_.emplace_back(id, samples);
-      else
+    for (const Pending& p : pending_) {
+      const uint64_t samples = q_.result(p.handle);
+      if (p.cheap && samples > 0) {  // skipped: assumed visible, as without the cheap test
+        ++st_.skipped;
+        visible_.emplace_back(p.id, kNoQuery);
+        continue;
+      }
+      if (skipper_) skipper_->record(p.id, samples > 0);  // occluded: queried again from now on
+      if (samples > 0) {
+        visible_.emplace_back(p.id, samples);
+      } else {
         ++st_.occluded;
+        st_.skipped_occluded += p.cheap;
+      }
     }
     q_.end_batch();
   }
@@ -226,7 +237,11 @@ class LodTraversal {
   using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue_;
   std::vector<uint32_t> batch_, out_, accepted_;
-  std::vector<std::pair<uint32_t, uint32_t>> pending_;  // (node, query handle)
+  struct Pending {
+    uint32_t id, handle;
+    bool cheap;  // skipped by adaptive queries: only the cheap test (issue_cheap)
+  };
+  std::vector<Pending> pending_;
   std::vector<std::pair<uint32_t, uint64_t>> visible_;  // (node, samples; kNoQuery: none)
 };
 

@@ -24,6 +24,14 @@ class OcclusionQueries {
   virtual uint64_t result(uint32_t handle) = 0;
   // Every result of the batch was read: handles may be recycled.
   virtual void end_batch() {}
+  // Whether issue_cheap() can prove boxes occluded at a fraction of a test's cost (a depth
+  // pyramid on the CPU or in one dispatch per batch; HcQuerier): adaptive queries then still
+  // test what they skip that way, so a leaf that became occluded leaves V at once instead of
+  // after up to QuerySkipper::kMaxWait frames.
+  virtual bool cheap_tests() const { return false; }
+  // Only the cheap test for `box`: result() is 0 where it proves the box occluded, else 1 with
+  // nothing tested further (assumed visible). Only where cheap_tests().
+  virtual uint32_t issue_cheap(const Aabb& box) { return issue(box); }
 };
 
 // Every box passes: with it HC's traversal returns the frustum set at the chosen LODs (a frame the
@@ -50,6 +58,7 @@ struct CullStats {
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
   uint32_t hlods = 0;              // interior nodes accepted at their HLOD
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
+  uint32_t skipped_occluded = 0;   // of the queries it skipped, proven occluded by a cheap test (in occluded)
   uint32_t sealed = 0;             // nodes hidden inside solids (Enclosures::hides), no query
 };
 

@@ -311,8 +311,17 @@ uint32_t HcQuerier::issue(const Aabb& box) {
   if (!use_pyramid_) return q_issue(box);
   if (resolved_) throw std::logic_error("HcQuerier: issue() after result() in one batch (call end_batch() first)");
   boxes_.push_back(box);
+  cheap_.push_back(0);
   probes_.push_back(pyramid_probe(box, cam_, {ctx_.width(), ctx_.height()}, BoxQuerier::kRelativePad, policy_.span));
   return uint32_t(boxes_.size() - 1);
+}
+
+uint32_t HcQuerier::issue_cheap(const Aabb& box) {
+  if (!use_pyramid_) throw std::logic_error("HcQuerier: issue_cheap() in a frame without the pyramid (cheap_tests())");
+  const uint32_t handle = issue(box);
+  cheap_.back() = 1;
+  ++stats_.cheap;
+  return handle;
 }
 
 void HcQuerier::resolve() {
@@ -356,6 +365,11 @@ void HcQuerier::resolve() {
   }
   // cpu_pyramid without sample counts also proves boxes that show, from level 0, which must be
   // the current depth under the box: not where occluder fusion drew since it was read.
+  for (size_t i = 0; i < boxes_.size(); ++i)
+    if (handle_[i] == kPending && cheap_[i]) {
+      handle_[i] = kAssumed;
+      ++stats_.assumed;
+    }
   if (cpu_pyramid_ && !sample_counts_)
     for (size_t i = 0; i < boxes_.size(); ++i)
       if (handle_[i] == kPending && clean_under(boxes_[i]) && cpu_pyramid_->shows(boxes_[i], cam_)) {
@@ -392,7 +406,8 @@ uint64_t HcQuerier::result(uint32_t handle) {
       throw std::out_of_range("HcQuerier: handle " + std::to_string(handle) + " not issued in this batch (" +
                               std::to_string(boxes_.size()) + " issued)");
     if (!resolved_) resolve();
-    samples = handle_[handle] == kZero ? 0 : handle_[handle] == kShows ? 1 : q_result(handle_[handle]);
+    const uint32_t h = handle_[handle];
+    samples = h == kZero ? 0 : h == kShows || h == kAssumed ? 1 : q_result(h);
   }
   stats_.occluded += samples == 0;
   return samples;
@@ -436,6 +451,7 @@ void HcQuerier::end_batch() {
     stats_.draws = counter_->draws();
   }
   boxes_.clear();
+  cheap_.clear();
   probes_.clear();
   resolved_ = false;
 }

@@ -119,6 +119,8 @@ class HcQuerier final : public OcclusionQueries {
     uint64_t occluded = 0;         // boxes answered 0 samples (by the pyramid or a query)
     uint64_t pyramid_pixels = 0;   // pixels of the rectangles of the boxes the pyramid proved
     uint64_t shown = 0;            // cpu_pyramid: boxes proven to show (DepthPyramid::shows), no query
+    uint64_t cheap = 0;            // of the tests, issue_cheap() ones (the pyramid only)
+    uint64_t assumed = 0;          // of those, not proven occluded: answered 1, nothing tested further
   };
 
   // `sample_counts`: result() must be the number of samples (visible-pixel LOD), not just > 0.
@@ -133,6 +135,9 @@ class HcQuerier final : public OcclusionQueries {
   // rectangles); empty: anything, anywhere.
   void depth_added(std::span<const Aabb> drawn = {});
   uint32_t issue(const Aabb& box) override;
+  // The pyramid's test alone (frames that use it): boxes it cannot prove occluded answer 1.
+  bool cheap_tests() const override { return use_pyramid_; }
+  uint32_t issue_cheap(const Aabb& box) override;
   uint64_t result(uint32_t handle) override;
   void end_batch() override;
   // Restores colour and depth writes.
@@ -142,7 +147,7 @@ class HcQuerier final : public OcclusionQueries {
   BoxQuerier& box_querier() { return queries_; }
 
  private:
-  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kShows = ~0u - 2, kQueryBit = 1u << 31 };
+  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kShows = ~0u - 2, kAssumed = ~0u - 3, kQueryBit = 1u << 31 };
   void resolve();
   void q_begin(const Camera& cam);
   uint32_t q_issue(const Aabb& box);
@@ -168,6 +173,7 @@ class HcQuerier final : public OcclusionQueries {
   double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
   uint32_t frames_off_ = 0;     // frames without the pyramid since it was last used
   std::vector<Aabb> boxes_;             // this batch's boxes
+  std::vector<uint8_t> cheap_;          // per box: issued by issue_cheap()
   std::vector<PyramidProbe> probes_;    // and their probes
   std::vector<uint32_t> handle_;        // per box: its query handle, kZero (0 samples) or kPending
   std::vector<PyramidProbe> batch_;     // probes sent to the GPU

@@ -108,7 +108,8 @@ void add_hc_options(Cli& cli, HcChoices& c) {
                       "HC query batches: a hierarchy level each, or nearest boxes first in shells");
   const std::tuple<const char*, bool*, const char*> switches[] = {
       {"adaptive-queries", &c.adaptive_queries,
-       "assume nodes whose queries keep coming back visible visible for a while (no query)"},
+       "assume nodes whose queries keep coming back visible visible for a while (no query; with a depth pyramid "
+       "(--hc-test pyramid, cpu-pyramid) still tested against it, so one that became occluded leaves V at once)"},
       {"occluder-fusion", &c.occluder_fusion,
        "HC draws (depth only) what each batch found visible before the next batch's queries"},
       {"sealed", &c.sealed,
