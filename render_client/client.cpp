@@ -127,7 +127,9 @@ class Client {
   // the next camera goes out before the frame is drawn, to keep the nodes busy.
   void receive(Frame& f, VisibleSet& visible, const SwitchStep& step) {
     const int k = links_.server_of(f.number);
+    const Clock::time_point w0 = Clock::now();
     if (k >= 0) f.served = receiver_.receive(k, f.number, visible, step);
+    f.row.wait_ms = ms_between(w0, Clock::now());
     FrameStats& row = f.row;
     row.frame = f.number;
     if (f.served) {

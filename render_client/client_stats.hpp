@@ -27,6 +27,7 @@ struct FrameStats {
   int hc_node = -1;  // the node that culled it; -1: frustum culling here
   uint64_t visible = 0, added = 0, removed = 0, queries = 0, triangles = 0, bytes_received = 0;
   double hc_ms = 0, or_ms = 0, rvg_ms = 0, latency_ms = 0, frame_interval_ms = 0;
+  double wait_ms = 0;  // waiting for the frame's set from the nodes (0: it was in)
   double hc_cpu_ms = 0, or_cpu_ms = 0, or_tail_cpu_ms = 0, rvg_cpu_ms = 0, rvg_frame_cpu_ms = 0, or_tail_ms = 0;
   uint32_t camera_gap = 0;
   uint32_t occlusion = 0;  // Camera.occlusion of its camera (0: the frustum set)
@@ -44,7 +45,7 @@ struct FrameStats {
     f("hc_ms", hc_ms); f("or_ms", or_ms); f("rvg_ms", rvg_ms); f("latency_ms", latency_ms);
     f("frame_interval_ms", frame_interval_ms); f("hc_cpu_ms", hc_cpu_ms); f("or_cpu_ms", or_cpu_ms);
     f("or_tail_cpu_ms", or_tail_cpu_ms); f("rvg_cpu_ms", rvg_cpu_ms); f("rvg_frame_cpu_ms", rvg_frame_cpu_ms);
-    f("or_tail_ms", or_tail_ms); f("camera_gap", camera_gap); f("occlusion", occlusion); f("two_pass", two_pass);
+    f("or_tail_ms", or_tail_ms); f("wait_ms", wait_ms); f("camera_gap", camera_gap); f("occlusion", occlusion); f("two_pass", two_pass);
     f("hidden_here", hidden_here); f("geometry_waits", geometry_waits); f("geometry_wait_ms", geometry_wait_ms);
     f("mode", std::string(mode_name(mode)));
   }
