@@ -76,7 +76,7 @@ class RunStats {
   std::vector<Clock::time_point> shown_;
   std::vector<double> latency_;
   uint64_t visible_ = 0, bytes_ = 0, triangles_ = 0;
-  double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0;
+  double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0, wait_ms_ = 0;
   uint32_t camera_gap_max_ = 0;
   size_t mode_frames_[4] = {0, 0, 0, 0};
 };

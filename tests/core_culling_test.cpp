@@ -228,7 +228,9 @@ TEST(QuerySkipper, CheapTestsDropASkippedLeafTheFrameItBecomesOccluded) {
     auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain_stats});
     auto v = hardware_cull_lod(h, cam, cheap_q, sel, {.skipper = &skipper, .stats = &skip_stats});
     EXPECT_EQ(v, truth) << "frame " << frame;
-    if (frame == 15) EXPECT_GT(cheap_q.cheap, cheap_before) << "the skipped leaves were tested cheaply";
+    if (frame == 15) {
+      EXPECT_GT(cheap_q.cheap, cheap_before) << "the skipped leaves were tested cheaply";
+    }
   }
   EXPECT_GT(skip_stats.skipped, 0u);
   EXPECT_GT(skip_stats.skipped_occluded, 0u);

@@ -41,6 +41,12 @@ void expect_cluster_equals_reference(const std::string& name, const std::string&
   // HC queried: in every early frame (adaptive queries then trust nodes that keep passing: a
   // late frame of a walk may need none).
   for (size_t f = 0; f < std::min<size_t>(frames, 10); ++f) EXPECT_GT(stats["queries"][f], 0) << "frame " << f;
+  // The wait for a frame's set is part of the interval since the frame before (stats.csv wait_ms).
+  ASSERT_EQ(stats["wait_ms"].size(), frames);
+  for (size_t f = 1; f < frames; ++f) {
+    EXPECT_GE(stats["wait_ms"][f], 0.0) << "frame " << f;
+    EXPECT_LE(stats["wait_ms"][f], stats["frame_interval_ms"][f] + 0.01) << "frame " << f;  // the CSV's rounding
+  }
 }
 
 // The plant's 40-camera walk (`o`: cluster("plant:0.3", "walk:40")) with the render client's
