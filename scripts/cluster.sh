@@ -46,6 +46,13 @@
 # HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
 # paired runs: frame interval 0.92-0.98x against 1 (docs/results.md). It also keeps the nodes
 # clear of a Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
+# --pin-nodes auto|on|off (default auto: on where this machine has fewer than 4 CPUs): both switch
+# nodes run on this process's last CPU (taskset), the render client on any. With three processes
+# on two cores the render client, whose frame the user waits for, then keeps a core while the
+# nodes work; left to float, a node's thread preempts its rasteriser mid-frame. Light views gain
+# most (paired runs, 512^2: the bridge orbit 1.70 -> 1.34 ms, sgd_bodo walk 3.43 -> 2.73, the
+# duplex orbit 3.69 -> 3.15, docs/results.md); heavy ones, where all three are busy anyway, gain
+# nothing. With four CPUs or more each process has its own.
 # --hosts HOST0,HOST1,HOSTC runs the three processes on three hosts over ssh instead
 # (scripts/cluster_hosts.sh --help, docs/clusters.md).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
@@ -60,6 +67,7 @@ MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
 scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 restart_nodes=3
+pin_nodes=auto
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -69,6 +77,7 @@ while [ $# -gt 0 ]; do
     --no-key) key_file=none; shift ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
     --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
+    --pin-nodes) occ_need_value "$@"; pin_nodes=$2; shift 2 ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;
@@ -78,6 +87,19 @@ done
 [[ "$node_threads" =~ ^[0-9]+$ ]] && [ "$node_threads" -le 64 ] ||
   occ_die "--node-raster-threads '$node_threads': expected a whole number from 0 to 64"
 [[ "$restart_nodes" =~ ^[0-9]+$ ]] || occ_die "--restart-nodes '$restart_nodes': expected a whole number (0: never)"
+# The CPUs this script may use: their count and the last one (the nodes' CPU with --pin-nodes).
+read -r cpu_count cpu_last < <(python3 -c 'import os; a = sorted(os.sched_getaffinity(0)); print(len(a), a[-1])')
+pin=()
+case "$pin_nodes" in
+  auto) [ "$cpu_count" -ge 2 ] && [ "$cpu_count" -lt 4 ] && command -v taskset >/dev/null && pin=(taskset -c "$cpu_last") ;;
+  on)
+    [ "$cpu_count" -ge 2 ] || occ_die "--pin-nodes on: needs at least 2 CPUs (this process may use $cpu_count)"
+    command -v taskset >/dev/null || occ_die "--pin-nodes on: needs util-linux's taskset"
+    pin=(taskset -c "$cpu_last") ;;
+  off) ;;
+  *) occ_die "--pin-nodes '$pin_nodes': expected auto, on or off" ;;
+esac
+[ ${#pin[@]} = 0 ] || echo "cluster: both switch nodes on CPU $cpu_last, the render client on any of $cpu_count (--pin-nodes $pin_nodes)" >&2
 supervise=1  # --on-node-failure exit: a node's death ends the client, so it ends the run
 [[ " ${rvg_only[*]} " == *" --on-node-failure exit "* ]] && supervise=0
 if [ $window = 1 ]; then
@@ -182,7 +204,7 @@ start_relay() {
 start_node() {
   local ns=("${in_a[@]}") peer=()
   [ "$1" = 1 ] && ns=("${in_b[@]}") peer=(--peer "$peer0")
-  "${ns[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id "$1" --scene "$scene" "${peer[@]}" \
+  "${ns[@]}" "${pin[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id "$1" --scene "$scene" "${peer[@]}" \
     --listen "$listen" --port "$2" --port-file "${3%.log}.port" "${common[@]}" "${node_only[@]}" >"$3" 2>&1 &
   node_pid=$!
   pids+=($node_pid)

@@ -2,6 +2,8 @@
 // help without installing or building, and scripts/video.sh makes an MP4 (skipped without ffmpeg).
 #include <gtest/gtest.h>
 
+#include <sched.h>
+
 #include <fstream>
 #include <memory>
 #include <stdexcept>
@@ -116,6 +118,12 @@ TEST(Conventions, ClusterPrintsTheFailingProcessesOwnError) {
         << p.log();
     EXPECT_FALSE(fs::exists(dir / "e" / "node0.log")) << p.log();
   }
+  {  // a bad --pin-nodes: said before any process starts
+    Proc p(cluster(dir / "f", {"--scene", "city:2x2:2:4:1", "--pin-nodes", "always"}), dir / "f.log");
+    EXPECT_EQ(p.wait(60s), 2);
+    EXPECT_NE(p.log().find("--pin-nodes 'always': expected auto, on or off"), std::string::npos) << p.log();
+    EXPECT_FALSE(fs::exists(dir / "f" / "node0.log")) << p.log();
+  }
   {  // a broken --path file: the render client's own line, and the nodes are stopped at once, not
      // left to wait for it until their --timeout-ms
     std::ofstream(dir / "broken.csv") << "frame,eye_x\n0,1\n";
@@ -128,6 +136,59 @@ TEST(Conventions, ClusterPrintsTheFailingProcessesOwnError) {
     EXPECT_NE(log.find("  error: " + (dir / "broken.csv").string() + ": line 2: expected 11 or 13 columns"),
               std::string::npos) << log;
     EXPECT_NE(log.find("cluster: stopping node0 node1"), std::string::npos) << log;
+  }
+}
+
+namespace {
+// /proc/PID/status's Cpus_allowed_list ("0-1", "1"), empty when the process is gone.
+std::string cpus_allowed(const std::string& pid) {
+  std::ifstream f("/proc/" + pid + "/status");
+  for (std::string line; std::getline(f, line);)
+    if (line.rfind("Cpus_allowed_list:", 0) == 0) return line.substr(line.find_first_not_of(" \t", 18));
+  return "";
+}
+}  // namespace
+
+// --pin-nodes on: both switch nodes may run on the launcher's last CPU only, the render client on
+// all of them; off: the nodes too. (auto is on under 4 CPUs.)
+TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  ASSERT_EQ(::sched_getaffinity(0, sizeof set, &set), 0);
+  int count = 0, last = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &set)) ++count, last = c;
+  if (count < 2) GTEST_SKIP() << "one CPU: nothing to pin apart";
+  const std::string all = cpus_allowed("self");
+  const fs::path dir = fresh_dir("cluster_pin");
+  for (const std::string mode : {"on", "off"}) {
+    Proc p(cluster(dir / mode, {"--scene", "city:2x2:2:4:1", "--path", "walk:8000", "--no-images", "--pin-nodes", mode}),
+           dir / (mode + ".log"));
+    // Each process's CPUs, read while it runs (the nodes from their start, the client once
+    // it is started: it runs for seconds).
+    std::string seen[3];
+    const char* names[3] = {"node0", "node1", "render_client"};
+    const auto until = std::chrono::steady_clock::now() + 120s;
+    while (std::chrono::steady_clock::now() < until && p.running() && seen[2].empty()) {
+      for (int k = 0; k < 3; ++k) {
+        // A node's pid file is written as it is started (by taskset, which then runs it): its
+        // port file says it runs.
+        const fs::path pid = dir / mode / (std::string(names[k]) + ".pid");
+        const bool started = k == 2 || fs::exists(dir / mode / (std::string(names[k]) + ".port"));
+        if (seen[k].empty() && started && fs::exists(pid)) {
+          std::string id = read_file(pid);
+          id.erase(id.find_last_not_of(" \n") + 1);
+          if (!id.empty()) seen[k] = cpus_allowed(id);
+        }
+      }
+      std::this_thread::sleep_for(5ms);
+    }
+    EXPECT_EQ(p.wait(300s), 0) << p.log();
+    const std::string nodes = mode == "on" ? std::to_string(last) : all;
+    EXPECT_EQ(seen[0], nodes) << "--pin-nodes " << mode << ": node 0";
+    EXPECT_EQ(seen[1], nodes) << "--pin-nodes " << mode << ": node 1";
+    EXPECT_EQ(seen[2], all) << "--pin-nodes " << mode << ": the render client";
+    EXPECT_EQ(p.log().find("both switch nodes on CPU") != std::string::npos, mode == "on") << p.log();
   }
 }
 
