@@ -67,7 +67,8 @@ struct CullStats {
 // without a query, for its next `wait` visits; every confirmation doubles the wait (up to
 // kMaxWait), an occluded result resets it. Assuming visible is conservative: the node is accepted
 // or descended exactly as if its query had passed, so no frame changes; only the visible set may
-// keep a node for up to kMaxWait visits after it became occluded. A scene with little occlusion
+// keep a node for up to kMaxWait visits after it became occluded (where the querier has
+// cheap_tests(), only while its cheap test cannot prove that). A scene with little occlusion
 // (an open field, the outside of one object) thus stops paying for queries that never cull.
 class QuerySkipper {
  public:
