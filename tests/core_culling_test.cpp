@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 
 #include "common/cull/culling.hpp"
 #include "common/lod/lod.hpp"
@@ -165,38 +166,34 @@ TEST(QuerySkipper, TrustsAfterRepeatedVisibleResultsAndResetsOnOccluded) {
   EXPECT_FALSE(s.skip(2));  // other nodes are independent
 }
 
-TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
+namespace {
+// The cube grid from above, 32 cubes visible and half of them occluded from frame 15 on, 30
+// frames: HC without adaptive queries (`plain`, the truth) and with them against `fast`;
+// check(frame, with, truth) sees each frame's sets.
+void occluded_half_walk(FakeQueries& fast, CullStats& plain, CullStats& skip,
+                        const std::function<void(int, const std::vector<uint32_t>&, const std::vector<uint32_t>&)>& check) {
   Scene s = cube_grid(8, 3);
   Hierarchy h = Hierarchy::build(s, {});
   Renderables r(h, nullptr);
   Camera cam = overview(h.node(0).box);
   LodSelector sel(r, cam, 480, 0.0);
-  FakeQueries truth_q, fast_q;
+  FakeQueries truth_q;
   for (int i = 0; i < 8; ++i)
     for (int j = 0; j < 8; j += 2) truth_q.visible_points.push_back({3.0 * i + 0.5, 0.5, 3.0 * j + 0.5});
-  fast_q.visible_points = truth_q.visible_points;
+  fast.visible_points = truth_q.visible_points;
   QuerySkipper skipper(h.size());
-  CullStats plain_stats, skip_stats;
   for (int frame = 0; frame < 30; ++frame) {
     if (frame == 15) {  // half of the visible cubes become occluded
       truth_q.visible_points.resize(16);
-      fast_q.visible_points.resize(16);
+      fast.visible_points.resize(16);
     }
-    auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain_stats});
-    auto fast = hardware_cull_lod(h, cam, fast_q, sel, {.skipper = &skipper, .stats = &skip_stats});
-    EXPECT_TRUE(std::includes(fast.begin(), fast.end(), truth.begin(), truth.end())) << "frame " << frame;
-    if (frame < 15 || frame >= 15 + QuerySkipper::kMaxWait + 1) {
-      EXPECT_EQ(fast, truth) << "frame " << frame;
-    }
+    auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain});
+    auto v = hardware_cull_lod(h, cam, fast, sel, {.skipper = &skipper, .stats = &skip});
+    check(frame, v, truth);
   }
-  EXPECT_GT(skip_stats.skipped, 0u);
-  // The occluded half is queried every frame; the visible half mostly is not.
-  EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
 }
 
-// A querier with a cheap test (HcQuerier's depth pyramid) that proves every occluded box: the
-// leaves adaptive queries skip are tested that way, so one that becomes occluded leaves V in the
-// same frame, while the full tests stay as few as without it.
+// A querier with a cheap test (HcQuerier's depth pyramid) that proves every occluded box.
 struct CheapFakeQueries : FakeQueries {
   uint32_t cheap = 0;
   bool cheap_tests() const override { return true; }
@@ -205,33 +202,35 @@ struct CheapFakeQueries : FakeQueries {
     return issue(b);  // the fake's answer: exact (0 where occluded), and 1 or more otherwise
   }
 };
+}  // namespace
 
-TEST(QuerySkipper, CheapTestsDropASkippedLeafTheFrameItBecomesOccluded) {
-  Scene s = cube_grid(8, 3);
-  Hierarchy h = Hierarchy::build(s, {});
-  Renderables r(h, nullptr);
-  Camera cam = overview(h.node(0).box);
-  LodSelector sel(r, cam, 480, 0.0);
-  FakeQueries truth_q;
-  CheapFakeQueries cheap_q;
-  for (int i = 0; i < 8; ++i)
-    for (int j = 0; j < 8; j += 2) truth_q.visible_points.push_back({3.0 * i + 0.5, 0.5, 3.0 * j + 0.5});
-  cheap_q.visible_points = truth_q.visible_points;
-  QuerySkipper skipper(h.size());
+TEST(QuerySkipper, SkippedQueriesNeverLoseAVisibleNodeAndCatchUpWithOcclusion) {
+  FakeQueries fast_q;
   CullStats plain_stats, skip_stats;
-  for (int frame = 0; frame < 30; ++frame) {
-    if (frame == 15) {
-      truth_q.visible_points.resize(16);
-      cheap_q.visible_points.resize(16);
+  occluded_half_walk(fast_q, plain_stats, skip_stats, [](int frame, const auto& fast, const auto& truth) {
+    EXPECT_TRUE(std::includes(fast.begin(), fast.end(), truth.begin(), truth.end())) << "frame " << frame;
+    if (frame < 15 || frame >= 15 + QuerySkipper::kMaxWait + 1) {
+      EXPECT_EQ(fast, truth) << "frame " << frame;
     }
-    const uint32_t cheap_before = cheap_q.cheap;
-    auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain_stats});
-    auto v = hardware_cull_lod(h, cam, cheap_q, sel, {.skipper = &skipper, .stats = &skip_stats});
+  });
+  EXPECT_GT(skip_stats.skipped, 0u);
+  // The occluded half is queried every frame; the visible half mostly is not.
+  EXPECT_LT(skip_stats.queries, plain_stats.queries * 3 / 4) << skip_stats.queries << " vs " << plain_stats.queries;
+}
+
+// With a cheap test the leaves adaptive queries skip are tested that way, so one that becomes
+// occluded leaves V in the same frame, while the full tests stay as few as without it.
+TEST(QuerySkipper, CheapTestsDropASkippedLeafTheFrameItBecomesOccluded) {
+  CheapFakeQueries cheap_q;
+  CullStats plain_stats, skip_stats;
+  uint32_t cheap_before_15 = 0;
+  occluded_half_walk(cheap_q, plain_stats, skip_stats, [&](int frame, const auto& v, const auto& truth) {
     EXPECT_EQ(v, truth) << "frame " << frame;
+    if (frame == 14) cheap_before_15 = cheap_q.cheap;
     if (frame == 15) {
-      EXPECT_GT(cheap_q.cheap, cheap_before) << "the skipped leaves were tested cheaply";
+      EXPECT_GT(cheap_q.cheap, cheap_before_15) << "the skipped leaves were tested cheaply";
     }
-  }
+  });
   EXPECT_GT(skip_stats.skipped, 0u);
   EXPECT_GT(skip_stats.skipped_occluded, 0u);
   EXPECT_EQ(skip_stats.skipped + skip_stats.skipped_occluded, cheap_q.cheap);
