@@ -89,14 +89,12 @@ void RunStats::print(size_t leaves, uint64_t scene_triangles, uint32_t resyncs,
       "summary: frames=%zu mean_fps=%.2f median_fps=%.2f mean_bytes_per_frame=%.0f mean_visible=%.1f "
       "leaves=%zu culled_pct=%.1f mean_triangles=%.0f triangles_culled_pct=%.1f latency_ms_mean=%.1f "
       "latency_ms_p95=%.1f hc_ms_mean=%.2f or_ms_mean=%.2f rvg_ms_mean=%.2f wait_ms_mean=%.2f peak_rss_mb=%ld "
-      "latency_frames=%.2f "
-      "camera_gap_max=%u frames_without_occlusion=%u\n",
+      "latency_frames=%.2f camera_gap_max=%u frames_without_occlusion=%u\n",
       frames, 1000.0 * frames / wall_ms, 1000.0 / intervals[frames / 2], double(bytes_) / frames, mean_v, leaves,
       100.0 * (1.0 - mean_v / std::max<size_t>(leaves, 1)), double(triangles_) / frames,
       100.0 * (1.0 - double(triangles_) / frames / std::max<uint64_t>(scene_triangles, 1)), latency_sum / frames,
-      lat[std::min(frames - 1, frames * 95 / 100)], hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames, wait_ms_ / frames,
-      peak_rss_mb(),
-      latency_sum / wall_ms, camera_gap_max_, frames_without_occlusion);
+      lat[std::min(frames - 1, frames * 95 / 100)], hc_ms_ / frames, or_ms_ / frames, rvg_ms_ / frames,
+      wait_ms_ / frames, peak_rss_mb(), latency_sum / wall_ms, camera_gap_max_, frames_without_occlusion);
   if (!all_switch())
     std::printf("modes: switch=%zu resync=%zu single=%zu frustum=%zu resyncs=%u\n", mode_frames_[0], mode_frames_[1],
                 mode_frames_[2], mode_frames_[3], resyncs);

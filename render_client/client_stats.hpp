@@ -45,7 +45,8 @@ struct FrameStats {
     f("hc_ms", hc_ms); f("or_ms", or_ms); f("rvg_ms", rvg_ms); f("latency_ms", latency_ms);
     f("frame_interval_ms", frame_interval_ms); f("hc_cpu_ms", hc_cpu_ms); f("or_cpu_ms", or_cpu_ms);
     f("or_tail_cpu_ms", or_tail_cpu_ms); f("rvg_cpu_ms", rvg_cpu_ms); f("rvg_frame_cpu_ms", rvg_frame_cpu_ms);
-    f("or_tail_ms", or_tail_ms); f("wait_ms", wait_ms); f("camera_gap", camera_gap); f("occlusion", occlusion); f("two_pass", two_pass);
+    f("or_tail_ms", or_tail_ms); f("wait_ms", wait_ms); f("camera_gap", camera_gap); f("occlusion", occlusion);
+    f("two_pass", two_pass);
     f("hidden_here", hidden_here); f("geometry_waits", geometry_waits); f("geometry_wait_ms", geometry_wait_ms);
     f("mode", std::string(mode_name(mode)));
   }

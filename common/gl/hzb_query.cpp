@@ -363,13 +363,14 @@ void HcQuerier::resolve() {
       }
     if (!cpu_pyramid_) q_begin(cam_);  // the dispatches changed the program
   }
-  // cpu_pyramid without sample counts also proves boxes that show, from level 0, which must be
-  // the current depth under the box: not where occluder fusion drew since it was read.
+  // Skipped by adaptive queries (issue_cheap) and not proven occluded: assumed visible.
   for (size_t i = 0; i < boxes_.size(); ++i)
     if (handle_[i] == kPending && cheap_[i]) {
       handle_[i] = kAssumed;
       ++stats_.assumed;
     }
+  // cpu_pyramid without sample counts also proves boxes that show, from level 0, which must be
+  // the current depth under the box: not where occluder fusion drew since it was read.
   if (cpu_pyramid_ && !sample_counts_)
     for (size_t i = 0; i < boxes_.size(); ++i)
       if (handle_[i] == kPending && clean_under(boxes_[i]) && cpu_pyramid_->shows(boxes_[i], cam_)) {
