@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 
 #include "common/camera_path.hpp"
 #include "common/gl/context.hpp"
@@ -406,7 +407,10 @@ TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
 }
 
 // Not a check (no timing assertions): what a build and a test dispatch cost at 1024 x 1024 here.
+// A benchmark, 20 s of the suite (more under the sanitizers), so only when asked:
+//   OCC_BENCH=1 build/bin/gl_hzb_test --gtest_filter=GpuDepthPyramid.PrintsItsCostAt1024
 TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
+  if (!std::getenv("OCC_BENCH")) GTEST_SKIP() << "a benchmark: OCC_BENCH=1 runs it";
   Plant p(1024, 1024, "plant:0.05", 2);
   GpuDepthPyramid gpu(*p.ctx);
   p.draw_occluders(p.path[1]);
