@@ -7,6 +7,10 @@ add_dependencies(frame_bytes_test render_client)
 find_package(Python3 COMPONENTS Interpreter REQUIRED)
 add_test(NAME BenchReport.Arithmetic COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/bench_report_test.py)
 set_tests_properties(BenchReport.Arithmetic PROPERTIES LABELS unit)
+# scripts/limit_table.py (docs/results.md's "cluster / oracle") end to end on one small view.
+add_test(NAME LimitTable.OneViewEndToEnd COMMAND ${Python3_EXECUTABLE} -W error ${CMAKE_CURRENT_SOURCE_DIR}/limit_table_test.py
+         $<TARGET_FILE_DIR:render_client>)
+set_tests_properties(LimitTable.OneViewEndToEnd PROPERTIES LABELS integration)
 # The README is a user guide (<= 200 lines, no paths outside the repository, links resolve).
 add_test(NAME Docs.ReadmeIsAGuideAndLinksResolve COMMAND ${Python3_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/docs_test.py ${PROJECT_SOURCE_DIR})
 set_tests_properties(Docs.ReadmeIsAGuideAndLinksResolve PROPERTIES LABELS unit)
