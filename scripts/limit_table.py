@@ -18,8 +18,8 @@ visible ones on the same cameras, all repeats together; beside it the share of s
 floor: the same ratio for the single-process stop-and-wait baseline (render_client --reference
 --cull stop-and-wait --exact: front to back, each leaf's box queried against the depth of
 everything nearer), over all frames from --skip on, one untimed run: what testing boxes cannot
-prove hidden, whoever tests them. Prints a markdown
-table and writes it to OUT/limit.md (rows also in OUT/limit.csv). Asserts nothing about speed.
+prove hidden, whoever tests them. Prints a markdown table and writes it to OUT/limit.md (rows
+also in OUT/limit.csv). Asserts nothing about speed.
 
   scripts/limit_table.py --scene S --path P [--scene S2 --path P2 ...] [--sizes 512,1024]
                          [--repeats N] [--skip K] [--out DIR]
@@ -91,7 +91,9 @@ def measure(scene, path, size, args, out):
         runs["cluster"].append(column(f"{d}/cluster/stats.csv", "frame_interval_ms", args.skip))
     pvs = [pvs_over_exact(os.path.join(out, f"r{r}"), args.skip) for r in range(args.repeats)]
     drawn_tri, exact_tri, occlusion_frames, frames = (sum(p[k] for p in pvs) for k in range(4))
-    run(ref + ["--cull", "stop-and-wait", "--exact", "--no-images", "--out", f"{out}/box_floor"], f"{out}/box_floor.log")
+    # The box floor: one untimed run of the stop-and-wait baseline.
+    run(ref + ["--cull", "stop-and-wait", "--exact", "--no-images", "--out", f"{out}/box_floor"],
+        f"{out}/box_floor.log")
     floor_drawn, floor_exact = (sum(column(f"{out}/box_floor/stats.csv", c, args.skip))
                                 for c in ("triangles_drawn", "exact_triangles"))
     # Wrong pixels: one more run of each with images (PNG writing stays out of the timed runs).
@@ -128,7 +130,8 @@ def markdown(rows):
         mp = lambda k: f"{r[k + '_median_ms']:.2f} / {r[k + '_p99_ms']:.2f}"
         out.append(f"| {r['scene']} {r['path']} | {r['size']}^2 | {mp('oracle')} | {mp('none')} | {mp('frustum')} "
                    f"| {mp('cluster')} | {r['cluster_over_oracle']:.2f} | {r['cluster_over_best_single']:.2f} "
-                   f"| {r['pvs_over_exact']:.2f} ({r['occlusion_frames_pct']} %) | {r['box_floor']:.2f} | {r['wrong_pixels']} |")
+                   f"| {r['pvs_over_exact']:.2f} ({r['occlusion_frames_pct']} %) | {r['box_floor']:.2f} "
+                   f"| {r['wrong_pixels']} |")
     return "\n".join(out)
 
 
