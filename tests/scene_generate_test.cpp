@@ -179,3 +179,42 @@ TEST(Mesh, ZeroAreaTrianglesAreLeftOutAndCounted) {
   EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 7, 2, 0, 5, 8}));
   EXPECT_EQ(drop_zero_area_triangles(m), 0u);
 }
+
+// A triangle that repeats an earlier one of its mesh on the same positions (any vertices), in
+// the same winding or (double-sided) either, and draws alike (uvs, colours, normals up to sign)
+// is left out; everything else stays, in order.
+TEST(Mesh, RepeatedTrianglesAreLeftOutAndCounted) {
+  auto mesh = [] {
+    Mesh m;
+    // Vertices 0-2 a triangle; 3-5 the same positions again (normals opposite); 6 a fourth point.
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+    m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, -1}, {0, 0, -1}, {0, 0, -1}, {0, 0, 1}};
+    m.uvs = {{0, 0}, {1, 0}, {0, 1}, {0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    m.indices = {0, 1, 2,   // a triangle
+                 1, 2, 0,   // itself rotated: a repeat in the same winding
+                 3, 5, 4,   // reversed, on other vertices with opposite normals
+                 4, 3, 5,   // reversed, rotated
+                 1, 6, 2,   // a neighbour sharing an edge
+                 5, 3, 4};  // same winding on the other vertices
+    return m;
+  };
+  Mesh one = mesh();
+  EXPECT_EQ(drop_repeated_triangles(one, false), 3u);  // 1 2 0, 4 3 5 (repeats 3 5 4), 5 3 4
+  EXPECT_EQ(one.indices, (std::vector<uint32_t>{0, 1, 2, 3, 5, 4, 1, 6, 2}))
+      << "single-sided: a reversed triangle is the other side's surface";
+  Mesh both = mesh();
+  EXPECT_EQ(drop_repeated_triangles(both, true), 4u);
+  EXPECT_EQ(both.indices, (std::vector<uint32_t>{0, 1, 2, 1, 6, 2}));
+  EXPECT_EQ(drop_repeated_triangles(both, true), 0u);
+
+  // Corners that draw differently keep their triangle.
+  Mesh uv = mesh();
+  uv.uvs[4] = {0.5f, 0};
+  EXPECT_EQ(drop_repeated_triangles(uv, true), 1u);  // only the rotated copy on vertices 0-2
+  Mesh tilted = mesh();
+  tilted.normals[3] = glm::normalize(glm::vec3(0, 1, -1));
+  EXPECT_EQ(drop_repeated_triangles(tilted, true), 1u);  // only the rotated copy on vertices 0-2
+  Mesh coloured = mesh();
+  coloured.colors = {1, 1, 1, 2, 2, 2, 1};
+  EXPECT_EQ(drop_repeated_triangles(coloured, true), 1u);
+}

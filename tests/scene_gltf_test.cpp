@@ -194,6 +194,56 @@ TEST_F(GltfFiles, InterleavedStrideNormalsAndByteIndices) {
   EXPECT_EQ(s.zero_area_triangles, 1u);
 }
 
+// Exports make a surface two-sided by repeating every face reversed on the same vertices
+// (bim/schependomlaan): with a double-sided material the repeats are left out (and counted per
+// instance), so the cube loads as the plain one does, normals included (computed over both
+// copies they would cancel); single-sided or BLEND, the repeats stay.
+TEST_F(GltfFiles, FacesRepeatedReversedLoadOnce) {
+  auto with_faces = [](bool repeat_reversed, json material) {
+    Gltf g = cube();
+    const std::vector<uint16_t> faces{0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                      3, 6, 2, 3, 7, 6, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5};
+    std::vector<uint16_t> idx;
+    for (size_t t = 0; t < faces.size(); t += 3) {
+      idx.insert(idx.end(), {faces[t], faces[t + 1], faces[t + 2]});
+      if (repeat_reversed) idx.insert(idx.end(), {faces[t], faces[t + 2], faces[t + 1]});
+    }
+    g.j["meshes"][0]["primitives"][0]["indices"] = g.indices(idx);
+    g.j["meshes"][0]["primitives"][0]["material"] = 0;
+    g.j["materials"] = {material};
+    return g;
+  };
+  const json two_sided = {{"doubleSided", true}};
+  const Scene plain = load_gltf(write("plain.gltf", with_faces(false, two_sided)));
+  const Scene twice = load_gltf(write("twice.gltf", with_faces(true, two_sided)));
+  ASSERT_EQ(twice.meshes.size(), 1u);
+  EXPECT_EQ(twice.repeated_triangles, 24u);  // 12 per instance
+  EXPECT_EQ(plain.repeated_triangles, 0u);
+  EXPECT_EQ(twice.meshes[0].indices, plain.meshes[0].indices);
+  EXPECT_EQ(twice.meshes[0].normals, plain.meshes[0].normals);
+  expect_unit_normals(twice.meshes[0]);
+  EXPECT_EQ(twice.content_hash(), plain.content_hash());
+
+  const Scene one_sided = load_gltf(write("one_sided.gltf", with_faces(true, {{"doubleSided", false}})));
+  EXPECT_EQ(one_sided.meshes[0].indices.size(), 72u);
+  EXPECT_EQ(one_sided.repeated_triangles, 0u);
+  const json glass = {{"doubleSided", true}, {"alphaMode", "BLEND"}};
+  EXPECT_EQ(load_gltf(write("glass.gltf", with_faces(true, glass))).meshes[0].indices.size(), 72u);
+
+  // The count comes back from the scene cache, and a start says it.
+  SceneOptions o;
+  o.spec = (dir_ / "twice.gltf").string();
+  o.lod_cache = (dir_ / "cache").string();
+  for (const char* from : {"wrote scene cache", "read from scene cache"}) {
+    ::testing::internal::CaptureStderr();
+    const LoadedScene ls = load_and_build(o, "test", false);
+    const std::string log = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(log.find(from), std::string::npos) << log;
+    EXPECT_NE(log.find("24 repeated triangles of the file left out"), std::string::npos) << log;
+    EXPECT_EQ(ls.scene.repeated_triangles, 24u);
+  }
+}
+
 TEST_F(GltfFiles, StripsAndFansBecomeListsAndLinesAreSkipped) {
   Gltf g;
   // A 2x1 quad strip (4 triangles) and a 5-vertex fan (3 triangles), all facing +z.

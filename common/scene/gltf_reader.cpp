@@ -205,6 +205,7 @@ class GltfReader {
     }
     const std::string name = node.name.empty() ? where : node.name;
     scene_.zero_area_triangles += zero_area_of_mesh_[node.mesh];  // counted per instance, as drawn
+    scene_.repeated_triangles += repeated_of_mesh_[node.mesh];
     for (int m : it->second)
       if (m >= 0) scene_.objects.push_back(Object{uint32_t(m), world, name});
   }
@@ -338,15 +339,6 @@ class GltfReader {
     zero_area_of_mesh_[mi] += drop_zero_area_triangles(mesh);
     if (mesh.indices.empty()) return -1;
 
-    if (const auto nrm = prim.attributes.find("NORMAL"); nrm != prim.attributes.end()) {
-      mesh.normals = read_vec3(nrm->second, "NORMAL", where);
-      if (mesh.normals.size() != vertices)
-        fail(where, "NORMAL count " + num(mesh.normals.size()) + " != POSITION count " + num(vertices));
-      repair_normals(mesh);
-    } else {
-      compute_normals(mesh);
-    }
-
     mesh.material = material(prim.material, where);
     const Material& mat = scene_.materials[mesh.material];
     if (mat.base_color_texture >= 0) {
@@ -364,6 +356,19 @@ class GltfReader {
       if (mesh.colors.size() != vertices)
         fail(where, "COLOR_0 count " + num(mesh.colors.size()) + " != POSITION count " + num(vertices));
     }
+    const auto nrm = prim.attributes.find("NORMAL");
+    if (nrm != prim.attributes.end()) {
+      mesh.normals = read_vec3(nrm->second, "NORMAL", where);
+      if (mesh.normals.size() != vertices)
+        fail(where, "NORMAL count " + num(mesh.normals.size()) + " != POSITION count " + num(vertices));
+    }
+    // Before normals are computed: a face and its reversed copy on the same vertices would
+    // cancel each other's normal there.
+    if (mat.alpha_mode == AlphaMode::Opaque) repeated_of_mesh_[mi] += drop_repeated_triangles(mesh, mat.double_sided);
+    if (nrm != prim.attributes.end())
+      repair_normals(mesh);
+    else
+      compute_normals(mesh);
     scene_.meshes.push_back(std::move(mesh));
     return int(scene_.meshes.size() - 1);
   }
@@ -547,6 +552,7 @@ class GltfReader {
   std::string file_;
   Scene scene_;
   std::map<int, uint64_t> zero_area_of_mesh_;  // glTF mesh -> zero-area triangles left out of its primitives
+  std::map<int, uint64_t> repeated_of_mesh_;   // glTF mesh -> repeated triangles left out of them
   std::vector<int> parent_;                     // per node, -1 for roots
   std::map<int, std::vector<int>> mesh_cache_;  // glTF mesh -> scene mesh per primitive (-1: none)
   std::map<int, uint32_t> material_cache_;      // glTF material (-1: default) -> scene material

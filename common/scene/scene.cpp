@@ -4,9 +4,12 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "common/hash.hpp"
 
@@ -183,6 +186,75 @@ uint64_t drop_zero_area_triangles(Mesh& mesh) {
     double magnitude = 0;
     for (const glm::dvec3& p : {pa, pb, pc}) magnitude = std::max({magnitude, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
     if (glm::length(n) <= longest * kCollinearUlps * magnitude * 0x1p-23) continue;
+    mesh.indices[kept++] = a;
+    mesh.indices[kept++] = b;
+    mesh.indices[kept++] = c;
+  }
+  const uint64_t dropped = (mesh.indices.size() - kept) / 3;
+  mesh.indices.resize(kept);
+  return dropped;
+}
+
+namespace {
+
+// A triangle as drop_repeated_triangles compares it: its positions' bits, the corner with the
+// smallest first, and its vertices in that order (a rotation: the same winding).
+struct TriangleKey {
+  std::array<uint32_t, 9> bits;
+  std::array<uint32_t, 3> vertices;
+};
+
+TriangleKey triangle_key(const Mesh& m, uint32_t a, uint32_t b, uint32_t c) {
+  std::array<std::array<uint32_t, 3>, 3> p;
+  const uint32_t v[3] = {a, b, c};
+  for (int k = 0; k < 3; ++k) {
+    const glm::vec3& q = m.positions[v[k]];
+    p[k] = {std::bit_cast<uint32_t>(q.x), std::bit_cast<uint32_t>(q.y), std::bit_cast<uint32_t>(q.z)};
+  }
+  const int f = int(std::min_element(p.begin(), p.end()) - p.begin());
+  TriangleKey key;
+  for (int k = 0; k < 3; ++k) {
+    std::copy(p[(f + k) % 3].begin(), p[(f + k) % 3].end(), key.bits.begin() + 3 * k);
+    key.vertices[k] = v[(f + k) % 3];
+  }
+  return key;
+}
+
+struct KeyBitsHash {
+  size_t operator()(const std::array<uint32_t, 9>& k) const {
+    uint64_t h = 0;
+    for (uint32_t v : k) h = mix64(h ^ v);
+    return size_t(h);
+  }
+};
+
+// Whether vertices u and v draw alike: the same texture coordinates and colour, and normals
+// equal or opposite (the Shaded pass lights |n.l|, scene_shaders.cpp). Positions are compared
+// by the caller.
+bool corners_alike(const Mesh& m, uint32_t u, uint32_t v) {
+  if (!m.uvs.empty() && m.uvs[u] != m.uvs[v]) return false;
+  if (!m.colors.empty() && m.colors[u] != m.colors[v]) return false;
+  if (!m.normals.empty() && m.normals[u] != m.normals[v] && m.normals[u] != -m.normals[v]) return false;
+  return true;
+}
+
+}  // namespace
+
+uint64_t drop_repeated_triangles(Mesh& mesh, bool either_winding) {
+  std::unordered_map<std::array<uint32_t, 9>, std::array<uint32_t, 3>, KeyBitsHash> first;
+  first.reserve(mesh.indices.size() / 3);
+  size_t kept = 0;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+    TriangleKey key = triangle_key(mesh, a, b, c);
+    if (either_winding) {
+      TriangleKey reversed = triangle_key(mesh, a, c, b);
+      if (reversed.bits < key.bits) key = reversed;
+    }
+    const auto [at, fresh] = first.try_emplace(key.bits, key.vertices);
+    bool repeat = !fresh;
+    for (int k = 0; k < 3 && repeat; ++k) repeat = corners_alike(mesh, at->second[k], key.vertices[k]);
+    if (repeat) continue;
     mesh.indices[kept++] = a;
     mesh.indices[kept++] = b;
     mesh.indices[kept++] = c;

@@ -17,8 +17,8 @@ namespace occ {
 
 namespace {
 
-constexpr uint32_t kSceneCacheVersion = 4;  // 2: welded vertices, vertex cache order; 3: fetch order;
-                                            // 4: the structure ahead of the arrays
+constexpr uint32_t kSceneCacheVersion = 5;  // 2: welded vertices, vertex cache order; 3: fetch order;
+                                            // 4: the structure ahead of the arrays; 5: repeated triangles
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
 constexpr size_t kHead = CacheHeader::kSize;
 
@@ -253,6 +253,7 @@ void write_payload(Out& o, const Scene& s, const BuildParams& p, uint32_t depth,
   o.str(s.source);
   write_records(o, s.files, [](const SourceFile& sf, const auto& f) { source_file_fields(sf, f); });
   o.pod(s.zero_area_triangles);
+  o.pod(s.repeated_triangles);
   o.pod(uint64_t(s.meshes.size()));
   MappedMesh unused;
   for (const Mesh& m : s.meshes) {
@@ -351,6 +352,7 @@ struct SceneCacheIo {
       if (source_file(was.path) != was)
         return fail("stale (" + was.path + " changed or is gone since the cache was written)");
     if (!in.pod(s.zero_area_triangles)) return fail("corrupt zero-area triangle count");
+    if (!in.pod(s.repeated_triangles)) return fail("corrupt repeated triangle count");
     uint64_t n = 0;
     if (!in.count(n, 8 * 7 + 4)) return fail("corrupt mesh count");
     s.meshes.resize(n);

@@ -148,6 +148,10 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   if (ls.scene.zero_area_triangles > 0)
     std::cerr << who << ": " << ls.scene.zero_area_triangles
               << " zero-area triangles of the file left out (collinear vertices, exactly or at float precision: nothing to draw)\n";
+  if (ls.scene.repeated_triangles > 0)
+    std::cerr << who << ": " << ls.scene.repeated_triangles
+              << " repeated triangles of the file left out (the same positions and look as another of their mesh, in"
+                 " either winding where double-sided)\n";
   if (use_cache && !from_cache) {
     const auto t3 = std::chrono::steady_clock::now();
     if (auto err = save_scene_cache(cache_path, cache_key, ls.scene, ls.hierarchy)) {
