@@ -496,3 +496,58 @@ TEST(SceneRenderer, BlendedItemsShowOnlyWhereTheyAreInFrontOfOpaqueDepth) {
   const GLuint q[] = {0};
   EXPECT_THROW(r.query_blended_items(bad, q), std::invalid_argument);
 }
+
+// glTF requires flat normals for a primitive without NORMAL (Mesh::flat): a cube on 8 shared
+// vertices, shaded flat, looks like the cube on 24 vertices that carry each face's normal, and
+// not like its smooth normals (the corners' averages), which shade each face in a gradient.
+TEST(SceneRenderer, FlatMeshesShadeEachTriangleWithItsOwnNormal) {
+  const std::vector<glm::vec3> corner{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                      {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const std::vector<uint32_t> faces{0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                    3, 6, 2, 3, 7, 6, 0, 4, 7, 0, 7, 3, 1, 2, 6, 1, 6, 5};
+  auto scene_of = [](Mesh m) {
+    Scene s;
+    s.meshes.push_back(std::move(m));
+    s.objects.push_back({0, place({-0.5, -0.5, -0.5}), "cube"});
+    return s;
+  };
+  Mesh shared;  // 8 vertices, smooth normals
+  shared.positions = corner;
+  shared.indices = faces;
+  compute_normals(shared);
+  Mesh flat = shared;
+  flat.flat = true;
+  Mesh faceted;  // every triangle on its own vertices, with its face's normal
+  for (size_t t = 0; t < faces.size(); t += 3) {
+    const glm::vec3 a = corner[faces[t]], b = corner[faces[t + 1]], c = corner[faces[t + 2]];
+    const glm::vec3 n = glm::normalize(glm::cross(b - a, c - a));
+    for (const glm::vec3& p : {a, b, c}) {
+      faceted.indices.push_back(uint32_t(faceted.positions.size()));
+      faceted.positions.push_back(p);
+      faceted.normals.push_back(n);
+    }
+  }
+  auto ctx = GlContext::create(GlBackend::Auto, kSize, kSize);
+  size_t shown = 0, off_faceted = 0, off_smooth = 0;
+  for (const glm::dvec3 eye : {glm::dvec3(1.8, 1.3, 2.2), glm::dvec3(-2.5, -0.7, 1.1), glm::dvec3(0.4, 2.9, -1.6)}) {
+    const Camera cam = Camera::look_at(eye, glm::dvec3(0.0), {0, 1, 0}, 60.0, 1.0, 0.1, 100.0);
+    const Image a = render_shaded(*ctx, scene_of(flat), cam), b = render_shaded(*ctx, scene_of(faceted), cam),
+                c = render_shaded(*ctx, scene_of(shared), cam);
+    for (size_t i = 0; i < a.rgba.size(); i += 4) {
+      const bool on = !std::equal(&b.rgba[i], &b.rgba[i] + 3, &b.rgba[0]);  // not the corner's background
+      shown += on;
+      int worst_b = 0, worst_c = 0;
+      for (int k = 0; k < 3; ++k) {
+        worst_b = std::max(worst_b, std::abs(int(a.rgba[i + k]) - int(b.rgba[i + k])));
+        worst_c = std::max(worst_c, std::abs(int(a.rgba[i + k]) - int(c.rgba[i + k])));
+      }
+      off_faceted += worst_b > 1;  // a level of rounding: derivatives against a given normal
+      off_smooth += on && worst_c > 8;
+    }
+  }
+  std::cout << "flat cube: " << shown << " pixels shown, " << off_faceted << " off the faceted cube's by more than 1, "
+            << off_smooth << " off the smooth one's by more than 8\n";
+  EXPECT_GT(shown, 3u * 1000);
+  EXPECT_EQ(off_faceted, 0u);
+  EXPECT_GT(off_smooth, shown / 5);
+}

@@ -157,6 +157,7 @@ TEST_F(GltfFiles, CubeInstancedWithComposedTransforms) {
     EXPECT_EQ(s.objects[1].transform, glm::scale(root, glm::dvec3(2.0)));
     EXPECT_EQ(s.bounds(), (Aabb{{10, 0, 0}, {12, 2, 2}}));
     expect_unit_normals(s.meshes[0]);  // computed: the file has none
+    EXPECT_TRUE(s.meshes[0].flat) << "glTF: a primitive without NORMAL is shaded flat";
   }
   EXPECT_EQ(load_gltf(write("a.gltf", cube())).content_hash(),
             load_gltf(write("a.glb", cube())).content_hash());
@@ -190,6 +191,7 @@ TEST_F(GltfFiles, InterleavedStrideNormalsAndByteIndices) {
   const Mesh& m = s.meshes[0];
   EXPECT_EQ(m.positions, (std::vector<glm::vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
   EXPECT_EQ(m.normals, std::vector<glm::vec3>(3, {0, 0, 1}));
+  EXPECT_FALSE(m.flat);  // the file's normals are used
   EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2}));  // the zero-area triangle left out, and counted
   EXPECT_EQ(s.zero_area_triangles, 1u);
 }
@@ -241,6 +243,7 @@ TEST_F(GltfFiles, FacesRepeatedReversedLoadOnce) {
     EXPECT_NE(log.find(from), std::string::npos) << log;
     EXPECT_NE(log.find("24 repeated triangles of the file left out"), std::string::npos) << log;
     EXPECT_EQ(ls.scene.repeated_triangles, 24u);
+    EXPECT_TRUE(ls.scene.meshes[0].flat);
   }
 }
 

@@ -51,6 +51,7 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
   if (scene.mesh_has_colors(obj.mesh)) look.bits |= kVertexColor;
   const bool mirrored = glm::determinant(glm::dmat3(obj.transform)) < 0.0;
   if (!mat) {
+    if (mesh.flat) look.bits |= kFlat;
     look.color = object_color(o);
     look.cull = kCullNone;
     return look;
@@ -61,6 +62,7 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
   if (mat->alpha_mode == AlphaMode::Mask) look.bits |= kMask;
   if (mat->alpha_mode == AlphaMode::Blend) look.bits |= kBlend;
   if (mat->unlit) look.bits |= kUnlit;
+  if (mesh.flat && !mat->unlit) look.bits |= kFlat;
   if (mat->base_color_texture >= 0 && scene.mesh_has_uvs(obj.mesh)) {
     if (size_t(mat->base_color_texture) >= scene.textures.size() ||
         scene.textures[size_t(mat->base_color_texture)].image >= scene.images.size())

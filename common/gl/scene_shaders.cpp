@@ -37,7 +37,9 @@ flat out float v_cutoff;
 #ifdef IDS
 flat out uint v_id;
 #endif
-#ifdef LIT
+#if defined(LIT) && defined(FLAT)
+out vec3 v_view;  // view-space position: its derivatives span the triangle's plane
+#elif defined(LIT)
 out vec3 v_normal;
 #endif
 void main() {
@@ -49,7 +51,9 @@ void main() {
 #ifdef SHADED
   vec3 base = vec3(in_normal_color[0].w, in_normal_color[1].w, in_normal_color[2].w) * in_vertex_color.rgb;
   v_color = vec4(base, alpha);
-#ifdef LIT
+#if defined(LIT) && defined(FLAT)
+  v_view = p.xyz;
+#elif defined(LIT)
   v_normal = mat3(in_normal_color[0].xyz, in_normal_color[1].xyz, in_normal_color[2].xyz) * in_normal;
 #endif
 #elif defined(MASK)
@@ -86,7 +90,9 @@ flat in uint v_id;
 #if defined(SHADED) || defined(IDS)
 out vec4 out_color;
 #endif
-#ifdef LIT
+#if defined(LIT) && defined(FLAT)
+in vec3 v_view;
+#elif defined(LIT)
 in vec3 v_normal;
 #endif
 void main() {
@@ -97,6 +103,11 @@ void main() {
   // normal) instead of two: a light at the eye also needed the view-space position, and
   // llvmpipe sets up every interpolant per triangle (saw 512^2 render ~10 % and duplex 1024^2
   // ~5 % less time per frame, paired runs of render_client --reference).
+  // Flat: the triangle's own normal, from the screen derivatives of its view-space position
+  // (a 2x2 quad's fragments all belong to one triangle, so they span its plane).
+#ifdef FLAT
+  vec3 v_normal = cross(dFdx(v_view), dFdy(v_view));
+#endif
   float lambert = min(abs(v_normal.z) * inversesqrt(max(dot(v_normal, v_normal), 1e-36)), 1.0);
   c.rgb *= 0.2 + 0.8 * lambert;
 #endif
@@ -127,7 +138,7 @@ std::string defines(DrawMode mode, unsigned bits) {
   if (bits & kBlend) d += "#define BLEND\n";
   if (bits & kUnlit) d += "#define UNLIT\n";
   if (bits & kVertexColor) d += "#define VERTEX_COLOR\n";
-  if (mode == DrawMode::Shaded && !(bits & kUnlit)) d += "#define LIT\n";
+  if (mode == DrawMode::Shaded && !(bits & kUnlit)) d += (bits & kFlat) ? "#define LIT\n#define FLAT\n" : "#define LIT\n";
   return d;
 }
 
@@ -146,6 +157,7 @@ std::string variant_name(unsigned bits) {
   if (bits & kBlend) add("blended");
   if (bits & kUnlit) add("unlit");
   if (bits & kVertexColor) add("vertex-coloured");
+  if (bits & kFlat) add("flat");
   return n.empty() ? "plain" : n;
 }
 

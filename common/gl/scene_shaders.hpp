@@ -16,8 +16,9 @@ enum class DrawMode { Shaded, DepthOnly, ItemIds };
 namespace gl_detail {
 
 // Material variant bits (a shader variant per combination the scene uses).
-constexpr unsigned kTextured = 1, kMask = 2, kBlend = 4, kUnlit = 8, kVertexColor = 16;
-constexpr unsigned kVariants = 32;  // every combination of the bits
+// kFlat: lit with each triangle's own normal (Mesh::flat).
+constexpr unsigned kTextured = 1, kMask = 2, kBlend = 4, kUnlit = 8, kVertexColor = 16, kFlat = 32;
+constexpr unsigned kVariants = 64;  // every combination of the bits
 // Face culling of an object's triangles.
 constexpr uint8_t kCullNone = 0, kCullBackCcw = 1, kCullBackCw = 2;
 

@@ -365,10 +365,12 @@ class GltfReader {
     // Before normals are computed: a face and its reversed copy on the same vertices would
     // cancel each other's normal there.
     if (mat.alpha_mode == AlphaMode::Opaque) repeated_of_mesh_[mi] += drop_repeated_triangles(mesh, mat.double_sided);
-    if (nrm != prim.attributes.end())
+    if (nrm != prim.attributes.end()) {
       repair_normals(mesh);
-    else
+    } else {
       compute_normals(mesh);
+      mesh.flat = true;
+    }
     scene_.meshes.push_back(std::move(mesh));
     return int(scene_.meshes.size() - 1);
   }

@@ -46,6 +46,7 @@ Mesh read_mapped_mesh(const Scene& scene, uint32_t m) {
   Mesh out;
   out.name = me.name;
   out.material = me.material;
+  out.flat = me.flat;
   out.clusters = me.clusters;
   if (!me.released || !scene.mapped) throw std::logic_error("read_mapped_mesh: mesh " + std::to_string(m) + " is in memory");
   const MappedMesh& mm = scene.mapped->meshes[m];
@@ -112,6 +113,7 @@ uint64_t Scene::content_hash() const {
   for (const Mesh& m : meshes) {
     h.bytes(m.positions.data(), m.positions.size() * sizeof(glm::vec3));
     h.bytes(m.indices.data(), m.indices.size() * sizeof(uint32_t));
+    if (m.flat) h.u32(0x666c6174);  // "flat" (scenes without it hash as before)
     if (m.material != kNoMaterial || !m.uvs.empty() || !m.colors.empty()) {  // generated scenes hash as before
       h.u32(m.material);
       h.u64(m.uvs.size());

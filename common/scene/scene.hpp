@@ -74,6 +74,10 @@ struct Mesh {
   std::vector<uint32_t> colors;    // empty, or same size as positions: COLOR_0 as RGBA8
                                    // (r in the low byte); multiplies the base colour
   uint32_t material = kNoMaterial; // index into Scene::materials
+  // Shaded with each triangle's own normal (the plane it lies in), not `normals`: glTF requires
+  // flat normals for a primitive without NORMAL (the BIM exports give none). `normals` then
+  // holds smooth ones, for the vertex layout and the LOD builders.
+  bool flat = false;
 
   // After release_geometry() the vertex and index arrays are gone (the GL driver holds the only
   // copy); the counts, the box and the clusters stay.

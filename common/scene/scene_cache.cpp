@@ -17,8 +17,9 @@ namespace occ {
 
 namespace {
 
-constexpr uint32_t kSceneCacheVersion = 5;  // 2: welded vertices, vertex cache order; 3: fetch order;
-                                            // 4: the structure ahead of the arrays; 5: repeated triangles
+constexpr uint32_t kSceneCacheVersion = 6;  // 2: welded vertices, vertex cache order; 3: fetch order;
+                                            // 4: the structure ahead of the arrays; 5: repeated triangles;
+                                            // 6: flat meshes
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
 constexpr size_t kHead = CacheHeader::kSize;
 
@@ -132,7 +133,7 @@ class In {
 // also holds the counts of its arrays (mesh_arrays); the arrays follow the whole structure.
 template <class M, class F>
 void mesh_fields(M& m, const F& f) {
-  f(m.name), f(m.clusters), f(m.material);
+  f(m.name), f(m.clusters), f(m.material), f(m.flat);
 }
 // The arrays of a mesh in the order the structure counts them and the array section stores
 // them, each with its place in the file (MappedMesh): f(array, place).
