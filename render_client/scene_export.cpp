@@ -60,8 +60,10 @@ void save_gltf(const Scene& scene, const std::string& gltf_path) {
               << num(box.max.z) << "]},{\"bufferView\":" << nrm << ",\"componentType\":5126,\"count\":"
               << mesh.normals.size() << ",\"type\":\"VEC3\"},{\"bufferView\":" << idx
               << ",\"componentType\":5125,\"count\":" << mesh.indices.size() << ",\"type\":\"SCALAR\"}";
+    // A flat mesh goes without NORMAL, so that it is read back flat (its normals stay unused).
     meshes << (n_meshes ? "," : "") << "{\"primitives\":[{\"attributes\":{\"POSITION\":" << a
-           << ",\"NORMAL\":" << a + 1 << "},\"indices\":" << a + 2 << ",\"material\":0,\"mode\":4}]}";
+           << (mesh.flat ? "" : ",\"NORMAL\":" + std::to_string(a + 1)) << "},\"indices\":" << a + 2
+           << ",\"material\":0,\"mode\":4}]}";
     mesh_index[m] = n_meshes++;
   }
   int n_nodes = 0;
