@@ -172,22 +172,16 @@ void compute_normals(Mesh& mesh) {
   }
 }
 
-uint64_t drop_zero_area_triangles(Mesh& mesh) {
-  constexpr double kCollinearUlps = 8;
+namespace {
+
+// Removes, in place and keeping the others' order, the triangles (a, b, c) for which
+// drop(a, b, c) is true, and returns how many.
+template <class Drop>
+uint64_t remove_triangles_if(Mesh& mesh, Drop drop) {
   size_t kept = 0;
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
-    // Float differences and their products are exact in double: zero only when collinear. The
-    // height over the longest edge, |n| / longest, below a few float ulps of the coordinates is
-    // rounding noise: collinear at the precision the positions are stored in.
-    const glm::dvec3 pa(mesh.positions[a]), pb(mesh.positions[b]), pc(mesh.positions[c]);
-    const glm::dvec3 n = glm::cross(pb - pa, pc - pa);
-    if (n.x == 0 && n.y == 0 && n.z == 0) continue;
-    const double longest = std::sqrt(std::max({glm::dot(pb - pa, pb - pa), glm::dot(pc - pb, pc - pb),
-                                               glm::dot(pa - pc, pa - pc)}));
-    double magnitude = 0;
-    for (const glm::dvec3& p : {pa, pb, pc}) magnitude = std::max({magnitude, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-    if (glm::length(n) <= longest * kCollinearUlps * magnitude * 0x1p-23) continue;
+    if (drop(a, b, c)) continue;
     mesh.indices[kept++] = a;
     mesh.indices[kept++] = b;
     mesh.indices[kept++] = c;
@@ -195,6 +189,25 @@ uint64_t drop_zero_area_triangles(Mesh& mesh) {
   const uint64_t dropped = (mesh.indices.size() - kept) / 3;
   mesh.indices.resize(kept);
   return dropped;
+}
+
+}  // namespace
+
+uint64_t drop_zero_area_triangles(Mesh& mesh) {
+  constexpr double kCollinearUlps = 8;
+  return remove_triangles_if(mesh, [&](uint32_t a, uint32_t b, uint32_t c) {
+    // Float differences and their products are exact in double: zero only when collinear. The
+    // height over the longest edge, |n| / longest, below a few float ulps of the coordinates is
+    // rounding noise: collinear at the precision the positions are stored in.
+    const glm::dvec3 pa(mesh.positions[a]), pb(mesh.positions[b]), pc(mesh.positions[c]);
+    const glm::dvec3 n = glm::cross(pb - pa, pc - pa);
+    if (n.x == 0 && n.y == 0 && n.z == 0) return true;
+    const double longest = std::sqrt(std::max({glm::dot(pb - pa, pb - pa), glm::dot(pc - pb, pc - pb),
+                                               glm::dot(pa - pc, pa - pc)}));
+    double magnitude = 0;
+    for (const glm::dvec3& p : {pa, pb, pc}) magnitude = std::max({magnitude, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    return glm::length(n) <= longest * kCollinearUlps * magnitude * 0x1p-23;
+  });
 }
 
 namespace {
@@ -245,9 +258,7 @@ bool corners_alike(const Mesh& m, uint32_t u, uint32_t v) {
 uint64_t drop_repeated_triangles(Mesh& mesh, bool either_winding) {
   std::unordered_map<std::array<uint32_t, 9>, std::array<uint32_t, 3>, KeyBitsHash> first;
   first.reserve(mesh.indices.size() / 3);
-  size_t kept = 0;
-  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+  return remove_triangles_if(mesh, [&](uint32_t a, uint32_t b, uint32_t c) {
     TriangleKey key = triangle_key(mesh, a, b, c);
     if (either_winding) {
       TriangleKey reversed = triangle_key(mesh, a, c, b);
@@ -256,14 +267,8 @@ uint64_t drop_repeated_triangles(Mesh& mesh, bool either_winding) {
     const auto [at, fresh] = first.try_emplace(key.bits, key.vertices);
     bool repeat = !fresh;
     for (int k = 0; k < 3 && repeat; ++k) repeat = corners_alike(mesh, at->second[k], key.vertices[k]);
-    if (repeat) continue;
-    mesh.indices[kept++] = a;
-    mesh.indices[kept++] = b;
-    mesh.indices[kept++] = c;
-  }
-  const uint64_t dropped = (mesh.indices.size() - kept) / 3;
-  mesh.indices.resize(kept);
-  return dropped;
+    return repeat;
+  });
 }
 
 namespace {
