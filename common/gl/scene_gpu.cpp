@@ -49,9 +49,9 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
   const Material* mat = scene.material_of(obj.mesh);
   SceneGpu::ObjectLook look;
   if (scene.mesh_has_colors(obj.mesh)) look.bits |= kVertexColor;
+  if (mesh.flat && !(mat && mat->unlit)) look.bits |= kFlat;  // unlit: no normal to take
   const bool mirrored = glm::determinant(glm::dmat3(obj.transform)) < 0.0;
   if (!mat) {
-    if (mesh.flat) look.bits |= kFlat;
     look.color = object_color(o);
     look.cull = kCullNone;
     return look;
@@ -62,7 +62,6 @@ SceneGpu::ObjectLook look_of(const Scene& scene, uint32_t o) {
   if (mat->alpha_mode == AlphaMode::Mask) look.bits |= kMask;
   if (mat->alpha_mode == AlphaMode::Blend) look.bits |= kBlend;
   if (mat->unlit) look.bits |= kUnlit;
-  if (mesh.flat && !mat->unlit) look.bits |= kFlat;
   if (mat->base_color_texture >= 0 && scene.mesh_has_uvs(obj.mesh)) {
     if (size_t(mat->base_color_texture) >= scene.textures.size() ||
         scene.textures[size_t(mat->base_color_texture)].image >= scene.images.size())

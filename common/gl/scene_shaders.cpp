@@ -138,7 +138,8 @@ std::string defines(DrawMode mode, unsigned bits) {
   if (bits & kBlend) d += "#define BLEND\n";
   if (bits & kUnlit) d += "#define UNLIT\n";
   if (bits & kVertexColor) d += "#define VERTEX_COLOR\n";
-  if (mode == DrawMode::Shaded && !(bits & kUnlit)) d += (bits & kFlat) ? "#define LIT\n#define FLAT\n" : "#define LIT\n";
+  if (mode == DrawMode::Shaded && !(bits & kUnlit)) d += "#define LIT\n";
+  if (bits & kFlat) d += "#define FLAT\n";  // only lit variants carry it (look_of)
   return d;
 }
 

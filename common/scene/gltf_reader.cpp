@@ -357,7 +357,8 @@ class GltfReader {
         fail(where, "COLOR_0 count " + num(mesh.colors.size()) + " != POSITION count " + num(vertices));
     }
     const auto nrm = prim.attributes.find("NORMAL");
-    if (nrm != prim.attributes.end()) {
+    const bool has_normals = nrm != prim.attributes.end();
+    if (has_normals) {
       mesh.normals = read_vec3(nrm->second, "NORMAL", where);
       if (mesh.normals.size() != vertices)
         fail(where, "NORMAL count " + num(mesh.normals.size()) + " != POSITION count " + num(vertices));
@@ -365,7 +366,7 @@ class GltfReader {
     // Before normals are computed: a face and its reversed copy on the same vertices would
     // cancel each other's normal there.
     if (mat.alpha_mode == AlphaMode::Opaque) repeated_of_mesh_[mi] += drop_repeated_triangles(mesh, mat.double_sided);
-    if (nrm != prim.attributes.end()) {
+    if (has_normals) {
       repair_normals(mesh);
     } else {
       compute_normals(mesh);
