@@ -7,7 +7,8 @@
 namespace occ {
 
 CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
-                     const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other)
+                     const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other,
+                     CpuOccluders* cpu)
     : ctx_(ctx),
       renderer_(renderer),
       r_(r),
@@ -19,13 +20,16 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
       step_(r, config, vp.height),
       // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
       querier_(ctx, choices.test, config.visible_pixel_lod && config.lod()),
-      visible_(r.count()) {
+      visible_(r.count()),
+      cpu_(cpu) {
   if (choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
+  if (cpu_) geometry_seen_.assign(r_.hierarchy().size(), 0);
   restart();
 }
 
 void CullFrame::restart() {
   visible_.clear();
+  std::fill(geometry_seen_.begin(), geometry_seen_.end(), 0);
   v_frustum_set_ = or_deferred_ = false;
   stream_ = DiffReceiver{};
   // The hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
@@ -36,8 +40,13 @@ void CullFrame::restart() {
 void CullFrame::begin_or(const Camera& cam, bool occlusion) {
   occlusion_ = occlusion;
   drawn_.assign(r_.count(), 0);
+  or_on_cpu_ = cpu_drawn_ = false;
   if (!occlusion_) return;
   renderer_.begin_frame(cam, false);
+  if (cpu_) {
+    cpu_->begin(cam);
+    or_on_cpu_ = true;
+  }
   // V a frustum set (the frame before was culled without occlusion): not drawn; HC draws what
   // it finds visible, nearest first (occluder fusion), unless the stream brings a culled V.
   or_deferred_ = v_frustum_set_ && choices_.occluder_fusion;
@@ -54,7 +63,7 @@ void CullFrame::draw_v() {
       ids.push_back(id);
     }
   std::sort(ids.begin(), ids.end());
-  renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
+  draw_depth(ids);
   // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
   // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for the
   // end of the OR and lengthened its tail, which HC waits for.
@@ -71,8 +80,21 @@ std::vector<uint32_t> CullFrame::draw_new_occluders(std::span<const uint32_t> id
       drawn_[id] = 1;
       fresh.push_back(id);
     }
-  if (!fresh.empty()) renderer_.draw_renderables(r_, fresh, SceneRenderer::Mode::DepthOnly);
+  if (!fresh.empty()) draw_depth(fresh);
   return fresh;
+}
+
+void CullFrame::draw_depth(std::span<const uint32_t> ids) {
+  if (!or_on_cpu_) {
+    renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
+    // HC's occluder fusion: also into the CPU's depth, which its leaves' own triangles are
+    // tested against (hc()).
+    if (cpu_ && cpu_drawn_)
+      for (uint32_t id : ids) cpu_->draw_leaf(r_.node_of(id), r_.level_of(id));
+    return;
+  }
+  for (uint32_t id : ids) cpu_->draw_leaf(r_.node_of(id), r_.level_of(id));
+  cpu_drawn_ = cpu_drawn_ || !ids.empty();
 }
 
 void CullFrame::begin_stream(uint32_t frame) {
@@ -152,6 +174,22 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
         for (uint32_t id : drawn) boxes.push_back(r_.hierarchy().node(r_.node_of(id)).box);
         querier_.depth_added(boxes);
       };
+    if (or_on_cpu_ && cpu_drawn_) {  // the OR's depth, conservative, into the buffer HC tests
+      ctx_.write_depth(cpu_->raster().depth().data());
+      // At tau 0 a leaf whose box shows is tested with its own triangles against that depth
+      // (what the boxes of long, thin or hollow objects cannot prove hidden).
+      if (!config_.lod())
+        o.geometry_shows = [this, frame](uint32_t leaf) {
+          // A leaf whose triangles showed within the last kGeometryRecheck frames is taken to
+          // show still (extra leaves only cost drawing them): tests go to the rest.
+          uint32_t& seen = geometry_seen_[leaf];
+          if (seen != 0 && frame < seen + kGeometryRecheck) return true;
+          if (!cpu_->leaf_shows(leaf)) return false;
+          seen = frame;
+          return true;
+        };
+    }
+    or_on_cpu_ = false;  // occluder fusion draws in GL, over it (and on the CPU, for those tests)
     querier_.begin(cam);
     hc = step_.hc(frame, visible_, cam, querier_, o, out, hold_ ? &*hold_ : nullptr);
     querier_.end();
@@ -165,6 +203,7 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
 void CullFrame::count(const HcFrame& hc) {
   ++totals_.frames;
   totals_.queries += hc.stats.queries;
+  totals_.geometry_hidden += hc.stats.geometry_hidden;
   totals_.assumed_visible += hc.stats.skipped;
   totals_.skipped_occluded += hc.stats.skipped_occluded;
   totals_.pixel_stops += hc.stats.pixel_stops;

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "common/cull/culling.hpp"
+#include "common/cull/depth_raster.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -37,14 +38,17 @@ struct CullTotals {
   uint64_t pixel_stops = 0, hlods = 0;
   uint64_t held = 0;                // renderables kept in V by the visibility hold
   uint64_t ors_after_frustum_sets = 0;  // ORs that left out V, a frustum set (begin_or)
+  uint64_t geometry_hidden = 0;     // leaves whose box showed and whose triangles did not (the OR on the CPU)
 };
 
 class CullFrame {
  public:
   // `vp`: the cluster's viewport; `other`: the other node's name, for the stream's errors;
-  // `sealed`: the scene's items sealed inside solids (SceneGl::sealed).
+  // `sealed`: the scene's items sealed inside solids (SceneGl::sealed). `cpu`: the OR draws V on
+  // the CPU into it (SceneGl::cpu_occluders; null: in GL), and HC starts from that depth.
   CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
-            const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other);
+            const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other,
+            CpuOccluders* cpu = nullptr);
   CullFrame(const CullFrame&) = delete;
   CullFrame& operator=(const CullFrame&) = delete;
 
@@ -78,6 +82,7 @@ class CullFrame {
  private:
   void draw_v();  // what of V is not in the depth buffer yet, depth only
   std::vector<uint32_t> draw_new_occluders(std::span<const uint32_t> ids);
+  void draw_depth(std::span<const uint32_t> ids);  // the OR's draw: on the CPU while or_on_cpu_, else GL
   void count(const HcFrame& hc);
 
   GlContext& ctx_;
@@ -98,6 +103,11 @@ class CullFrame {
   bool occlusion_ = true;        // this frame's camera asks for occlusion
   bool v_frustum_set_ = false;   // V is a frustum set (its frame was culled without occlusion)
   bool or_deferred_ = false;     // this OR left V out (a frustum set) until the stream is in
+  CpuOccluders* cpu_ = nullptr;  // the OR on the CPU (null: GL)
+  bool or_on_cpu_ = false;       // between begin_or() and hc(): the OR's draws go to cpu_
+  bool cpu_drawn_ = false;       // cpu_ holds something this frame (uploaded at hc())
+  static constexpr uint32_t kGeometryRecheck = 16;
+  std::vector<uint32_t> geometry_seen_;  // per node: the last frame its triangles showed (0: none)
   // The stream of one frame (begin_stream).
   struct Incoming {
     uint32_t frame = 0;

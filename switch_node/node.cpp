@@ -61,7 +61,8 @@ class Session {
         other_("switch node " + std::to_string(1 - o.id)),
         g_(g),
         links_(o, mine, listener),
-        cull_(*g.ctx, *g.renderer, *g.renderables, g.sealed, o.config, o.hc, {o.width, o.height}, other_) {}
+        cull_(*g.ctx, *g.renderer, *g.renderables, g.sealed, o.config, o.hc, {o.width, o.height}, other_,
+              g.cpu_occluders.get()) {}
 
   // Returns 0 after the client's Bye.
   int run() {
@@ -377,7 +378,8 @@ class Session {
     std::cerr << who_ << ": " << t.frames << " HC frames, " << t.queries << " queries (" << t.assumed_visible
               << " more skipped by adaptive queries, " << t.skipped_occluded
               << " others they skipped proven occluded by the depth pyramid; " << t.held
-              << " renderables kept by the visibility hold); "
+              << " renderables kept by the visibility hold; " << t.geometry_hidden
+              << " leaves whose box showed found hidden by their own triangles); "
               << t.frustum_frames << " frames without occlusion (the render client's gate; " << t.ors_after_frustum_sets
               << " ORs after them drew no frustum set), sent "
               << links_.rvg().stats().sent.bytes << " B to the render client and " << links_.peer_sent_bytes()
@@ -433,12 +435,24 @@ class SwitchNode {
   explicit SwitchNode(const NodeOptions& o) : o_(o), who_("switch_node " + std::to_string(o.id)) {}
 
   int run() {
-    Enclosures sealed;  // found while the geometry is still on the CPU (the upload releases it)
+    // Found, or copied, while the geometry is still on the CPU (the upload releases it).
+    Enclosures sealed;
+    std::optional<CpuOccluders> cpu;
+    std::string no_cpu;
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
       if (o_.hc.sealed) sealed = find_enclosures(who_, ls.scene, ls.hierarchy);
+      if (o_.hc.or_raster == OrRaster::cpu) cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &no_cpu);
     });
     g_.sealed = std::move(sealed);
-    g_.renderer->set_occluder_offset(true);  // OR occluders must not hide their own query boxes
+    if (o_.hc.or_raster == OrRaster::cpu) {
+      if (cpu) {
+        g_.cpu_occluders = std::make_unique<CpuOccluders>(std::move(*cpu));
+        std::cerr << who_ << ": OR on the CPU (--or-raster cpu; " << fixed(double(g_.cpu_occluders->bytes()) / 1048576.0, 1)
+                  << " MB of triangles)\n";
+      } else {
+        std::cerr << who_ << ": OR in GL: " << no_cpu << "\n";
+      }
+    }
     if (o_.hc.test == HcTest::by_renderer)
       std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))
                 << " (--hc-test auto on a " << renderer_class_name(g_.ctx->renderer_class()) << " renderer)\n";

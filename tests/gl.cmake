@@ -12,7 +12,8 @@ occ_test(image_test unit LIBS occ_common SOURCES
 add_dependencies(image_test frame_diff)
 
 # The HC depth pyramid on the GPU against occlusion queries and the switch step (issue 16).
-occ_test(gl_hzb_test gl LIBS occ_gl occ_cluster SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/gl_hzb_test.cpp)
+occ_test(gl_hzb_test gl LIBS occ_gl occ_cluster SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/gl_hzb_test.cpp
+  ${CMAKE_CURRENT_SOURCE_DIR}/gl_depth_raster_test.cpp)
 # The tau checker's arithmetic (frame_diff --items, render_client/tools/item_diff.hpp; issue 33).
 occ_test(item_diff_test unit LIBS occ_item_diff SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/image_item_diff_test.cpp)
 # issue 33 end to end (label integration): the tau > 0 promise (0 objects missing, displacement

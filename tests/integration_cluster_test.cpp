@@ -191,6 +191,31 @@ TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsRefere
   EXPECT_GT(std::stoul(r->node1_log.substr(from + 2, at - from - 2)), 0u) << r->node1_log;
 }
 
+// The OR on the CPU (--or-raster cpu, common/cull/depth_raster.hpp): node 0 rasterises in GL (the
+// default), node 1 on the CPU, where at tau 0 HC also tests the leaves whose boxes show with
+// their own triangles. The frames are the reference's, node 1 says so at start-up and found
+// leaves hidden that way (pipes: long thin objects whose boxes show past what hides them), node 0
+// neither.
+TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
+  fs::path dir = fresh_dir("pipes_or_cpu");
+  ClusterOptions o = cluster("pipes", "orbit:40");
+  o.node1 = {"--or-raster", "cpu"};
+  const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
+  if (!r) return;
+  // "N leaves whose box showed found hidden by their own triangles"
+  auto hidden = [](const std::string& log) -> long {
+    const size_t at = log.find(" leaves whose box showed found hidden by their own triangles");
+    if (at == std::string::npos) return -1;
+    const size_t from = log.rfind(' ', at - 1);
+    return std::stol(log.substr(from + 1, at - from - 1));
+  };
+  EXPECT_EQ(r->node0_log.find("OR on the CPU"), std::string::npos) << r->node0_log;
+  EXPECT_EQ(hidden(r->node0_log), 0) << r->node0_log;
+  EXPECT_NE(r->node1_log.find("OR on the CPU (--or-raster cpu"), std::string::npos)
+      << r->node1_log;
+  EXPECT_GT(hidden(r->node1_log), 0) << r->node1_log;
+}
+
 // Defaults by renderer class (issue 34): with every process told it runs on a hardware GPU
 // (OCC_RENDERER_CLASS=hardware, on llvmpipe), --hc-test auto picks occlusion queries (no depth
 // read-back on the frame's path) and --two-pass auto is off; the frames still equal the reference.

@@ -53,6 +53,7 @@ struct CullStats {
   uint32_t frustum_culled = 0;     // nodes rejected by the frustum test
   uint32_t queries = 0;            // occlusion queries issued
   uint32_t occluded = 0;           // nodes whose query returned 0 samples
+  uint32_t geometry_hidden = 0;    // leaves whose box passed and whose triangles did not (HcOptions::geometry_shows)
   uint32_t near_visible = 0;       // nodes decided visible without a query
   uint32_t levels = 0;             // query batches (levels) issued
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
@@ -180,6 +181,9 @@ enum class HcOrder {
 // by_renderer (the default, --hc-test auto): queries on a hardware GPU, cpu_pyramid on a software
 // renderer (llvmpipe), chosen when the GL context is known (hc_test_for in common/gl/hzb_query.hpp).
 enum class HcTest { queries, pyramid, cpu_pyramid, by_renderer };
+// Where the OR rasterises V's depth: in GL, or on the CPU (common/cull/depth_raster.hpp; HC then
+// also tests leaves by their own triangles at tau 0).
+enum class OrRaster { gl, cpu };
 
 // How HC searches: the one option set, node-local (not in the config hash: the processes need not
 // agree, the visible set stays a conservative superset either way). The CLI fills it
@@ -194,6 +198,7 @@ struct HcChoices {
   // How each box is tested (common/gl/hzb_query.hpp): by the renderer (cpu_pyramid on llvmpipe,
   // queries on a hardware GPU: no per-frame read-back), or as the flag says.
   HcTest test = HcTest::by_renderer;
+  OrRaster or_raster = OrRaster::gl;
 };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
@@ -206,6 +211,9 @@ struct HcOptions {
   QuerySkipper* skipper = nullptr;       // choices.adaptive_queries' state (null: query every node)
   const Enclosures* enclosures = nullptr;  // choices.sealed: nodes it hides for the camera are culled
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
+  // A leaf whose box test passed is visible only where this says its own triangles may show
+  // (null: the box decides). Tau 0 only: it tests the leaf at full detail.
+  std::function<bool(uint32_t leaf)> geometry_shows = nullptr;
   CullStats* stats = nullptr;
   uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
   // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it

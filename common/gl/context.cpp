@@ -171,6 +171,11 @@ void GlContext::read_depth(float* out) const {
   gl_.ReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, out);
 }
 
+void GlContext::write_depth(const float* depth) {
+  gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  gl_.TextureSubImage2D(depth_tex_, 0, 0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+}
+
 void GlContext::read_depth(int x, int y, int w, int h, float* out) const {
   gl_.PixelStorei(GL_PACK_ROW_LENGTH, width_);
   gl_.ReadPixels(x, y, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, out + size_t(y) * size_t(width_) + size_t(x));

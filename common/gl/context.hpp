@@ -60,6 +60,8 @@ class GlContext {
   void read_depth(float* out) const;  // width() * height() floats
   // Pixels [x, x + w) x [y, y + h) of the depth buffer into a width() x height() array `out`.
   void read_depth(int x, int y, int w, int h, float* out) const;
+  // Replaces the depth buffer with `depth` (width() * height() floats, row 0 at the bottom).
+  void write_depth(const float* depth);
   // The depth attachment: a GL_DEPTH_COMPONENT32F texture (one level), sampled by compute
   // shaders (texelFetch(...).r is the depth) while it stays attached.
   GLuint depth_texture() const { return depth_tex_; }

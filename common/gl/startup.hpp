@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "common/cull/depth_raster.hpp"
 #include "common/cull/enclosure.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -35,6 +36,7 @@ struct SceneGl {
   std::unique_ptr<LoadedScene> loaded;
   std::unique_ptr<Renderables> renderables;  // with the LOD data when loaded with LODs
   Enclosures sealed;                         // items sealed inside solids (the switch nodes fill it before the upload)
+  std::unique_ptr<CpuOccluders> cpu_occluders;  // the switch nodes' OR on the CPU (--or-raster), else null
   std::unique_ptr<GlContext> ctx;
   std::unique_ptr<SceneRenderer> renderer;
   const Scene& scene() const { return loaded->scene; }

@@ -70,8 +70,13 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
   const Viewport vp{o.width, o.height};
-  CullFrame node0(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 1");
-  CullFrame node1(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 0");
+  // The OR on the CPU as the nodes' (--or-raster cpu); one for both cull frames, as each does its
+  // OR and HC before the other starts.
+  std::optional<CpuOccluders> cpu;
+  if (o.hc.or_raster == OrRaster::cpu) cpu = CpuOccluders::copy(ls.scene, h, o.width, o.height, nullptr);
+  CpuOccluders* const or_cpu = cpu ? &*cpu : nullptr;
+  CullFrame node0(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 1", or_cpu);
+  CullFrame node1(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 0", or_cpu);
   CullFrame* const nodes[2] = {&node0, &node1};
   std::vector<wire::Message> stream, next;  // HC(f-1)'s messages, as the other node reads them
   for (uint32_t f = 0; f <= last; ++f) {
