@@ -85,14 +85,10 @@ std::vector<uint32_t> CullFrame::draw_new_occluders(std::span<const uint32_t> id
 }
 
 void CullFrame::draw_depth(std::span<const uint32_t> ids) {
-  if (!or_on_cpu_) {
-    renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
-    // HC's occluder fusion: also into the CPU's depth, which its leaves' own triangles are
-    // tested against (hc()).
-    if (cpu_ && cpu_drawn_)
-      for (uint32_t id : ids) cpu_->draw_leaf(r_.node_of(id), r_.level_of(id));
-    return;
-  }
+  if (!or_on_cpu_) renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
+  // On the CPU: the OR's draws, and then HC's occluder fusion too (its leaves' own triangles are
+  // tested against that depth, hc()).
+  if (!or_on_cpu_ && !cpu_drawn_) return;
   for (uint32_t id : ids) cpu_->draw_leaf(r_.node_of(id), r_.level_of(id));
   cpu_drawn_ = cpu_drawn_ || !ids.empty();
 }

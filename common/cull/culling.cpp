@@ -172,11 +172,10 @@ class LodTraversal {
       // The box shows; a leaf's own triangles may not (HcOptions::geometry_shows).
       const bool hidden_inside = samples > 0 && o_.geometry_shows && h_.node(p.id).leaf() && !o_.geometry_shows(p.id);
       st_.geometry_hidden += hidden_inside;
-      if (skipper_) skipper_->record(p.id, samples > 0 && !hidden_inside);  // occluded: queried again from now on
-      if (samples > 0 && !hidden_inside) {
+      const bool shows = samples > 0 && !hidden_inside;
+      if (skipper_) skipper_->record(p.id, shows);  // occluded: queried again from now on
+      if (shows) {
         visible_.emplace_back(p.id, samples);
-      } else if (hidden_inside) {
-        ++st_.occluded;
       } else {
         ++st_.occluded;
         st_.skipped_occluded += p.cheap;

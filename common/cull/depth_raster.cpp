@@ -20,8 +20,8 @@ constexpr double kOffsetRelative = 1.0 / 1048576.0;
 // the depth. Here it is computed in double and moved back by this many such ulps.
 constexpr double kDepthUlps = 8.0;
 constexpr double kGuardBand = 8192;  // pixels: corners beyond are clipped by GL's own clipper
-constexpr double kNearEdge = 2.0;
-constexpr double kOffLine = 1.0 / 16;         // pixels: an edge's triangles are not edge-on            // sub-pixels: GL's snapping may differ by one at each end
+constexpr double kNearEdge = 2.0;            // sub-pixels: GL's snapping may differ by one at each end
+constexpr double kOffLine = 1.0 / 16;         // pixels: an edge's triangles are not edge-on
 
 // floor(a / b) and ceil(a / b) for b > 0.
 int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
@@ -374,7 +374,6 @@ void DepthRaster::span(const Setup& s, const int64_t* E, const int64_t* above, i
 void DepthRaster::triangle(const V& a0, const V& b0, const V& c0, Faces faces, uint8_t outline) {
   Setup s;
   if (!setup(a0, b0, c0, faces, false, outline, s)) return;
-  ++triangles_;
   const double dzdx = s.dzdx, z00 = s.z00 - s.back;  // moved back
   int64_t E[3] = {s.E[0], s.E[1], s.E[2]};
   if (s.px1 - s.px0 < 16) {

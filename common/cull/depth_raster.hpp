@@ -73,8 +73,6 @@ class DepthRaster {
   // The depth drawn so far (width() x height(), row 0 at the bottom).
   std::span<const float> depth() const { return depth_; }
 
-  // Triangles drawn (some pixel centre tested), since construction.
-  uint64_t triangles() const { return triangles_; }
 
  private:
   struct V {  // a vertex after projection: window position (pixels), depth and clip w
@@ -99,7 +97,6 @@ class DepthRaster {
   std::vector<uint32_t> stamp_;      // clip_[v] is current when stamp_[v] == draw_
   uint32_t draw_ = 0;
   double error_ = 0, error_w_ = 0;   // GL's depth error: error_ + error_w_ / w (set_projection)
-  uint64_t triangles_ = 0;
 };
 
 // The OR's occluders on the CPU: the opaque items' triangles (full detail), copied from the scene
