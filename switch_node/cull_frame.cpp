@@ -24,6 +24,9 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
       cpu_(cpu) {
   if (choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
   if (cpu_) geometry_seen_.assign(r_.hierarchy().size(), 0);
+  // The OR's occluders must not hide their own query boxes (SceneRenderer::set_occluder_offset):
+  // every depth-only draw on this renderer is the OR's or occluder fusion's.
+  renderer_.set_occluder_offset(true);
   restart();
 }
 

@@ -7,7 +7,7 @@
 // message of the other node's stream of the previous frame, hc(). cull_overview replays two of
 // them (one per node) in one process, so its picture is the cluster's by construction.
 // Contracts: the GL context is current on the calling thread; the context, renderer and
-// renderables outlive this. Create a fresh one per render client (nothing carries over).
+// renderables outlive this; the renderer draws depth only for this (its occluder offset is set). Create a fresh one per render client (nothing carries over).
 #pragma once
 #include <cstdint>
 #include <optional>

@@ -30,7 +30,7 @@ int render(const fs::path& out, const std::string& scene, const std::string& pat
 // frame_diff with no tolerance at all: exit 0 only when every pixel of every frame is equal.
 void expect_identical(const fs::path& a, const fs::path& b, const std::string& what) {
   Proc diff({bin("frame_diff"), a.string(), b.string(), "--max-fraction", "0"}, b.parent_path() / (what + "_diff.log"));
-  EXPECT_EQ(diff.wait(120s), 0) << what << ": " << diff.log();
+  EXPECT_EQ(diff.wait(120s), 0) << what << ": " << differing_frames(diff.log());
 }
 
 void expect_conservative(const fs::path& dir, const std::string& cull, size_t frames) {

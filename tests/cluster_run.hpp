@@ -238,8 +238,8 @@ inline std::optional<ClusterRun> expect_cluster_equals_reference(const fs::path&
   if (r.rvg_code != 0 || ref.code != 0) return std::nullopt;
   EXPECT_EQ(frame_count(dir / "cluster"), frames);
   const Outcome diff = frame_diff(dir / "reference", dir / "cluster");
-  EXPECT_EQ(diff.code, 0) << dir.filename() << ": cluster != reference\n" << diff.log;
-  EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
+  EXPECT_EQ(diff.code, 0) << dir.filename() << ": cluster != reference\n" << differing_frames(diff.log);
+  EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << differing_frames(diff.log);
   return r;
 }
 

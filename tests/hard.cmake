@@ -26,3 +26,6 @@ add_dependencies(hard_exit_test switch_node render_client frame_diff)
 occ_test(exactness_matrix_test matrix LIBS occ_common SOURCES
   ${CMAKE_CURRENT_SOURCE_DIR}/exactness_matrix_test.cpp)
 add_dependencies(exactness_matrix_test switch_node render_client occlusion_server frame_diff)
+# A resync at every frame of a walk, replayed in one process with the nodes' cull frames (GL).
+occ_test(hard_resync_test hard LIBS occ_cull_frame SOURCES
+  ${CMAKE_CURRENT_SOURCE_DIR}/hard_resync_test.cpp)

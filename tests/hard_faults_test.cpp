@@ -178,6 +178,6 @@ TEST(HardFaults, StrangersAtEveryListeningPortAreRefusedWithAReasonAndTheCluster
   const Outcome ref = run_reference(dir / "reference", scene, csv, unculled(view));
   ASSERT_EQ(ref.code, 0) << ref.log;
   const Outcome diff = frame_diff(dir / "reference", out);
-  EXPECT_EQ(diff.code, 0) << diff.log;
+  EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
   EXPECT_EQ(frame_count(out), path.size());
 }

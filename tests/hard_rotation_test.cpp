@@ -71,5 +71,5 @@ TEST(HardRotation, ConcatenatedPathRendersLikeTheDirectPathThroughTheCluster) {
   const Outcome ref = run_reference(dir / "direct", "hard:walls", csv, unculled(view));
   ASSERT_EQ(ref.code, 0) << ref.log;
   const Outcome diff = frame_diff(dir / "direct", dir / "cluster");
-  EXPECT_EQ(diff.code, 0) << "chained != direct\n" << diff.log;
+  EXPECT_EQ(diff.code, 0) << "chained != direct\n" << differing_frames(diff.log);
 }

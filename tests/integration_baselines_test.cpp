@@ -27,7 +27,7 @@ TEST(Baselines, StopAndWaitAndChcFramesEqualTheUnculledReference) {
     const Outcome culled = render(dir / cull, cull, false);
     ASSERT_EQ(culled.code, 0) << culled.log;
     const Outcome diff = frame_diff(dir / "none", dir / cull);
-    EXPECT_EQ(diff.code, 0) << cull << ": " << diff.log;
+    EXPECT_EQ(diff.code, 0) << cull << ": " << differing_frames(diff.log);
     auto st = read_csv(dir / cull / "stats.csv");
     auto ex = read_csv(dir / "none" / "stats.csv");
     ASSERT_EQ(st["nodes_drawn"].size(), 40u);
@@ -53,7 +53,7 @@ TEST(Baselines, DepthReadbackOcclusionServerFramesEqualTheReference) {
   ASSERT_EQ(rvg.wait(120s), 0) << rvg.log();
   EXPECT_EQ(server.wait(30s), 0) << server.log();
   const Outcome diff = frame_diff(dir / "ref", out);
-  EXPECT_EQ(diff.code, 0) << diff.log;
+  EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
   auto st = read_csv(out / "stats.csv");
   ASSERT_EQ(st["frame"].size(), 40u);
   EXPECT_LT(sum(st["visible"]) / 40, 0.5 * 360);  // it culls

@@ -376,8 +376,8 @@ TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   // Close to full detail: few differing pixels (LOD is not exact, so not zero).
   ASSERT_EQ(run_reference(dir / "reference", kCity, path, kView).code, 0);
   const Outcome diff = frame_diff(dir / "reference", dir / "tau3", {"--threshold", "16", "--max-fraction", "0.05", "--psnr"});
-  EXPECT_EQ(diff.code, 0) << diff.log;
-  EXPECT_NE(diff.log.find("psnr_db="), std::string::npos) << diff.log;
+  EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
+  EXPECT_NE(diff.log.find("psnr_db="), std::string::npos) << differing_frames(diff.log);
 }
 
 TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
@@ -457,6 +457,6 @@ TEST(ClusterBudget, PlantFarBelowItsSizeEqualsReferenceAndTheResidentCluster) {
   ASSERT_EQ(resident.rvg_code, 0) << resident.logs();
   EXPECT_EQ(resident.rvg_log.find("geometry streams:"), std::string::npos) << resident.rvg_log;
   const Outcome diff = frame_diff(dir / "tau2_all", dir / "tau2_budget");
-  EXPECT_EQ(diff.code, 0) << diff.log;
-  EXPECT_NE(diff_summary(diff.log).find("differing_pixels=0"), std::string::npos) << diff.log;
+  EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
+  EXPECT_NE(diff_summary(diff.log).find("differing_pixels=0"), std::string::npos) << differing_frames(diff.log);
 }

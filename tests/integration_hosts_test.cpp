@@ -86,8 +86,8 @@ TEST_F(Hosts, ClusterOverSshFramesEqualTheReferenceAndNothingIsLeft) {
   const Outcome ref = run_reference(dir_ / "reference", kScene, "walk:40", kView);
   ASSERT_EQ(ref.code, 0) << ref.log;
   const Outcome diff = frame_diff(dir_ / "reference", dir_ / "cluster");
-  ASSERT_NE(diff_summary(diff.log).find("frames=40"), std::string::npos) << diff.log;
-  EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << diff.log;
+  ASSERT_NE(diff_summary(diff.log).find("frames=40"), std::string::npos) << differing_frames(diff.log);
+  EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << differing_frames(diff.log);
 }
 
 TEST_F(Hosts, AWrongScenePathOrAnUnreachableHostIsNamedAndNothingIsLeft) {

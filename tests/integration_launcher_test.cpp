@@ -37,8 +37,8 @@ void expect_equals_reference(const fs::path& dir, const std::string& path, size_
   ASSERT_EQ(ref.code, 0) << ref.log;
   EXPECT_EQ(frame_count(dir / "cluster"), frames);
   const Outcome diff = frame_diff(dir / "reference", dir / "cluster");
-  ASSERT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
-  EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << diff.log;
+  ASSERT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << differing_frames(diff.log);
+  EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << differing_frames(diff.log);
 }
 
 // The by-hand tests run as if no launcher had started them (a CI job under Slurm or mpirun has

@@ -47,8 +47,8 @@ std::vector<std::string> client_argv(const ClusterOptions& o, int p0, int p1, co
 void expect_equals_reference(const fs::path& reference, const fs::path& out, size_t frames) {
   EXPECT_EQ(frame_count(out), frames) << out;
   const Outcome diff = frame_diff(reference, out);
-  EXPECT_EQ(diff.code, 0) << out << ": cluster != reference\n" << diff.log;
-  EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
+  EXPECT_EQ(diff.code, 0) << out << ": cluster != reference\n" << differing_frames(diff.log);
+  EXPECT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << differing_frames(diff.log);
 }
 
 // The cluster's first client reaches node 1 through a link_relay, so a test can hold that client

@@ -44,8 +44,8 @@ void expect_equals_reference(const fs::path& dir, const std::string& path, size_
   ASSERT_EQ(ref.code, 0) << ref.log;
   EXPECT_EQ(frame_count(dir), frames);
   const Outcome diff = frame_diff(dir.parent_path() / "reference", dir);
-  ASSERT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << diff.log;
-  EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << diff.log;
+  ASSERT_NE(diff_summary(diff.log).find("frames=" + std::to_string(frames)), std::string::npos) << differing_frames(diff.log);
+  EXPECT_NE(diff_summary(diff.log).find(" differing_pixels=0 "), std::string::npos) << differing_frames(diff.log);
 }
 
 std::string write_key(const fs::path& file, char fill) {

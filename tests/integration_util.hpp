@@ -263,6 +263,15 @@ inline std::string diff_summary(const std::string& log) {
   return last == std::string::npos ? log : log.substr(last);
 }
 
+// frame_diff's log without the frames that equal (a failure shows the frames that differ and the
+// summary, not thousands of lines a CI log cuts).
+inline std::string differing_frames(const std::string& log) {
+  std::string out, line;
+  for (std::istringstream in(log); std::getline(in, line);)
+    if (line.find(": 0 differing pixels") == std::string::npos) out += line + "\n";
+  return out;
+}
+
 // The frame_NNNNN.png files in a directory.
 inline size_t frame_count(const fs::path& dir) {
   size_t n = 0;

@@ -49,7 +49,7 @@ void expect_promise(const Case& c) {
     std::vector<std::string> flags = {"--items", "--tau", t, "--check"};
     if (c.thick) flags.push_back("--thick");
     const Outcome diff = frame_diff(dir / "reference", out, flags);
-    EXPECT_EQ(diff.code, 0) << c.name << " tau " << t << ": the promise is broken\n" << diff.log;
+    EXPECT_EQ(diff.code, 0) << c.name << " tau " << t << ": the promise is broken\n" << differing_frames(diff.log);
     const std::string summary = diff_summary(diff.log);
     EXPECT_NE(summary.find("frames=" + std::to_string(read_csv(out / "stats.csv")["frame"].size())), std::string::npos)
         << summary;

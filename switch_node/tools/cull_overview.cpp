@@ -65,7 +65,6 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   const Enclosures sealed = find_enclosures("cull_overview", ls.scene, h);
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
   SceneRenderer renderer(*ctx, ls.scene, h);
-  renderer.set_occluder_offset(true);  // as the switch nodes' OR
   const Renderables renderables(h, nullptr);
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
