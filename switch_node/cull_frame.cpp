@@ -23,7 +23,10 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
       visible_(r.count()),
       cpu_(cpu) {
   if (choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
-  if (cpu_) geometry_seen_.assign(r_.hierarchy().size(), 0);
+  if (cpu_) {
+    geometry_seen_.assign(r_.hierarchy().size(), 0);
+    raster_queries_.emplace(*cpu_);
+  }
   // The OR's occluders must not hide their own query boxes (SceneRenderer::set_occluder_offset):
   // every depth-only draw on this renderer is the OR's or occluder fusion's.
   renderer_.set_occluder_offset(true);
@@ -45,7 +48,8 @@ void CullFrame::begin_or(const Camera& cam, bool occlusion) {
   drawn_.assign(r_.count(), 0);
   or_on_cpu_ = cpu_drawn_ = false;
   if (!occlusion_) return;
-  renderer_.begin_frame(cam, false);
+  // The OR on the CPU: at tau 0 HC tests there too, and this frame leaves GL alone.
+  if (!cpu_ || config_.lod()) renderer_.begin_frame(cam, false);
   if (cpu_) {
     cpu_->begin(cam);
     or_on_cpu_ = true;
@@ -163,6 +167,10 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
     ++totals_.frustum_frames;
   } else {
     HcOptions o{.choices = choices_, .skipper = skipper_ ? &*skipper_ : nullptr, .enclosures = &sealed_};
+    // At tau 0 with the OR on the CPU, HC tests there too (RasterQueries): boxes against the
+    // CPU's depth, and each leaf whose box shows by its own triangles (what the boxes of long,
+    // thin or hollow objects cannot prove hidden); occluder fusion draws there. No GL this frame.
+    const bool on_cpu = or_on_cpu_ && !config_.lod();
     if (choices_.occluder_fusion)
       o.occluders = [&](std::span<const uint32_t> found) {
         // Restores the GL state the queries need; the pyramid is stale where they were drawn.
@@ -171,27 +179,37 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
         std::vector<Aabb> boxes;
         boxes.reserve(drawn.size());
         for (uint32_t id : drawn) boxes.push_back(r_.hierarchy().node(r_.node_of(id)).box);
-        querier_.depth_added(boxes);
+        if (on_cpu)
+          raster_queries_->depth_added(boxes);
+        else
+          querier_.depth_added(boxes);
       };
-    if (or_on_cpu_ && cpu_drawn_) {  // the OR's depth, conservative, into the buffer HC tests
-      ctx_.write_depth(cpu_->raster().depth().data());
-      // At tau 0 a leaf whose box shows is tested with its own triangles against that depth
-      // (what the boxes of long, thin or hollow objects cannot prove hidden).
-      if (!config_.lod())
-        o.geometry_shows = [this, frame](uint32_t leaf) {
-          // A leaf whose triangles showed within the last kGeometryRecheck frames is taken to
-          // show still (extra leaves only cost drawing them): tests go to the rest.
-          uint32_t& seen = geometry_seen_[leaf];
-          if (seen != 0 && frame < seen + kGeometryRecheck) return true;
-          if (!cpu_->leaf_shows(leaf)) return false;
-          seen = frame;
-          return true;
-        };
+    if (on_cpu) {
+      o.geometry_shows = [this, frame](uint32_t leaf) {
+        // A leaf whose triangles showed within the last kGeometryRecheck frames is taken to
+        // show still (extra leaves only cost drawing them): tests go to the rest.
+        uint32_t& seen = geometry_seen_[leaf];
+        if (seen != 0 && frame < seen + kGeometryRecheck) return true;
+        if (!cpu_->leaf_shows(leaf)) return false;
+        seen = frame;
+        return true;
+      };
+      raster_queries_->begin(cam);
+      hc = step_.hc(frame, visible_, cam, *raster_queries_, o, out, hold_ ? &*hold_ : nullptr);
+    } else {
+      // The OR's depth from the CPU (levels of detail: HLODs are not on the CPU), conservative,
+      // into the buffer HC tests, and HC's pyramid starts from it, not from GL's read back.
+      const float* uploaded = nullptr;
+      if (or_on_cpu_ && cpu_drawn_) {
+        ctx_.write_depth(cpu_->raster().depth().data());
+        uploaded = cpu_->raster().depth().data();
+      }
+      or_on_cpu_ = false;  // occluder fusion draws in GL, over it
+      querier_.begin(cam, uploaded);
+      hc = step_.hc(frame, visible_, cam, querier_, o, out, hold_ ? &*hold_ : nullptr);
+      querier_.end();
     }
-    or_on_cpu_ = false;  // occluder fusion draws in GL, over it (and on the CPU, for those tests)
-    querier_.begin(cam);
-    hc = step_.hc(frame, visible_, cam, querier_, o, out, hold_ ? &*hold_ : nullptr);
-    querier_.end();
+    or_on_cpu_ = false;
   }
   v_frustum_set_ = !occlusion_;
   or_deferred_ = false;

@@ -17,6 +17,7 @@
 
 #include "common/cull/culling.hpp"
 #include "common/cull/depth_raster.hpp"
+#include "common/cull/raster_queries.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
@@ -78,6 +79,8 @@ class CullFrame {
 
   const CullTotals& totals() const { return totals_; }
   const HcQuerier& querier() const { return querier_; }
+  // HC's tests on the CPU (tau 0 with the OR there); null otherwise.
+  const RasterQueries* raster_queries() const { return raster_queries_ ? &*raster_queries_ : nullptr; }
 
  private:
   void draw_v();  // what of V is not in the depth buffer yet, depth only
@@ -104,6 +107,7 @@ class CullFrame {
   bool v_frustum_set_ = false;   // V is a frustum set (its frame was culled without occlusion)
   bool or_deferred_ = false;     // this OR left V out (a frustum set) until the stream is in
   CpuOccluders* cpu_ = nullptr;  // the OR on the CPU (null: GL)
+  std::optional<RasterQueries> raster_queries_;  // with cpu_: HC's box tests at tau 0
   bool or_on_cpu_ = false;       // between begin_or() and hc(): the OR's draws go to cpu_
   bool cpu_drawn_ = false;       // cpu_ holds something this frame (uploaded at hc())
   static constexpr uint32_t kGeometryRecheck = 16;

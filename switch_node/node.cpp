@@ -400,6 +400,10 @@ class Session {
               << " shown, " << q.assumed << " of " << q.cheap << " skipped by adaptive queries assumed visible; of "
               << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
               << q.builds << " pyramid builds, " << q.refreshes << " refreshes after occluder fusion)\n";
+    if (const RasterQueries* rq = cull_.raster_queries())
+      std::cerr << who_ << ": HC on the CPU: " << rq->stats().tests << " boxes tested, "
+                << rq->stats().pyramid_occluded << " proven occluded by the depth pyramid, "
+                << rq->stats().raster_occluded << " by their faces\n";
     std::cerr.flush();
     print_geometry_line(stderr, who_, g_.renderer->geometry_pool());
     std::cerr << who_ << ": LOD: tau " << o_.config.pixel_error << " px, visible-pixel LOD "

@@ -5,10 +5,13 @@
 // the render client's frame would show of it).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "common/camera_path.hpp"
 #include "common/cull/depth_raster.hpp"
+#include "common/cull/raster_queries.hpp"
+#include "common/gl/box_query.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/lod/lod_select.hpp"
@@ -85,5 +88,88 @@ TEST(CpuOr, NeverNearerThanGlAndHidesOnlyWhatGlHides) {
       EXPECT_GT(hidden, 0u) << "of " << tested;
       EXPECT_LE(lost, covered / 20) << "of " << covered << " pixels GL covers, left uncovered";
     }
+  }
+}
+
+// HC's box tests on the CPU (RasterQueries) against GL: a leaf whose box it finds occluded
+// passes no sample of GL's occlusion query of the leaf's triangles over GL's depth of the
+// occluders (the render client's frame); and it proves nearly what GL's query of the box
+// (BoxQuerier, as HC in GL) proves over the same CPU depth uploaded.
+TEST(CpuHc, BoxesItFindsOccludedHideTheirContentInGlAsGlsQueriesFind) {
+  std::vector<std::pair<std::string, std::string>> views = {
+      {"office", "walk:6"}, {"city:8x8:3:10:1", "walk:6"}, {"hard:cracks", "walk:6"}, {"pipes", "orbit:6"}};
+  for (const char* rel : {"2CylinderEngine/2CylinderEngine.gltf", "bim/schependomlaan/schependomlaan.gltf"})
+    if (std::string p = shared_scene(rel); !p.empty()) views.push_back({p, "orbit:6"});
+  const Viewport vp{256, 256};
+  for (const auto& [spec, path] : views) {
+    SCOPED_TRACE(spec + " " + path);
+    Scene scene = load_scene(spec);
+    const Hierarchy h = Hierarchy::build(scene, {});
+    std::optional<CpuOccluders> cpu = CpuOccluders::copy(scene, h, vp.width, vp.height, nullptr);
+    ASSERT_TRUE(cpu);
+    auto ctx = GlContext::create(GlBackend::Auto, vp.width, vp.height);
+    SceneRenderer renderer(*ctx, scene, h);
+    const Renderables r(h, nullptr);
+    const GlApi& gl = ctx->gl();
+    GLuint query = 0;
+    gl.CreateQueries(GL_SAMPLES_PASSED, 1, &query);
+    BoxQuerier boxes(*ctx);
+    RasterQueries rq(*cpu);
+    std::vector<uint32_t> leaves;
+    for (uint32_t id = 0; id < h.size(); ++id)
+      if (h.node(id).leaf() && h.node(id).item_count > 0) leaves.push_back(id);
+    size_t tested = 0, hidden = 0, hidden_but_shown = 0, gl_hidden = 0, gl_only = 0;
+    for (const Camera& cam : load_camera_path(path, scene.bounds(), vp)) {
+      // Tested: every third leaf in the frustum (HC tests no other), the rest occluders.
+      std::vector<uint32_t> occluders, others;
+      const Frustum fr = cam.frustum();
+      for (size_t k = 0; k < leaves.size(); ++k)
+        if (k % 3 != 1)
+          occluders.push_back(leaves[k]);
+        else if (fr.classify(h.node(leaves[k]).box) != Containment::Outside)
+          others.push_back(leaves[k]);
+      cpu->begin(cam);
+      for (uint32_t id : occluders) cpu->draw_leaf(id, 0);
+      rq.begin(cam);
+      std::vector<uint8_t> cpu_hidden;
+      for (uint32_t id : others) {
+        const Aabb& box = h.node(id).box;
+        const bool near = visible_without_query(box, cam);
+        cpu_hidden.push_back(!near && rq.result(rq.issue(box)) == 0);
+        rq.end_batch();
+      }
+      // GL's box queries over the CPU's depth, uploaded.
+      renderer.begin_frame(cam, false);
+      ctx->write_depth(cpu->raster().depth().data());
+      boxes.begin(cam);
+      for (size_t k = 0; k < others.size(); ++k) {
+        const Aabb& box = h.node(others[k]).box;
+        if (visible_without_query(box, cam)) continue;
+        ++tested;
+        const bool gl_occluded = boxes.result(boxes.issue(box)) == 0;
+        boxes.reset();
+        gl_hidden += gl_occluded;
+        gl_only += gl_occluded && !cpu_hidden[k];
+      }
+      boxes.end();
+      // The leaves' own triangles over GL's depth of the occluders (no offset: the client's frame).
+      renderer.begin_frame(cam, false);
+      renderer.draw_renderables(r, occluders, SceneRenderer::Mode::DepthOnly);
+      for (size_t k = 0; k < others.size(); ++k) {
+        if (!cpu_hidden[k]) continue;
+        ++hidden;
+        const uint32_t ids[1] = {others[k]};
+        renderer.query_renderables(r, ids, query, GL_GREATER);
+        GLuint64 samples = 0;
+        gl.GetQueryObjectui64v(query, GL_QUERY_RESULT, &samples);
+        hidden_but_shown += samples > 0;
+      }
+    }
+    gl.DeleteQueries(1, &query);
+    std::printf("%s: %zu boxes, %zu occluded on the CPU, %zu by GL's queries (%zu of them not on the CPU)\n",
+                spec.c_str(), tested, hidden, gl_hidden, gl_only);
+    EXPECT_EQ(hidden_but_shown, 0u) << "of " << hidden << " leaves whose boxes were found occluded, GL's query saw samples";
+    EXPECT_GT(hidden, 0u) << "of " << tested;
+    EXPECT_LE(gl_only, gl_hidden / 20) << "of " << gl_hidden << " boxes GL's queries find occluded, not found on the CPU";
   }
 }

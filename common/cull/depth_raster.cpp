@@ -5,6 +5,10 @@
 #include <cstring>
 #include <unordered_map>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace occ {
@@ -22,11 +26,76 @@ constexpr double kDepthUlps = 8.0;
 constexpr double kGuardBand = 8192;  // pixels: corners beyond are clipped by GL's own clipper
 constexpr double kNearEdge = 2.0;            // sub-pixels: GL's snapping may differ by one at each end
 constexpr double kOffLine = 1.0 / 16;         // pixels: an edge's triangles are not edge-on
+// A tested depth is moved forward by two float ulps of itself (relative, not absolute: depths
+// far off are small in reverse-Z, an absolute 1e-7 was 3 % of them and proved nothing there).
+constexpr double kStoreUlps = 0x1p-22;
+constexpr double kPadSubpixels = 4;  // BoxQuerier::kPadSubpixels (GL's query box, on screen)
 
 // floor(a / b) and ceil(a / b) for b > 0.
 int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 int64_t ceil_div(int64_t a, int64_t b) { return -floor_div(-a, b); }
+
+// The spans' scalar loops; the AVX2 versions compute the same values four at a time (no fused
+// multiply-add: the same roundings).
+void fill_scalar(float* row, int64_t n, double z0, double dz) {
+  for (int64_t k = 0; k < n; ++k) {
+    const float d = float(std::min(z0 + dz * double(k), 1.0));
+    if (d > row[k]) row[k] = d;
+  }
+}
+bool reaches_scalar(const float* row, int64_t n, double z0, double dz) {
+  for (int64_t k = 0; k < n; ++k)
+    if (float(z0 + dz * double(k)) >= row[k]) return true;
+  return false;
+}
+#if defined(__x86_64__)
+__attribute__((target("avx2"))) void fill_avx2(float* row, int64_t n, double z0, double dz) {
+  const __m256d vz0 = _mm256_set1_pd(z0), vdz = _mm256_set1_pd(dz), one = _mm256_set1_pd(1.0),
+                four = _mm256_set1_pd(4.0);
+  __m256d k = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
+  int64_t i = 0;
+  for (; i + 4 <= n; i += 4, k = _mm256_add_pd(k, four)) {
+    const __m128 d = _mm256_cvtpd_ps(_mm256_min_pd(_mm256_add_pd(vz0, _mm256_mul_pd(vdz, k)), one));
+    _mm_storeu_ps(row + i, _mm_max_ps(d, _mm_loadu_ps(row + i)));
+  }
+  for (; i < n; ++i) {
+    const float d = float(std::min(z0 + dz * double(i), 1.0));
+    if (d > row[i]) row[i] = d;
+  }
+}
+__attribute__((target("avx2"))) bool reaches_avx2(const float* row, int64_t n, double z0, double dz) {
+  const __m256d vz0 = _mm256_set1_pd(z0), vdz = _mm256_set1_pd(dz), four = _mm256_set1_pd(4.0);
+  __m256d k = _mm256_set_pd(3.0, 2.0, 1.0, 0.0);
+  int64_t i = 0;
+  for (; i + 4 <= n; i += 4, k = _mm256_add_pd(k, four)) {
+    const __m128 d = _mm256_cvtpd_ps(_mm256_add_pd(vz0, _mm256_mul_pd(vdz, k)));
+    if (_mm_movemask_ps(_mm_cmpge_ps(d, _mm_loadu_ps(row + i)))) return true;
+  }
+  for (; i < n; ++i)
+    if (float(z0 + dz * double(i)) >= row[i]) return true;
+  return false;
+}
+const bool kAvx2 = __builtin_cpu_supports("avx2");
+#else
+constexpr bool kAvx2 = false;
+#endif
 }  // namespace
+
+namespace depth_span {
+bool vector_available() { return kAvx2; }
+void fill(float* row, int64_t n, double z0, double dz, bool vector) {
+#if defined(__x86_64__)
+  if (vector && kAvx2) return fill_avx2(row, n, z0, dz);
+#endif
+  fill_scalar(row, n, z0, dz);
+}
+bool reaches(const float* row, int64_t n, double z0, double dz, bool vector) {
+#if defined(__x86_64__)
+  if (vector && kAvx2) return reaches_avx2(row, n, z0, dz);
+#endif
+  return reaches_scalar(row, n, z0, dz);
+}
+}  // namespace depth_span
 
 DepthRaster::DepthRaster(int width, int height)
     : width_(std::max(width, 1)),
@@ -54,6 +123,14 @@ void DepthRaster::draw(const glm::dmat4& clip_from_object, std::span<const glm::
 bool DepthRaster::shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
                         std::span<const uint32_t> indices, Faces faces, std::span<const uint32_t> across) {
   return run(clip_from_object, positions, indices, faces, true, across);
+}
+
+bool DepthRaster::query_shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
+                              std::span<const uint32_t> indices) {
+  as_query_ = true;
+  const bool shown = run(clip_from_object, positions, indices, Faces::ccw, true, {});
+  as_query_ = false;
+  return shown;
 }
 
 bool DepthRaster::run(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
@@ -339,8 +416,10 @@ bool DepthRaster::setup(const V& a0, const V& b0, const V& c0, Faces faces, bool
   // GL sets up the plane in float from its corners: its error grows with the slopes times the
   // window coordinates (on screen and a guard band beyond).
   const double reach = std::min(extent, double(kGuardBand)) + double(width_) + double(height_);
-  s.back = kOffsetSlope * std::max(std::abs(s.dzdx), std::abs(s.dzdy)) + kOffsetRelative * std::abs(s.zmax) +
-           error_w_ / s.wmin + error_ +
+  // The GL OR's offset, except for a box tested as GL's query of it would be (as_query()).
+  const double offset =
+      test && as_query_ ? 0.0 : kOffsetSlope * std::max(std::abs(s.dzdx), std::abs(s.dzdy)) + kOffsetRelative * std::abs(s.zmax);
+  s.back = offset + error_w_ / s.wmin + error_ +
            kDepthUlps * 0x1p-24 * (std::abs(s.zmax) + (std::abs(s.dzdx) + std::abs(s.dzdy)) * reach);
   s.z00 = v[0]->z + s.dzdx * (double(s.px0) + 0.5 - v[0]->x) + s.dzdy * (double(s.py0) + 0.5 - v[0]->y);
   for (int k = 0; k < 3; ++k) {
@@ -400,14 +479,9 @@ void DepthRaster::triangle(const V& a0, const V& b0, const V& c0, Faces faces, u
     // Wide: the row's span of centres clear of every outline edge's margin.
     int64_t lo, hi;
     span(s, E, s.T, lo, hi);
-    if (lo <= hi) {
-      float* row = depth_.data() + size_t(py) * size_t(width_);
-      double z = z00 + s.dzdy * double(py - s.py0) + dzdx * double(lo - s.px0);
-      for (int64_t px = lo; px <= hi; ++px, z += dzdx) {
-        const float d = float(std::min(z, 1.0));
-        if (d > row[px]) row[px] = d;
-      }
-    }
+    if (lo <= hi)
+      depth_span::fill(depth_.data() + size_t(py) * size_t(width_) + size_t(lo), hi - lo + 1,
+                       z00 + s.dzdy * double(py - s.py0) + dzdx * double(lo - s.px0), dzdx);
     for (int k = 0; k < 3; ++k) E[k] += s.B[k];
   }
 }
@@ -416,23 +490,24 @@ bool DepthRaster::test_triangle(const V& a0, const V& b0, const V& c0, Faces fac
   Setup s;
   if (!setup(a0, b0, c0, faces, true, outline, s)) return false;
   if (s.degenerate) {  // its snapped box at its nearest corner, moved forward
-    const float d = float(s.zmax + kOffsetRelative * std::abs(s.zmax) + error_w_ / std::max(s.wmin, 1e-30) + error_ + 1e-7);
+    const float d = float(s.zmax + kOffsetRelative * std::abs(s.zmax) + error_w_ / std::max(s.wmin, 1e-30) + error_ +
+                          kStoreUlps * std::abs(s.zmax));
     for (int64_t py = s.py0; py <= s.py1; ++py)
       for (int64_t px = s.px0; px <= s.px1; ++px)
         if (d >= depth_[size_t(py) * size_t(width_) + size_t(px)]) return true;
     return false;
   }
-  // Pixels within the margin of an edge count (GL may cover them), at the plane moved forward.
+  // Pixels within the margin of an edge count (GL may cover them), at the plane moved forward
+  // (and by the float rounding of the depths compared).
   const int64_t below[3] = {-s.T[0], -s.T[1], -s.T[2]};
-  const double z00 = s.z00 + s.back + 1e-7;
+  const double z00 = s.z00 + s.back + kStoreUlps * std::abs(s.zmax);
   int64_t E[3] = {s.E[0], s.E[1], s.E[2]};
   for (int64_t py = s.py0; py <= s.py1; ++py) {
     int64_t lo, hi;
     span(s, E, below, lo, hi);
-    const size_t row = size_t(py) * size_t(width_);
-    double z = z00 + s.dzdy * double(py - s.py0) + s.dzdx * double(lo - s.px0);
-    for (int64_t px = lo; px <= hi; ++px, z += s.dzdx)
-      if (float(z) >= depth_[row + size_t(px)]) return true;
+    if (lo <= hi && depth_span::reaches(depth_.data() + size_t(py) * size_t(width_) + size_t(lo), hi - lo + 1,
+                                        z00 + s.dzdy * double(py - s.py0) + s.dzdx * double(lo - s.px0), s.dzdx))
+      return true;
     for (int k = 0; k < 3; ++k) E[k] += s.B[k];
   }
   return false;
@@ -496,6 +571,8 @@ void CpuOccluders::begin(const Camera& cam) {
   const glm::dmat4 proj = cam.projection();
   raster_.set_projection(proj[2][2], proj[3][2]);
   clip_from_world_ = proj * cam.view_rotation() * glm::translate(glm::dmat4(1.0), -cam.eye);
+  eye_ = cam.eye;
+  pixel_per_distance_ = 2.0 * std::tan(cam.fovy_rad * 0.5) / double(raster_.height());
 }
 
 void CpuOccluders::draw_leaf(uint32_t node, uint32_t level) {
@@ -527,6 +604,26 @@ bool CpuOccluders::leaf_shows(uint32_t node) {
       return true;
   }
   return false;
+}
+
+bool CpuOccluders::box_shows(const Aabb& box, double relative_pad) {
+  // Corners relative to the box's centre (small floats), the centre in the transform (double).
+  const glm::dvec3 c = 0.5 * (box.min + box.max), half = 0.5 * (box.max - box.min);
+  const glm::dvec3 far = glm::abs(c - eye_) + half;
+  // As GL's query box (BoxQuerier): also at least kPadSubpixels steps of GL's 1/256 pixel grid
+  // on screen, at the farthest corner's distance.
+  const double pad = std::max(relative_pad * std::max({far.x, far.y, far.z}),
+                              kPadSubpixels / kSub * pixel_per_distance_ * glm::length(far));
+  // Rounded outward to float, and a float ulp more.
+  const glm::dvec3 e = half + pad + 1e-6 * (glm::abs(half) + pad);
+  glm::vec3 corners[8];
+  for (int i = 0; i < 8; ++i)
+    corners[i] = glm::vec3(float((i & 1) ? e.x : -e.x), float((i & 2) ? e.y : -e.y), float((i & 4) ? e.z : -e.z));
+  // The six faces, two triangles each, counter-clockwise seen from outside (corner i: bit 0 x,
+  // bit 1 y, bit 2 z): the front faces, as GL's query draws them.
+  static constexpr uint32_t kFaces[36] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                          2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+  return raster_.query_shows(clip_from_world_ * glm::translate(glm::dmat4(1.0), c), corners, kFaces);
 }
 
 }  // namespace occ

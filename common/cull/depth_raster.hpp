@@ -70,6 +70,14 @@ class DepthRaster {
   bool shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
              std::span<const uint32_t> indices, Faces faces, std::span<const uint32_t> across = {});
 
+  // As shows(), for the faces of a query box (counter-clockwise seen from outside: its front
+  // faces are tested, clipped at the near plane): whether GL's occlusion query of those faces
+  // over GL's depth of the occluders drawn here could count a sample. The planes are
+  // moved forward by GL's float rounding only, not by the OR's occluder offset: the occluders
+  // drawn here already lie behind GL's by that offset, as GL's OR draws them for its queries.
+  bool query_shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
+                   std::span<const uint32_t> indices);
+
   // The depth drawn so far (width() x height(), row 0 at the bottom).
   std::span<const float> depth() const { return depth_; }
 
@@ -97,6 +105,7 @@ class DepthRaster {
   std::vector<uint32_t> stamp_;      // clip_[v] is current when stamp_[v] == draw_
   uint32_t draw_ = 0;
   double error_ = 0, error_w_ = 0;   // GL's depth error: error_ + error_w_ / w (set_projection)
+  bool as_query_ = false;            // query_shows() in progress
 };
 
 // The OR's occluders on the CPU: the opaque items' triangles (full detail), copied from the scene
@@ -115,6 +124,11 @@ class CpuOccluders {
   // Whether leaf `node` at full detail may show in front of the depth drawn so far
   // (DepthRaster::shows): false only where every item is opaque and none of its triangles shows.
   bool leaf_shows(uint32_t node);
+  // Whether content inside `box` (world) may show in front of the depth drawn so far: its faces
+  // (the box padded by relative_pad of its farthest camera-relative coordinate, as GL's query
+  // box) tested as GL's query of them would be (DepthRaster::query_shows). As with GL's query,
+  // the caller decides boxes the eye may see into before the near plane (visible_without_query).
+  bool box_shows(const Aabb& box, double relative_pad);
   DepthRaster& raster() { return raster_; }
   uint64_t bytes() const;  // the copies' memory
 
@@ -135,7 +149,19 @@ class CpuOccluders {
   std::vector<MeshCopy> meshes_;
   std::vector<ItemRef> items_;
   glm::dmat4 clip_from_world_{1.0};
+  glm::dvec3 eye_{0.0};
+  double pixel_per_distance_ = 0;  // a pixel's height at unit distance from the eye
   DepthRaster raster_;
 };
+
+// DepthRaster's spans (inner loops), exposed so a test holds the vector versions (AVX2, where
+// the CPU has it) to the scalar ones: pixel k of n at the plane's z0 + dz k, in double, rounded
+// to float. fill(): each kept where greater than row[k] (at most 1); reaches(): whether any is at
+// or in front of row[k]. `vector` false: the scalar loop.
+namespace depth_span {
+bool vector_available();
+void fill(float* row, int64_t n, double z0, double dz, bool vector = true);
+bool reaches(const float* row, int64_t n, double z0, double dz, bool vector = true);
+}  // namespace depth_span
 
 }  // namespace occ

@@ -244,7 +244,7 @@ HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Poli
   if (test_ == HcTest::pyramid) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
 
-void HcQuerier::begin(const Camera& cam) {
+void HcQuerier::begin(const Camera& cam, const float* depth) {
   // cpu_pyramid: the frame just ended decided boxes covering that many pixels; frames whose
   // pyramid would not pay do without it, with a frame with the pyramid every kRetryFrames to look again.
   if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
@@ -254,6 +254,7 @@ void HcQuerier::begin(const Camera& cam) {
   if (use_pyramid_) frames_off_ = 0;
   proven_frame_ = 0;
   cam_ = cam;
+  cpu_depth_ = depth;
   built_ = stale_ = false;
   clear_dirty();
   q_begin(cam);
@@ -285,7 +286,12 @@ void HcQuerier::depth_added(std::span<const Aabb> drawn) {
 void HcQuerier::cpu_refresh() {
   const int w = ctx_.width(), h = ctx_.height();
   if (!built_) {
-    ctx_.read_depth(cpu_pyramid_->level0(w, h));
+    float* level0 = cpu_pyramid_->level0(w, h);
+    if (cpu_depth_)
+      std::copy_n(cpu_depth_, size_t(w) * size_t(h), level0);
+    else
+      ctx_.read_depth(level0);
+    cpu_depth_ = nullptr;
     cpu_pyramid_->build_levels();
     built_ = true;
     stale_ = false;

@@ -128,8 +128,11 @@ class HcQuerier final : public OcclusionQueries {
   HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy);
   HcTest mode() const { return test_; }
 
-  // A frame's tests against a freshly drawn depth buffer, from `cam`.
-  void begin(const Camera& cam);
+  // A frame's tests against a freshly drawn depth buffer, from `cam`. `depth`: that buffer as the
+  // CPU already holds it (what GlContext::write_depth uploaded: width x height, GL's row order,
+  // alive until the frame's first batch resolves); cpu_pyramid builds from it instead of reading
+  // GL's back.
+  void begin(const Camera& cam, const float* depth = nullptr);
   // More depth was drawn into this frame's buffer (occluder fusion); restores the query state.
   // `drawn`: the world boxes of what was drawn (cpu_pyramid then refreshes only their screen
   // rectangles); empty: anything, anywhere.
@@ -161,6 +164,7 @@ class HcQuerier final : public OcclusionQueries {
   std::unique_ptr<BoxBatchCounter> counter_;  // cpu_pyramid only
   std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid only
   std::unique_ptr<DepthPyramid> cpu_pyramid_;  // cpu_pyramid only
+  const float* cpu_depth_ = nullptr;           // begin()'s depth, until the pyramid is built
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
   // cpu_pyramid: pixels drawn since level 0 was read (inclusive; empty when x0 > x1).
