@@ -23,10 +23,8 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
       visible_(r.count()),
       cpu_(cpu) {
   if (choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
-  if (cpu_) {
-    geometry_seen_.assign(r_.hierarchy().size(), 0);
-    raster_queries_.emplace(*cpu_);
-  }
+  if (cpu_) geometry_seen_.assign(r_.hierarchy().size(), 0);
+  if (hc_on_cpu()) raster_queries_.emplace(*cpu_);
   // The OR's occluders must not hide their own query boxes (SceneRenderer::set_occluder_offset):
   // every depth-only draw on this renderer is the OR's or occluder fusion's.
   renderer_.set_occluder_offset(true);
@@ -43,13 +41,15 @@ void CullFrame::restart() {
   if (choices_.visibility_hold > 0) hold_.emplace(r_.hierarchy().size(), uint32_t(choices_.visibility_hold));
 }
 
+bool CullFrame::hc_on_cpu() const { return cpu_ && !config_.lod() && choices_.test == HcTest::by_renderer; }
+
 void CullFrame::begin_or(const Camera& cam, bool occlusion) {
   occlusion_ = occlusion;
   drawn_.assign(r_.count(), 0);
   or_on_cpu_ = cpu_drawn_ = false;
   if (!occlusion_) return;
   // The OR on the CPU: at tau 0 HC tests there too, and this frame leaves GL alone.
-  if (!cpu_ || config_.lod()) renderer_.begin_frame(cam, false);
+  if (!hc_on_cpu()) renderer_.begin_frame(cam, false);
   if (cpu_) {
     cpu_->begin(cam);
     or_on_cpu_ = true;
@@ -170,7 +170,7 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
     // At tau 0 with the OR on the CPU, HC tests there too (RasterQueries): boxes against the
     // CPU's depth, and each leaf whose box shows by its own triangles (what the boxes of long,
     // thin or hollow objects cannot prove hidden); occluder fusion draws there. No GL this frame.
-    const bool on_cpu = or_on_cpu_ && !config_.lod();
+    const bool on_cpu = or_on_cpu_ && hc_on_cpu();
     if (choices_.occluder_fusion)
       o.occluders = [&](std::span<const uint32_t> found) {
         // Restores the GL state the queries need; the pyramid is stale where they were drawn.
@@ -184,7 +184,7 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
         else
           querier_.depth_added(boxes);
       };
-    if (on_cpu) {
+    if (or_on_cpu_ && !config_.lod())
       o.geometry_shows = [this, frame](uint32_t leaf) {
         // A leaf whose triangles showed within the last kGeometryRecheck frames is taken to
         // show still (extra leaves only cost drawing them): tests go to the rest.
@@ -194,11 +194,12 @@ HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
         seen = frame;
         return true;
       };
+    if (on_cpu) {
       raster_queries_->begin(cam);
       hc = step_.hc(frame, visible_, cam, *raster_queries_, o, out, hold_ ? &*hold_ : nullptr);
     } else {
-      // The OR's depth from the CPU (levels of detail: HLODs are not on the CPU), conservative,
-      // into the buffer HC tests, and HC's pyramid starts from it, not from GL's read back.
+      // The OR's depth from the CPU (with levels of detail, or a --hc-test given), conservative,
+      // into the buffer HC tests in GL, and HC's pyramid starts from it, not from GL's read back.
       const float* uploaded = nullptr;
       if (or_on_cpu_ && cpu_drawn_) {
         ctx_.write_depth(cpu_->raster().depth().data());

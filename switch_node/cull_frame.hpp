@@ -79,7 +79,10 @@ class CullFrame {
 
   const CullTotals& totals() const { return totals_; }
   const HcQuerier& querier() const { return querier_; }
-  // HC's tests on the CPU (tau 0 with the OR there); null otherwise.
+  // Whether HC tests on the CPU (RasterQueries): the OR there, tau 0 and --hc-test auto (a
+  // --hc-test given tests in GL against the OR's depth uploaded).
+  bool hc_on_cpu() const;
+  // HC's tests on the CPU (hc_on_cpu()); null otherwise.
   const RasterQueries* raster_queries() const { return raster_queries_ ? &*raster_queries_ : nullptr; }
 
  private:

@@ -445,19 +445,26 @@ class SwitchNode {
     std::string no_cpu;
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
       if (o_.hc.sealed) sealed = find_enclosures(who_, ls.scene, ls.hierarchy);
-      if (o_.hc.or_raster == OrRaster::cpu) cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &no_cpu);
+      if (o_.hc.or_raster != OrRaster::gl) cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &no_cpu);
     });
     g_.sealed = std::move(sealed);
-    if (o_.hc.or_raster == OrRaster::cpu) {
-      if (cpu) {
-        g_.cpu_occluders = std::make_unique<CpuOccluders>(std::move(*cpu));
-        std::cerr << who_ << ": OR on the CPU (--or-raster cpu; " << fixed(double(g_.cpu_occluders->bytes()) / 1048576.0, 1)
-                  << " MB of triangles)\n";
-      } else {
-        std::cerr << who_ << ": OR in GL: " << no_cpu << "\n";
-      }
+    // auto: decided by the renderer now the GL context is known (the copy is dropped for GL).
+    const OrRaster raster = or_raster_for(o_.hc.or_raster, g_.ctx->renderer_class());
+    const std::string chosen = o_.hc.or_raster == OrRaster::by_renderer
+                                   ? "--or-raster auto on a " + std::string(renderer_class_name(g_.ctx->renderer_class())) + " renderer"
+                                   : "--or-raster " + std::string(raster == OrRaster::cpu ? "cpu" : "gl");
+    if (raster == OrRaster::cpu && cpu) {
+      g_.cpu_occluders = std::make_unique<CpuOccluders>(std::move(*cpu));
+      std::cerr << who_ << ": OR on the CPU (" << chosen << "; " << fixed(double(g_.cpu_occluders->bytes()) / 1048576.0, 1)
+                << " MB of triangles)\n";
+    } else if (raster == OrRaster::cpu) {
+      std::cerr << who_ << ": OR in GL (" << chosen << "): " << no_cpu << "\n";
+    } else {
+      std::cerr << who_ << ": OR in GL (" << chosen << ")\n";
     }
-    if (o_.hc.test == HcTest::by_renderer)
+    if (o_.hc.test == HcTest::by_renderer && g_.cpu_occluders && !o_.config.lod())
+      std::cerr << who_ << ": HC on the CPU (--hc-test auto with the OR on the CPU at tau 0)\n";
+    else if (o_.hc.test == HcTest::by_renderer)
       std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))
                 << " (--hc-test auto on a " << renderer_class_name(g_.ctx->renderer_class()) << " renderer)\n";
     mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),

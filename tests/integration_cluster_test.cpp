@@ -200,25 +200,27 @@ TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsRefere
   EXPECT_GT(std::stoul(r->node1_log.substr(from + 2, at - from - 2)), 0u) << r->node1_log;
 }
 
-// The OR on the CPU (--or-raster cpu, common/cull/depth_raster.hpp): node 0 rasterises in GL (the
-// default), node 1 on the CPU, where at tau 0 HC also tests the leaves whose boxes show with
-// their own triangles. The frames are the reference's, node 1 says so at start-up and found
-// leaves hidden that way (pipes: long thin objects whose boxes show past what hides them), node 0
-// neither.
+// The OR on the CPU (common/cull/depth_raster.hpp; --or-raster auto on llvmpipe): node 0 told to
+// rasterise in GL, node 1 by default on the CPU, where at tau 0 HC tests there too, boxes and the
+// leaves whose boxes show by their own triangles. The frames are the reference's, node 1 says so
+// at start-up, tested boxes on the CPU and found leaves hidden by their triangles (pipes: long thin
+// objects whose boxes show past what hides them), node 0 none of that.
 TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
   fs::path dir = fresh_dir("pipes_or_cpu");
   ClusterOptions o = cluster("pipes", "orbit:40");
-  o.node1 = {"--or-raster", "cpu"};
+  o.node0 = {"--or-raster", "gl"};
   const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
   if (!r) return;
-  // "N leaves whose box showed found hidden by their own triangles"
+  // "N leaves whose box showed found hidden by their own triangles", "HC on the CPU: N boxes tested"
   auto hidden = [](const std::string& log) {
     return number_before(log, " leaves whose box showed found hidden by their own triangles");
   };
-  EXPECT_EQ(r->node0_log.find("OR on the CPU"), std::string::npos) << r->node0_log;
+  EXPECT_NE(r->node0_log.find("OR in GL (--or-raster gl)"), std::string::npos) << r->node0_log;
+  EXPECT_EQ(r->node0_log.find("HC on the CPU"), std::string::npos) << r->node0_log;
   EXPECT_EQ(hidden(r->node0_log), 0) << r->node0_log;
-  EXPECT_NE(r->node1_log.find("OR on the CPU (--or-raster cpu"), std::string::npos)
+  EXPECT_NE(r->node1_log.find("OR on the CPU (--or-raster auto on a software renderer"), std::string::npos)
       << r->node1_log;
+  EXPECT_GT(number_before(r->node1_log, " boxes tested, "), 0) << r->node1_log;
   EXPECT_GT(hidden(r->node1_log), 0) << r->node1_log;
 }
 
@@ -236,6 +238,7 @@ TEST(Cluster, HardwareRendererDefaultsQueriesNoTwoPassEqualsReference) {
   for (const std::string* log : {&r->node0_log, &r->node1_log}) {
     EXPECT_NE(log->find("hardware renderer (OCC_RENDERER_CLASS)"), std::string::npos) << *log;
     EXPECT_NE(log->find("HC test queries (--hc-test auto on a hardware renderer)"), std::string::npos) << *log;
+    EXPECT_NE(log->find("OR in GL (--or-raster auto on a hardware renderer)"), std::string::npos) << *log;
     EXPECT_NE(log->find("HC test queries: "), std::string::npos) << *log;  // the summary: what it ran
     EXPECT_EQ(log->find("HC test cpu-pyramid"), std::string::npos) << *log;
   }
@@ -350,6 +353,9 @@ TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   ClusterOptions o = cluster(kCity, path);
   o.all = {"--lod-cache", (dir / "cache").string()};
   o.client = {"--no-images"};
+  // The OR in GL at both: at tau 0 the OR on the CPU (llvmpipe's default) also culls leaves by
+  // their own triangles, which levels of detail do not (the test compares what LODs save).
+  o.node0 = o.node1 = {"--or-raster", "gl"};
   ClusterRun exact = run_cluster(dir / "tau0", o);
   ASSERT_EQ(exact.rvg_code, 0) << exact.rvg_log;
   o.all.insert(o.all.end(), {"--pixel-error", "3"});

@@ -181,9 +181,12 @@ enum class HcOrder {
 // by_renderer (the default, --hc-test auto): queries on a hardware GPU, cpu_pyramid on a software
 // renderer (llvmpipe), chosen when the GL context is known (hc_test_for in common/gl/hzb_query.hpp).
 enum class HcTest { queries, pyramid, cpu_pyramid, by_renderer };
-// Where the OR rasterises V's depth: in GL, or on the CPU (common/cull/depth_raster.hpp; HC then
-// also tests leaves by their own triangles at tau 0).
-enum class OrRaster { gl, cpu };
+// Where the OR rasterises V's depth: in GL, or on the CPU (common/cull/depth_raster.hpp; at tau 0
+// HC then tests there too, boxes and leaves by their own triangles: common/cull/raster_queries.hpp).
+// by_renderer (the default, --or-raster auto): cpu on a software renderer (llvmpipe: GL's own
+// rasteriser runs on the same cores, with shading machinery a depth-only pass does not need), gl
+// on a hardware GPU (or_raster_for in common/gl/hzb_query.hpp).
+enum class OrRaster { gl, cpu, by_renderer };
 
 // How HC searches: the one option set, node-local (not in the config hash: the processes need not
 // agree, the visible set stays a conservative superset either way). The CLI fills it
@@ -198,7 +201,7 @@ struct HcChoices {
   // How each box is tested (common/gl/hzb_query.hpp): by the renderer (cpu_pyramid on llvmpipe,
   // queries on a hardware GPU: no per-frame read-back), or as the flag says.
   HcTest test = HcTest::by_renderer;
-  OrRaster or_raster = OrRaster::gl;
+  OrRaster or_raster = OrRaster::by_renderer;
 };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.

@@ -126,9 +126,9 @@ bool DepthRaster::shows(const glm::dmat4& clip_from_object, std::span<const glm:
 }
 
 bool DepthRaster::query_shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
-                              std::span<const uint32_t> indices) {
+                              std::span<const uint32_t> indices, bool both_sides) {
   as_query_ = true;
-  const bool shown = run(clip_from_object, positions, indices, Faces::ccw, true, {});
+  const bool shown = run(clip_from_object, positions, indices, both_sides ? Faces::both : Faces::ccw, true, {});
   as_query_ = false;
   return shown;
 }
@@ -573,6 +573,9 @@ void CpuOccluders::begin(const Camera& cam) {
   clip_from_world_ = proj * cam.view_rotation() * glm::translate(glm::dmat4(1.0), -cam.eye);
   eye_ = cam.eye;
   pixel_per_distance_ = 2.0 * std::tan(cam.fovy_rad * 0.5) / double(raster_.height());
+  // The eye to the near rectangle's corners, with slack (as BoxQuerier's).
+  const double ty = std::tan(cam.fovy_rad * 0.5), tx = ty * cam.aspect;
+  near_reach_ = cam.near_dist * std::sqrt(1.0 + tx * tx + ty * ty) * (1.0 + 1e-3);
 }
 
 void CpuOccluders::draw_leaf(uint32_t node, uint32_t level) {
@@ -623,7 +626,13 @@ bool CpuOccluders::box_shows(const Aabb& box, double relative_pad) {
   // bit 1 y, bit 2 z): the front faces, as GL's query draws them.
   static constexpr uint32_t kFaces[36] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
                                           2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
-  return raster_.query_shows(clip_from_world_ * glm::translate(glm::dmat4(1.0), c), corners, kFaces);
+  // The padded box within reach of the near rectangle (the eye may be inside it, its front faces
+  // clipped away): both sides, as GL's query then draws them; the eye inside: it shows.
+  const glm::dvec3 gap = glm::max(glm::max(-(c - eye_) - e, (c - eye_) - e), glm::dvec3(0.0));
+  const double gap2 = glm::dot(gap, gap);
+  if (gap2 == 0) return true;
+  return raster_.query_shows(clip_from_world_ * glm::translate(glm::dmat4(1.0), c), corners, kFaces,
+                             gap2 <= near_reach_ * near_reach_);
 }
 
 }  // namespace occ

@@ -71,12 +71,12 @@ class DepthRaster {
              std::span<const uint32_t> indices, Faces faces, std::span<const uint32_t> across = {});
 
   // As shows(), for the faces of a query box (counter-clockwise seen from outside: its front
-  // faces are tested, clipped at the near plane): whether GL's occlusion query of those faces
-  // over GL's depth of the occluders drawn here could count a sample. The planes are
+  // faces are tested, clipped at the near plane, or both sides): whether GL's occlusion query of
+  // those faces over GL's depth of the occluders drawn here could count a sample. The planes are
   // moved forward by GL's float rounding only, not by the OR's occluder offset: the occluders
   // drawn here already lie behind GL's by that offset, as GL's OR draws them for its queries.
   bool query_shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
-                   std::span<const uint32_t> indices);
+                   std::span<const uint32_t> indices, bool both_sides);
 
   // The depth drawn so far (width() x height(), row 0 at the bottom).
   std::span<const float> depth() const { return depth_; }
@@ -151,6 +151,7 @@ class CpuOccluders {
   glm::dmat4 clip_from_world_{1.0};
   glm::dvec3 eye_{0.0};
   double pixel_per_distance_ = 0;  // a pixel's height at unit distance from the eye
+  double near_reach_ = 0;          // the eye to the near rectangle's corners, with slack
   DepthRaster raster_;
 };
 

@@ -231,6 +231,11 @@ HcTest hc_test_for(HcTest test, RendererClass renderer) {
   return renderer == RendererClass::hardware ? HcTest::queries : HcTest::cpu_pyramid;
 }
 
+OrRaster or_raster_for(OrRaster raster, RendererClass renderer) {
+  if (raster != OrRaster::by_renderer) return raster;
+  return renderer == RendererClass::hardware ? OrRaster::gl : OrRaster::cpu;
+}
+
 HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
     : test_(hc_test_for(test, ctx.renderer_class())),
       sample_counts_(sample_counts),

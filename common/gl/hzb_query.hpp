@@ -87,6 +87,8 @@ class GpuDepthPyramid {
 // cpu_pyramid on a software renderer (llvmpipe: reading depth back is a memcpy, queries are
 // rasterised). Any other test is returned as it is. HcQuerier applies it to the test it is given.
 HcTest hc_test_for(HcTest test, RendererClass renderer);
+// --or-raster auto: cpu on a software renderer, gl on a hardware GPU; other choices as given.
+OrRaster or_raster_for(OrRaster raster, RendererClass renderer);
 
 class HcQuerier final : public OcclusionQueries {
  public:

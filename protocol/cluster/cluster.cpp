@@ -125,12 +125,15 @@ void add_hc_options(Cli& cli, HcChoices& c) {
                      "read back to the CPU once a frame proves what it can (boxes occluded and, without "
                      "--visible-pixel-lod, boxes that show), the rest counted by one draw per batch (boxes over "
                      "16384 pixels stay queries). Same results");
-  cli.choice<OrRaster>("or-raster", &c.or_raster, {{"gl", OrRaster::gl}, {"cpu", OrRaster::cpu}},
-                       "where the OR rasterises the visible set's depth: gl; or cpu, a depth-only rasteriser "
-                       "conservative against GL's depth, and at tau 0 HC then also tests each leaf whose box "
-                       "shows with its own triangles (smaller visible sets; more work for the node: "
-                       "docs/results.md). cpu needs the scene's triangles in memory (not streamed within "
-                       "--geometry-budget), else the OR stays in GL. Same frames");
+  cli.choice<OrRaster>("or-raster", &c.or_raster,
+                       {{"auto", OrRaster::by_renderer}, {"gl", OrRaster::gl}, {"cpu", OrRaster::cpu}},
+                       "where the OR rasterises the visible set's depth: auto = by the renderer (cpu on a "
+                       "software renderer such as llvmpipe, gl on a hardware GPU; the start-up says which); "
+                       "gl; cpu = a depth-only rasteriser conservative against GL's depth, and at tau 0 HC then "
+                       "tests there too: boxes against that depth (no GL queries) and each leaf whose box shows "
+                       "by its own triangles (smaller visible sets: docs/results.md). cpu needs the scene's "
+                       "triangles in memory (not streamed within --geometry-budget), else the OR stays in GL. "
+                       "Same frames");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
 }

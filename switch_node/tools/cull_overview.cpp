@@ -72,7 +72,8 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   // The OR on the CPU as the nodes' (--or-raster cpu); one for both cull frames, as each does its
   // OR and HC before the other starts.
   std::optional<CpuOccluders> cpu;
-  if (o.hc.or_raster == OrRaster::cpu) cpu = CpuOccluders::copy(ls.scene, h, o.width, o.height, nullptr);
+  if (or_raster_for(o.hc.or_raster, ctx->renderer_class()) == OrRaster::cpu)
+    cpu = CpuOccluders::copy(ls.scene, h, o.width, o.height, nullptr);
   CpuOccluders* const or_cpu = cpu ? &*cpu : nullptr;
   CullFrame node0(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 1", or_cpu);
   CullFrame node1(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 0", or_cpu);
