@@ -7,6 +7,8 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <stdexcept>
 
 #include "common/camera_path.hpp"
 #include "common/cull/depth_raster.hpp"
@@ -26,6 +28,42 @@ std::string shared_scene(const std::string& rel) {
   const std::string p = std::string(OCC_SHARED_DIR) + "/scenes/" + rel;
   return std::filesystem::exists(p) ? p : "";
 }
+
+// One scene twice: on the CPU (CpuOccluders) and in GL without the occluder offset (the depth of
+// the render client's frame, what HC's answers must hold for; the switch nodes' OR moves its
+// occluders back further), with an occlusion query and the scene's non-empty leaves.
+struct CpuAndGl {
+  Scene scene;
+  Hierarchy h;
+  std::optional<CpuOccluders> cpu;
+  std::unique_ptr<GlContext> ctx;
+  std::unique_ptr<SceneRenderer> renderer;
+  std::unique_ptr<Renderables> r;
+  GLuint query = 0;
+  std::vector<uint32_t> leaves;
+
+  CpuAndGl(const std::string& spec, Viewport vp) : scene(load_scene(spec)), h(Hierarchy::build(scene, {})) {
+    std::string why;
+    cpu = CpuOccluders::copy(scene, h, vp.width, vp.height, &why);
+    if (!cpu) throw std::runtime_error(spec + ": " + why);
+    ctx = GlContext::create(GlBackend::Auto, vp.width, vp.height);
+    renderer = std::make_unique<SceneRenderer>(*ctx, scene, h);
+    r = std::make_unique<Renderables>(h, nullptr);
+    ctx->gl().CreateQueries(GL_SAMPLES_PASSED, 1, &query);
+    for (uint32_t id = 0; id < h.size(); ++id)
+      if (h.node(id).leaf() && h.node(id).item_count > 0) leaves.push_back(id);
+  }
+  ~CpuAndGl() { ctx->gl().DeleteQueries(1, &query); }
+
+  // Samples of leaf `id`'s triangles passing GL's depth test over GL's depth buffer.
+  uint64_t samples(uint32_t id) {
+    const uint32_t ids[1] = {id};
+    renderer->query_renderables(*r, ids, query, GL_GREATER);
+    GLuint64 n = 0;
+    ctx->gl().GetQueryObjectui64v(query, GL_QUERY_RESULT, &n);
+    return n;
+  }
+};
 }  // namespace
 
 TEST(CpuOr, NeverNearerThanGlAndHidesOnlyWhatGlHides) {
@@ -36,24 +74,13 @@ TEST(CpuOr, NeverNearerThanGlAndHidesOnlyWhatGlHides) {
   for (const Viewport vp : {Viewport{203, 117}, Viewport{256, 256}}) {
     for (const auto& [spec, path] : views) {
       SCOPED_TRACE(spec + " " + path + " " + std::to_string(vp.width) + "x" + std::to_string(vp.height));
-      Scene scene = load_scene(spec);
-      const Hierarchy h = Hierarchy::build(scene, {});
-      std::string why;
-      std::optional<CpuOccluders> cpu = CpuOccluders::copy(scene, h, vp.width, vp.height, &why);
-      ASSERT_TRUE(cpu) << why;
-      auto ctx = GlContext::create(GlBackend::Auto, vp.width, vp.height);
-      SceneRenderer renderer(*ctx, scene, h);
-      // No occluder offset: the depth of the render client's frame, what HC's answers must hold for
-      // (the switch nodes' OR moves its occluders back further).
-      const Renderables r(h, nullptr);
-      const GlApi& gl = ctx->gl();
-      GLuint query = 0;
-      gl.CreateQueries(GL_SAMPLES_PASSED, 1, &query);
-      std::vector<uint32_t> leaves;
-      for (uint32_t id = 0; id < h.size(); ++id)
-        if (h.node(id).leaf() && h.node(id).item_count > 0) leaves.push_back(id);
+      CpuAndGl g(spec, vp);
+      std::optional<CpuOccluders>& cpu = g.cpu;
+      SceneRenderer& renderer = *g.renderer;
+      const Renderables& r = *g.r;
+      const std::vector<uint32_t>& leaves = g.leaves;
       size_t nearer = 0, hidden = 0, hidden_but_shown = 0, tested = 0, covered = 0, lost = 0;
-      for (const Camera& cam : load_camera_path(path, scene.bounds(), vp)) {
+      for (const Camera& cam : load_camera_path(path, g.scene.bounds(), vp)) {
         // Occluders: most leaves, every third one left out (so that what is behind the holes shows).
         std::vector<uint32_t> occluders, others;
         for (size_t k = 0; k < leaves.size(); ++k) (k % 3 == 1 ? others : occluders).push_back(leaves[k]);
@@ -61,7 +88,7 @@ TEST(CpuOr, NeverNearerThanGlAndHidesOnlyWhatGlHides) {
         renderer.draw_renderables(r, occluders, SceneRenderer::Mode::DepthOnly);
         cpu->begin(cam);
         for (uint32_t id : occluders) cpu->draw_leaf(id, 0);
-        const std::vector<float> gl_depth = ctx->read_depth();
+        const std::vector<float> gl_depth = g.ctx->read_depth();
         const std::span<const float> cpu_depth = cpu->raster().depth();
         for (size_t p = 0; p < gl_depth.size(); ++p) nearer += cpu_depth[p] > gl_depth[p];
         for (size_t p = 0; p < gl_depth.size(); ++p) {
@@ -72,14 +99,9 @@ TEST(CpuOr, NeverNearerThanGlAndHidesOnlyWhatGlHides) {
           ++tested;
           if (cpu->leaf_shows(id)) continue;
           ++hidden;
-          const uint32_t ids[1] = {id};
-          renderer.query_renderables(r, ids, query, GL_GREATER);
-          GLuint64 samples = 0;
-          gl.GetQueryObjectui64v(query, GL_QUERY_RESULT, &samples);
-          hidden_but_shown += samples > 0;
+          hidden_but_shown += g.samples(id) > 0;
         }
       }
-      gl.DeleteQueries(1, &query);
       EXPECT_EQ(nearer, 0u) << "pixels where the CPU's depth is nearer than GL's";
       EXPECT_EQ(hidden_but_shown, 0u) << "of " << hidden << " leaves found hidden, GL's query saw samples";
       // It must prove something, or the checks above say nothing; and it covers nearly what GL
@@ -105,31 +127,23 @@ TEST(CpuHc, BoxesItFindsOccludedHideTheirContentInGlAsGlsQueriesFind) {
   const Viewport vp{256, 256};
   for (const auto& [spec, path] : views) {
     SCOPED_TRACE(spec + " " + path);
-    Scene scene = load_scene(spec);
+    CpuAndGl g(spec, vp);
     auto look = [](glm::dvec3 eye, glm::dvec3 target, double fovy, double n, double f) {
       return Camera::look_at(eye, target, {0, 1, 0}, fovy, 1.0, n, f);
     };
     const std::vector<Camera> cameras =
-        path != "pinned" ? load_camera_path(path, scene.bounds(), vp)
+        path != "pinned" ? load_camera_path(path, g.scene.bounds(), vp)
                          : std::vector<Camera>{look({-0.02, 1.002, 0.001}, {0, 1.002, 0.001}, 40, 1e-4, 2e5),
                                                look({-0.005, 1.0005, 0.0005}, {0.001, 1.0005, 0.0005}, 60, 1e-4, 2e5),
                                                look({-3, 2, -1}, {5, 1, 0}, 60, 1e-3, 2e5),
                                                look({-4e4, 1e4, -4e4}, {0, 0, 0}, 60, 1.0, 2e5),
                                                look({0.0005, 1.0005, 0.5}, {0.0005, 1.0005, -1}, 90, 1e-5, 1e6)};
-    const Hierarchy h = Hierarchy::build(scene, {});
-    std::optional<CpuOccluders> cpu = CpuOccluders::copy(scene, h, vp.width, vp.height, nullptr);
-    ASSERT_TRUE(cpu);
-    auto ctx = GlContext::create(GlBackend::Auto, vp.width, vp.height);
-    SceneRenderer renderer(*ctx, scene, h);
-    const Renderables r(h, nullptr);
-    const GlApi& gl = ctx->gl();
-    GLuint query = 0;
-    gl.CreateQueries(GL_SAMPLES_PASSED, 1, &query);
-    BoxQuerier boxes(*ctx);
-    RasterQueries rq(*cpu);
-    std::vector<uint32_t> leaves;
-    for (uint32_t id = 0; id < h.size(); ++id)
-      if (h.node(id).leaf() && h.node(id).item_count > 0) leaves.push_back(id);
+    BoxQuerier boxes(*g.ctx);
+    RasterQueries rq(*g.cpu);
+    const Hierarchy& h = g.h;
+    std::optional<CpuOccluders>& cpu = g.cpu;
+    SceneRenderer& renderer = *g.renderer;
+    const std::vector<uint32_t>& leaves = g.leaves;
     size_t tested = 0, hidden = 0, hidden_but_shown = 0, gl_hidden = 0, gl_only = 0, cpu_only = 0;
     for (const Camera& cam : cameras) {
       const Frustum fr = cam.frustum();
@@ -152,7 +166,7 @@ TEST(CpuHc, BoxesItFindsOccludedHideTheirContentInGlAsGlsQueriesFind) {
       }
       // GL's box queries over the CPU's depth, uploaded.
       renderer.begin_frame(cam, false);
-      ctx->write_depth(cpu->raster().depth().data());
+      g.ctx->write_depth(cpu->raster().depth().data());
       boxes.begin(cam);
       for (size_t k = 0; k < others.size(); ++k) {
         const Aabb& box = h.node(others[k]).box;
@@ -178,18 +192,13 @@ TEST(CpuHc, BoxesItFindsOccludedHideTheirContentInGlAsGlsQueriesFind) {
       boxes.end();
       // The leaves' own triangles over GL's depth of the occluders (no offset: the client's frame).
       renderer.begin_frame(cam, false);
-      renderer.draw_renderables(r, occluders, SceneRenderer::Mode::DepthOnly);
+      renderer.draw_renderables(*g.r, occluders, SceneRenderer::Mode::DepthOnly);
       for (size_t k = 0; k < others.size(); ++k) {
         if (!cpu_hidden[k]) continue;
         ++hidden;
-        const uint32_t ids[1] = {others[k]};
-        renderer.query_renderables(r, ids, query, GL_GREATER);
-        GLuint64 samples = 0;
-        gl.GetQueryObjectui64v(query, GL_QUERY_RESULT, &samples);
-        hidden_but_shown += samples > 0;
+        hidden_but_shown += g.samples(others[k]) > 0;
       }
     }
-    gl.DeleteQueries(1, &query);
     std::printf("%s: %zu boxes, %zu occluded on the CPU, %zu by GL's queries (%zu of them not on the CPU, %zu only on it)\n",
                 spec.c_str(), tested, hidden, gl_hidden, gl_only, cpu_only);
     EXPECT_EQ(hidden_but_shown, 0u) << "of " << hidden << " leaves whose boxes were found occluded, GL's query saw samples";
