@@ -169,8 +169,10 @@ TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
   EXPECT_EQ(ors, 8u);
 }
 
-// The default HC test is cpu-pyramid (a depth pyramid read back to the CPU decides what it can,
-// the rest are counted by one draw per batch); occlusion queries stay available. Node 0 with
+// Where the OR stays in GL (here: plant:M streams its geometry within --geometry-budget, so its
+// triangles are not on the CPU) the default HC test on llvmpipe is cpu-pyramid (a depth pyramid
+// read back to the CPU decides what it can, the rest are counted by one draw per batch);
+// occlusion queries stay available. Node 0 with
 // --hc-test queries, node 1 with the default: the reference's frames, node 0 drew no batch and
 // node 1 proved boxes on the CPU and counted others in batch draws.
 TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsReference) {
