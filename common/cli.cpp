@@ -8,6 +8,23 @@
 
 namespace occ {
 
+namespace {
+// `v` as a whole number min..max, else InputError naming --name (`other`: what else it may be).
+long whole_number(const std::string& name, const std::string& v, long min, long max, const std::string& other = "") {
+  size_t used = 0;
+  long n = 0;
+  try {
+    n = std::stol(v, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used == 0 || used != v.size()) throw InputError("--" + name + " '" + v + "': not a whole number" + other);
+  if (n < min || n > max)
+    throw InputError("--" + name + " '" + v + "': must be " + std::to_string(min) + ".." + std::to_string(max) + other);
+  return n;
+}
+}  // namespace
+
 Cli::Cli(std::string program, std::string usage, std::string description)
     : program_(std::move(program)), usage_(std::move(usage)), description_(std::move(description)) {}
 
@@ -27,24 +44,20 @@ void Cli::option(const std::string& name, uint32_t* out, long min, long max, con
   integer(name, out, min, max, help);
 }
 
+void Cli::option(const std::string& name, std::optional<int>* out, long min, long max, const std::string& help) {
+  opts_.push_back({name, "N|auto", help, true,
+                   [=](const std::string& v) {
+                     if (v == "auto")
+                       *out = std::nullopt;
+                     else
+                       *out = int(whole_number(name, v, min, max, " or auto"));
+                   },
+                   *out ? std::to_string(**out) : "auto"});
+}
+
 template <class T>
 void Cli::integer(const std::string& name, T* out, long min, long max, const std::string& help) {
-  opts_.push_back({name, "N", help, true,
-                   [=](const std::string& v) {
-                     size_t used = 0;
-                     long n = 0;
-                     try {
-                       n = std::stol(v, &used);
-                     } catch (...) {
-                       used = 0;
-                     }
-                     if (used == 0 || used != v.size())
-                       throw InputError("--" + name + " '" + v + "': not a whole number");
-                     if (n < min || n > max)
-                       throw InputError("--" + name + " '" + v + "': must be " + std::to_string(min) + ".." +
-                                        std::to_string(max));
-                     *out = T(n);
-                   },
+  opts_.push_back({name, "N", help, true, [=](const std::string& v) { *out = T(whole_number(name, v, min, max)); },
                    std::to_string(*out)});
 }
 

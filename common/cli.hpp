@@ -20,6 +20,8 @@ class Cli {
   void option(const std::string& name, int* out, long min, long max, const std::string& help);
   void option(const std::string& name, uint32_t* out, long min, long max, const std::string& help);
   void option(const std::string& name, double* out, double min, double max, const std::string& help);
+  // A whole number min..max, or the word auto (nullopt: the program decides).
+  void option(const std::string& name, std::optional<int>* out, long min, long max, const std::string& help);
   // One of a fixed set of words.
   void choice(const std::string& name, std::string* out, std::vector<std::string> words, const std::string& help);
   // One of a fixed set of words, each naming a value of T (an enum): typed configuration.

@@ -14,7 +14,7 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
       r_(r),
       sealed_(sealed),
       config_(config),
-      choices_(choices),
+      choices_(choices.resolved(hc_tests_on_cpu(cpu != nullptr, config, choices))),
       vp_(vp),
       other_(std::move(other)),
       step_(r, config, vp.height),
@@ -22,7 +22,7 @@ CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables&
       querier_(ctx, choices.test, config.visible_pixel_lod && config.lod()),
       visible_(r.count()),
       cpu_(cpu) {
-  if (choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
+  if (*choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
   if (cpu_) geometry_seen_.assign(r_.hierarchy().size(), 0);
   if (hc_on_cpu()) raster_queries_.emplace(*cpu_);
   // The OR's occluders must not hide their own query boxes (SceneRenderer::set_occluder_offset):
@@ -38,10 +38,14 @@ void CullFrame::restart() {
   stream_ = DiffReceiver{};
   // The hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
   hold_.reset();
-  if (choices_.visibility_hold > 0) hold_.emplace(r_.hierarchy().size(), uint32_t(choices_.visibility_hold));
+  if (*choices_.visibility_hold > 0) hold_.emplace(r_.hierarchy().size(), uint32_t(*choices_.visibility_hold));
 }
 
-bool CullFrame::hc_on_cpu() const { return cpu_ && !config_.lod() && choices_.test == HcTest::by_renderer; }
+bool hc_tests_on_cpu(bool or_on_cpu, const ClusterConfig& config, const HcChoices& choices) {
+  return or_on_cpu && !config.lod() && choices.test == HcTest::by_renderer;
+}
+
+bool CullFrame::hc_on_cpu() const { return hc_tests_on_cpu(cpu_ != nullptr, config_, choices_); }
 
 void CullFrame::begin_or(const Camera& cam, bool occlusion) {
   occlusion_ = occlusion;

@@ -28,6 +28,10 @@
 
 namespace occ {
 
+// Whether HC tests on the CPU (RasterQueries, no GL in the frame): the OR there (or_on_cpu), tau 0
+// and --hc-test auto (a --hc-test given tests in GL against the OR's depth uploaded).
+bool hc_tests_on_cpu(bool or_on_cpu, const ClusterConfig& config, const HcChoices& choices);
+
 // Summed over the HC frames of one render client.
 struct CullTotals {
   uint64_t frames = 0;              // HC frames
@@ -79,9 +83,9 @@ class CullFrame {
 
   const CullTotals& totals() const { return totals_; }
   const HcQuerier& querier() const { return querier_; }
-  // Whether HC tests on the CPU (RasterQueries): the OR there, tau 0 and --hc-test auto (a
-  // --hc-test given tests in GL against the OR's depth uploaded).
-  bool hc_on_cpu() const;
+  bool hc_on_cpu() const;  // hc_tests_on_cpu() for this frame's OR
+  // The HC choices, their auto settings resolved (HcChoices::resolved).
+  const HcChoices& choices() const { return choices_; }
   // HC's tests on the CPU (hc_on_cpu()); null otherwise.
   const RasterQueries* raster_queries() const { return raster_queries_ ? &*raster_queries_ : nullptr; }
 

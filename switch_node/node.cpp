@@ -443,13 +443,16 @@ class SwitchNode {
     Enclosures sealed;
     std::optional<CpuOccluders> cpu;
     std::string no_cpu;
-    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
-      if (o_.hc.sealed) sealed = find_enclosures(who_, ls.scene, ls.hierarchy);
-      if (o_.hc.or_raster != OrRaster::gl) cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &no_cpu);
-    });
+    OrRaster raster = OrRaster::gl;
+    g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, nullptr,
+                        [&](const LoadedScene& ls, const GlContext& ctx) {
+                          if (o_.hc.sealed) sealed = find_enclosures(who_, ls.scene, ls.hierarchy);
+                          // auto: by the renderer (no copy for a hardware GPU).
+                          raster = or_raster_for(o_.hc.or_raster, ctx.renderer_class());
+                          if (raster == OrRaster::cpu)
+                            cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &no_cpu);
+                        });
     g_.sealed = std::move(sealed);
-    // auto: decided by the renderer now the GL context is known (the copy is dropped for GL).
-    const OrRaster raster = or_raster_for(o_.hc.or_raster, g_.ctx->renderer_class());
     const std::string chosen = o_.hc.or_raster == OrRaster::by_renderer
                                    ? "--or-raster auto on a " + std::string(renderer_class_name(g_.ctx->renderer_class())) + " renderer"
                                    : "--or-raster " + std::string(raster == OrRaster::cpu ? "cpu" : "gl");
@@ -462,9 +465,14 @@ class SwitchNode {
     } else {
       std::cerr << who_ << ": OR in GL (" << chosen << ")\n";
     }
-    if (o_.hc.test == HcTest::by_renderer && g_.cpu_occluders && !o_.config.lod())
-      std::cerr << who_ << ": HC on the CPU (--hc-test auto with the OR on the CPU at tau 0)\n";
-    else if (o_.hc.test == HcTest::by_renderer)
+    if (hc_tests_on_cpu(g_.cpu_occluders != nullptr, o_.config, o_.hc)) {
+      std::cerr << who_ << ": HC on the CPU (--hc-test auto with the OR on the CPU at tau 0)";
+      const HcChoices resolved = o_.hc.resolved(true);
+      if (!o_.hc.adaptive_queries || !o_.hc.visibility_hold)
+        std::cerr << "; adaptive queries " << (*resolved.adaptive_queries ? "on" : "off") << ", visibility hold "
+                  << *resolved.visibility_hold << " (auto: a test here costs less than drawing what they keep)";
+      std::cerr << "\n";
+    } else if (o_.hc.test == HcTest::by_renderer)
       std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))
                 << " (--hc-test auto on a " << renderer_class_name(g_.ctx->renderer_class()) << " renderer)\n";
     mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),

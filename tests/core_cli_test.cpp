@@ -54,3 +54,19 @@ TEST(Cli, ParsesEveryKindAndRejectsBadValuesByName) {
   EXPECT_EQ(error_of(cli, {"prog", "stray"}), "unexpected argument 'stray' (see prog --help)");
   EXPECT_NE(cli.help().find("--camera-mode latest|lockstep"), std::string::npos);
 }
+
+TEST(Cli, AWholeNumberOrAutoIsNulloptForAuto) {
+  std::optional<int> hold;
+  Cli cli("prog", "[options]", "test");
+  cli.option("visibility-hold", &hold, 0, 255, "h");
+  EXPECT_NE(cli.help().find("--visibility-hold N|auto"), std::string::npos);
+  EXPECT_NE(cli.help().find("(default auto)"), std::string::npos);
+  Args three{"prog", "--visibility-hold", "3"};
+  ASSERT_TRUE(cli.parse(three.argc(), three.argv()));
+  EXPECT_EQ(hold, 3);
+  Args automatic{"prog", "--visibility-hold", "auto"};
+  ASSERT_TRUE(cli.parse(automatic.argc(), automatic.argv()));
+  EXPECT_EQ(hold, std::nullopt);
+  EXPECT_EQ(error_of(cli, {"prog", "--visibility-hold", "x"}), "--visibility-hold 'x': not a whole number or auto");
+  EXPECT_EQ(error_of(cli, {"prog", "--visibility-hold", "256"}), "--visibility-hold '256': must be 0..255 or auto");
+}

@@ -188,7 +188,7 @@ void occluded_half_walk(FakeQueries& fast, CullStats& plain, CullStats& skip,
       fast.visible_points.resize(16);
     }
     auto truth = hardware_cull_lod(h, cam, truth_q, sel, {.stats = &plain});
-    auto v = hardware_cull_lod(h, cam, fast, sel, {.skipper = &skipper, .stats = &skip});
+    auto v = hardware_cull_lod(h, cam, fast, sel, {.choices = {.adaptive_queries = true}, .skipper = &skipper, .stats = &skip});
     check(frame, v, truth);
   }
 }
@@ -259,7 +259,7 @@ TEST(QuerySkipper, HeavyLeavesAreQueriedEveryTime) {
   for (uint32_t id = 0; id < h.size(); ++id)
     if (h.node(id).leaf() && h.node(id).item_count) expected.push_back(id);
   for (int frame = 0; frame < kFrames; ++frame) {
-    auto v = hardware_cull_lod(h, cam, q, sel, {.skipper = &skipper});
+    auto v = hardware_cull_lod(h, cam, q, sel, {.choices = {.adaptive_queries = true}, .skipper = &skipper});
     EXPECT_EQ(v, expected) << "frame " << frame;
   }
   int heavy_leaves = 0, light_leaves = 0;
@@ -280,3 +280,21 @@ TEST(QuerySkipper, HeavyLeavesAreQueriedEveryTime) {
   EXPECT_EQ(light_leaves, 8);
 }
 
+
+// --adaptive-queries and --visibility-hold at auto: off where HC tests on the CPU, on (a hold of
+// kAutoHoldFrames) where it tests in GL; a setting given stays.
+TEST(HcChoices, AutoSettingsDependOnWhereHcTestsAndGivenOnesStay) {
+  const HcChoices automatic;
+  EXPECT_EQ(automatic.resolved(true).adaptive_queries, false);
+  EXPECT_EQ(automatic.resolved(true).visibility_hold, 0);
+  EXPECT_EQ(automatic.resolved(false).adaptive_queries, true);
+  EXPECT_EQ(automatic.resolved(false).visibility_hold, HcChoices::kAutoHoldFrames);
+  const HcChoices given{.adaptive_queries = true, .visibility_hold = 5};
+  for (bool on_cpu : {false, true}) {
+    EXPECT_EQ(given.resolved(on_cpu).adaptive_queries, true);
+    EXPECT_EQ(given.resolved(on_cpu).visibility_hold, 5);
+  }
+  const HcChoices off{.adaptive_queries = false, .visibility_hold = 0};
+  EXPECT_EQ(off.resolved(false).adaptive_queries, false);
+  EXPECT_EQ(off.resolved(false).visibility_hold, 0);
+}

@@ -135,6 +135,39 @@ TEST(Hzb, FootprintFlagsBoxesAtTheNearPlaneAndOffscreen) {
   EXPECT_NEAR(fp.nearest_depth, 1.0 * (100 - 4) / (4 * 99.0), 1e-6);
 }
 
+// What occluder fusion redrew (PixelRect): the union of the boxes' footprints, the whole viewport
+// for a box the near plane cuts, nothing for one off screen; touches() as the footprints overlap.
+TEST(Hzb, RedrawnPixelsAreTheUnionOfTheDrawnBoxesFootprints) {
+  Camera cam = Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90, 1, 1, 100);
+  const Viewport vp{64, 64};
+  PixelRect r;
+  EXPECT_TRUE(r.empty());
+  r.add_box({{50, -1, -6}, {60, 1, -5}}, cam, vp);  // off screen
+  EXPECT_TRUE(r.empty());
+  const Aabb left{{-3, -1, -6}, {-2, 1, -5}}, right{{2, -1, -6}, {3, 1, -5}}, middle{{-0.1f, -0.1f, -6}, {0.1f, 0.1f, -5}};
+  r.add_box(left, cam, vp);
+  const BoxFootprint l = box_footprint(left, cam, vp), m = box_footprint(middle, cam, vp);
+  EXPECT_EQ(r.x0, l.x0);
+  EXPECT_EQ(r.x1, l.x1);
+  EXPECT_FALSE(r.touches(m));  // between the two, not yet covered
+  r.add_box(right, cam, vp);
+  const BoxFootprint rt = box_footprint(right, cam, vp);
+  EXPECT_EQ(r.x0, l.x0);
+  EXPECT_EQ(r.x1, rt.x1);
+  EXPECT_EQ(r.y0, std::min(l.y0, rt.y0));
+  EXPECT_EQ(r.y1, std::max(l.y1, rt.y1));
+  EXPECT_TRUE(r.touches(m));  // inside the union's rectangle
+  EXPECT_DOUBLE_EQ(r.pixels(), double(r.x1 - r.x0 + 1) * double(r.y1 - r.y0 + 1));
+  r.add_box({{-1, -1, -2}, {1, 1, 1}}, cam, vp);  // the near plane cuts it
+  EXPECT_EQ(r.x0, 0);
+  EXPECT_EQ(r.y0, 0);
+  EXPECT_EQ(r.x1, 63);
+  EXPECT_EQ(r.y1, 63);
+  r.clear();
+  EXPECT_TRUE(r.empty());
+  EXPECT_FALSE(r.touches(m));
+}
+
 // ---- The HC pyramid probe (issue 16): level choice, rectangle, depth bound; GL-free.
 
 TEST(HzbProbe, LevelCountHalvesRoundingUpToOneTexel) {

@@ -235,9 +235,11 @@ TEST_P(BoxQuerierOffset, BoxBehindOccluderHasNoSamplesBesideAndInFrontHave) {
 INSTANTIATE_TEST_SUITE_P(NearAndFarFromOrigin, BoxQuerierOffset, testing::Values(0.0, 1e7),
                          [](const auto& info) { return info.param == 0.0 ? "AtOrigin" : "At1e7"; });
 
-TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
-  // Pins the documented limitation: the visible occluder lies inside the box, but every box face
-  // the eye can see is behind it. Callers must decide such boxes on the CPU.
+TEST(BoxQuerier, EyeInsideBoxCountsTheViewportWithoutDrawing) {
+  // The visible occluder lies inside the box, and every box face the eye can see is behind it: a
+  // query drawn would count nothing. A padded box within reach of the near rectangle is not drawn
+  // and counts the viewport's pixels (box_query.hpp), in a batch too; the traversal decides the
+  // unpadded box on the CPU first (visible_without_query).
   OccluderFixture f(glm::dvec3(0.0));
   Scene big;
   big.meshes.push_back(quad_mesh());
@@ -250,9 +252,20 @@ TEST(BoxQuerier, EyeInsideBoxCanReportZeroSamplesThoughContentShows) {
   q.begin(f.cam);
   const Aabb around_eye{glm::dvec3(-10), glm::dvec3(10)};
   ASSERT_TRUE(around_eye.contains(f.cam.eye));
-  EXPECT_EQ(q.result(q.issue(around_eye)), 0u);
-  EXPECT_TRUE(visible_without_query(around_eye, f.cam));
+  const uint64_t viewport = uint64_t(f.ctx->width()) * uint64_t(f.ctx->height());
+  const uint32_t handle = q.issue(around_eye);
+  EXPECT_TRUE(q.ready(handle));
+  EXPECT_EQ(q.result(handle), viewport);
+  EXPECT_EQ(q.queries_issued(), 1u);
+  q.reset();
   q.end();
+  for (bool exact : {false, true}) {
+    BoxBatchCounter batch(*f.ctx, exact);
+    batch.begin(f.cam);
+    EXPECT_EQ(batch.result(batch.issue(around_eye)), exact ? viewport : 1u);
+    batch.end();
+  }
+  EXPECT_TRUE(visible_without_query(around_eye, f.cam));
 }
 
 // Issue 16: the geometry goes to GL in small segments (hundreds here) and, with Upload::release,

@@ -206,7 +206,8 @@ TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsRefere
 // rasterise in GL, node 1 by default on the CPU, where at tau 0 HC tests there too, boxes and the
 // leaves whose boxes show by their own triangles. The frames are the reference's, node 1 says so
 // at start-up, tested boxes on the CPU and found leaves hidden by their triangles (pipes: long thin
-// objects whose boxes show past what hides them), node 0 none of that.
+// objects whose boxes show past what hides them), node 0 none of that. Adaptive queries and the
+// visibility hold at auto: off on node 1 (HC on the CPU), on node 0 (HC in GL), which skips tests.
 TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
   fs::path dir = fresh_dir("pipes_or_cpu");
   ClusterOptions o = cluster("pipes", "orbit:40");
@@ -224,6 +225,16 @@ TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
       << r->node1_log;
   EXPECT_GT(number_before(r->node1_log, " boxes tested, "), 0) << r->node1_log;
   EXPECT_GT(hidden(r->node1_log), 0) << r->node1_log;
+  EXPECT_NE(r->node1_log.find("HC on the CPU (--hc-test auto with the OR on the CPU at tau 0); adaptive queries off, "
+                              "visibility hold 0 (auto"),
+            std::string::npos)
+      << r->node1_log;
+  // "(N more skipped by adaptive queries, ...; M renderables kept by the visibility hold; ..."
+  auto skipped = [](const std::string& log) { return number_before(log, " more skipped by adaptive queries"); };
+  auto held = [](const std::string& log) { return number_before(log, " renderables kept by the visibility hold"); };
+  EXPECT_EQ(skipped(r->node1_log), 0) << r->node1_log;
+  EXPECT_EQ(held(r->node1_log), 0) << r->node1_log;
+  EXPECT_GT(skipped(r->node0_log), 0) << r->node0_log;
 }
 
 // Defaults by renderer class (issue 34): with every process told it runs on a hardware GPU

@@ -80,7 +80,7 @@ class LodTraversal {
         sel_(sel),
         o_(o),
         st_(o.stats ? *o.stats : local_),
-        skipper_(o.choices.adaptive_queries ? o.skipper : nullptr),
+        skipper_(o.choices.adaptive_queries.value_or(false) ? o.skipper : nullptr),
         enclosures_(o.choices.sealed ? o.enclosures : nullptr),
         occluders_(o.choices.occluder_fusion ? o.occluders : nullptr),
         fr_(cam.frustum()),

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -194,14 +195,28 @@ enum class OrRaster { gl, cpu, by_renderer };
 // (switch_node/cull_frame.hpp); SwitchStep::hc and hardware_cull_lod read it through HcOptions.
 struct HcChoices {
   HcOrder order = HcOrder::near_first;
-  bool adaptive_queries = true;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
+  // Adaptive queries and the visibility hold keep in V what a fresh test might drop (conservative),
+  // to save tests; nullopt: auto (resolved()).
+  std::optional<bool> adaptive_queries = std::nullopt;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
   bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
   bool sealed = true;            // skip what is sealed inside solids (HcOptions::enclosures)
-  int visibility_hold = 2;       // frames a node found visible stays in V (VisibilityHold; 0 off)
+  std::optional<int> visibility_hold = std::nullopt;  // frames a node found visible stays in V (VisibilityHold; 0 off)
   // How each box is tested (common/gl/hzb_query.hpp): by the renderer (cpu_pyramid on llvmpipe,
   // queries on a hardware GPU: no per-frame read-back), or as the flag says.
   HcTest test = HcTest::by_renderer;
   OrRaster or_raster = OrRaster::by_renderer;
+
+  // The auto settings for where HC tests. Saving a test pays where a test is dear (a GL query or
+  // box draw: adaptive queries on, a hold of 2 frames), not where HC tests on the CPU (tests_on_cpu:
+  // a pyramid probe, then the box's faces): there what they keep costs the render client's draw
+  // more than the tests cost the node (both off; docs/results.md "What HC keeps").
+  HcChoices resolved(bool tests_on_cpu) const {
+    HcChoices c = *this;
+    if (!c.adaptive_queries) c.adaptive_queries = !tests_on_cpu;
+    if (!c.visibility_hold) c.visibility_hold = tests_on_cpu ? 0 : kAutoHoldFrames;
+    return c;
+  }
+  static constexpr int kAutoHoldFrames = 2;
 };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.

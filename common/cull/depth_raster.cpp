@@ -126,9 +126,9 @@ bool DepthRaster::shows(const glm::dmat4& clip_from_object, std::span<const glm:
 }
 
 bool DepthRaster::query_shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
-                              std::span<const uint32_t> indices, bool both_sides) {
+                              std::span<const uint32_t> indices) {
   as_query_ = true;
-  const bool shown = run(clip_from_object, positions, indices, both_sides ? Faces::both : Faces::ccw, true, {});
+  const bool shown = run(clip_from_object, positions, indices, Faces::ccw, true, {});
   as_query_ = false;
   return shown;
 }
@@ -626,13 +626,12 @@ bool CpuOccluders::box_shows(const Aabb& box, double relative_pad) {
   // bit 1 y, bit 2 z): the front faces, as GL's query draws them.
   static constexpr uint32_t kFaces[36] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
                                           2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
-  // The padded box within reach of the near rectangle (the eye may be inside it, its front faces
-  // clipped away): both sides, as GL's query then draws them; the eye inside: it shows.
+  // The padded box within reach of the near rectangle (the eye may be inside it, the near plane
+  // may cut away its front faces where what it holds lies beyond the plane): it shows, as GL's
+  // query counts it (BoxQuerier).
   const glm::dvec3 gap = glm::max(glm::max(-(c - eye_) - e, (c - eye_) - e), glm::dvec3(0.0));
-  const double gap2 = glm::dot(gap, gap);
-  if (gap2 == 0) return true;
-  return raster_.query_shows(clip_from_world_ * glm::translate(glm::dmat4(1.0), c), corners, kFaces,
-                             gap2 <= near_reach_ * near_reach_);
+  if (glm::dot(gap, gap) <= near_reach_ * near_reach_) return true;
+  return raster_.query_shows(clip_from_world_ * glm::translate(glm::dmat4(1.0), c), corners, kFaces);
 }
 
 }  // namespace occ

@@ -71,12 +71,12 @@ class DepthRaster {
              std::span<const uint32_t> indices, Faces faces, std::span<const uint32_t> across = {});
 
   // As shows(), for the faces of a query box (counter-clockwise seen from outside: its front
-  // faces are tested, clipped at the near plane, or both sides): whether GL's occlusion query of
+  // faces are tested, clipped at the near plane): whether GL's occlusion query of
   // those faces over GL's depth of the occluders drawn here could count a sample. The planes are
   // moved forward by GL's float rounding only, not by the OR's occluder offset: the occluders
   // drawn here already lie behind GL's by that offset, as GL's OR draws them for its queries.
   bool query_shows(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
-                   std::span<const uint32_t> indices, bool both_sides);
+                   std::span<const uint32_t> indices);
 
   // The depth drawn so far (width() x height(), row 0 at the bottom).
   std::span<const float> depth() const { return depth_; }
@@ -126,8 +126,8 @@ class CpuOccluders {
   bool leaf_shows(uint32_t node);
   // Whether content inside `box` (world) may show in front of the depth drawn so far: its faces
   // (the box padded by relative_pad of its farthest camera-relative coordinate, as GL's query
-  // box) tested as GL's query of them would be (DepthRaster::query_shows). As with GL's query,
-  // the caller decides boxes the eye may see into before the near plane (visible_without_query).
+  // box) tested as GL's query of them would be (DepthRaster::query_shows); the padded box within
+  // reach of the near rectangle shows, as GL's query counts it (common/gl/box_query.hpp).
   bool box_shows(const Aabb& box, double relative_pad);
   DepthRaster& raster() { return raster_; }
   uint64_t bytes() const;  // the copies' memory

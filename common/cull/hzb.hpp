@@ -9,6 +9,7 @@
 // strictly smaller (farther) than the farthest occluder depth over every texel its screen
 // rectangle touches: conservative, like an occlusion query that needs one passing sample.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -28,6 +29,35 @@ struct BoxFootprint {
 // near plane (the caller must treat the box as visible). Offscreen: the rectangle misses the
 // viewport or the box lies beyond the far plane.
 BoxFootprint box_footprint(const Aabb& box, const Camera& cam, const Viewport& vp);
+
+// Pixels [x0, x1] x [y0, y1] of a viewport (inclusive; empty when x0 > x1) that grow with what is
+// drawn: where a depth pyramid is behind its depth buffer after occluder fusion drew.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+  bool empty() const { return x0 > x1 || y0 > y1; }
+  void clear() { *this = PixelRect{}; }
+  void add(const PixelRect& r) {
+    if (r.empty()) return;
+    if (empty()) {
+      *this = r;
+      return;
+    }
+    x0 = std::min(x0, r.x0), y0 = std::min(y0, r.y0), x1 = std::max(x1, r.x1), y1 = std::max(y1, r.y1);
+  }
+  // Where a draw inside `box` may touch the viewport: its footprint, the whole viewport where
+  // the near plane cuts the box, nothing where it is off screen.
+  void add_box(const Aabb& box, const Camera& cam, const Viewport& vp) {
+    const BoxFootprint fp = box_footprint(box, cam, vp);
+    if (fp.kind == BoxFootprint::Kind::NearPlane) add({0, 0, vp.width - 1, vp.height - 1});
+    if (fp.kind == BoxFootprint::Kind::OnScreen) add({fp.x0, fp.y0, fp.x1, fp.y1});
+  }
+  // Whether `fp` (not off screen) may touch these pixels.
+  bool touches(const BoxFootprint& fp) const {
+    if (empty() || fp.kind == BoxFootprint::Kind::Offscreen) return false;
+    return fp.kind == BoxFootprint::Kind::NearPlane || !(fp.x1 < x0 || fp.x0 > x1 || fp.y1 < y0 || fp.y0 > y1);
+  }
+  double pixels() const { return empty() ? 0.0 : double(x1 - x0 + 1) * double(y1 - y0 + 1); }
+};
 
 // ---- The switch nodes' HC pyramid test (issue 16; GPU side in common/gl/hzb_query.*): the same
 // pyramid, built on the GPU from HC's own depth buffer, proves boxes occluded before any occlusion

@@ -19,43 +19,26 @@ void RasterQueries::begin(const Camera& cam) {
   const std::span<const float> d = r.depth();
   std::copy(d.begin(), d.end(), pyramid_.level0(r.width(), r.height()));
   pyramid_.build_levels();
-  dirty_x0_ = dirty_y0_ = 0;
-  dirty_x1_ = dirty_y1_ = -1;
+  dirty_.clear();
   answers_.clear();
 }
 
 void RasterQueries::depth_added(std::span<const Aabb> drawn) {
-  const DepthRaster& r = occ_.raster();
-  const int w = r.width(), h = r.height();
-  for (const Aabb& box : drawn) {
-    const BoxFootprint fp = box_footprint(box, cam_, {w, h});  // widened by a pixel each side
-    int x0 = 0, y0 = 0, x1 = w - 1, y1 = h - 1;
-    if (fp.kind == BoxFootprint::Kind::Offscreen) continue;
-    if (fp.kind == BoxFootprint::Kind::OnScreen) {
-      x0 = std::max(fp.x0, 0), y0 = std::max(fp.y0, 0), x1 = std::min(fp.x1, w - 1), y1 = std::min(fp.y1, h - 1);
-      if (x0 > x1 || y0 > y1) continue;
-    }
-    const bool empty = dirty_x0_ > dirty_x1_;
-    dirty_x0_ = empty ? x0 : std::min(dirty_x0_, x0);
-    dirty_y0_ = empty ? y0 : std::min(dirty_y0_, y0);
-    dirty_x1_ = empty ? x1 : std::max(dirty_x1_, x1);
-    dirty_y1_ = empty ? y1 : std::max(dirty_y1_, y1);
-  }
+  for (const Aabb& box : drawn) dirty_.add_box(box, cam_, {occ_.raster().width(), occ_.raster().height()});
 }
 
 bool RasterQueries::pyramid_hides(const Aabb& box) {
-  if (dirty_x0_ <= dirty_x1_) {  // level 0 from the raster where fusion drew, the levels above it
+  if (!dirty_.empty()) {  // level 0 from the raster where fusion drew, the levels above it
     const DepthRaster& r = occ_.raster();
     const int w = r.width();
     float* level0 = pyramid_.level0(w, r.height());
-    for (int y = dirty_y0_; y <= dirty_y1_; ++y) {
+    for (int y = dirty_.y0; y <= dirty_.y1; ++y) {
       const size_t row = size_t(y) * size_t(w);
-      std::copy(r.depth().begin() + ptrdiff_t(row + size_t(dirty_x0_)), r.depth().begin() + ptrdiff_t(row + size_t(dirty_x1_) + 1),
-                level0 + row + size_t(dirty_x0_));
+      std::copy(r.depth().begin() + ptrdiff_t(row + size_t(dirty_.x0)), r.depth().begin() + ptrdiff_t(row + size_t(dirty_.x1) + 1),
+                level0 + row + size_t(dirty_.x0));
     }
-    pyramid_.build_levels(dirty_x0_, dirty_y0_, dirty_x1_, dirty_y1_);
-    dirty_x0_ = dirty_y0_ = 0;
-    dirty_x1_ = dirty_y1_ = -1;
+    pyramid_.build_levels(dirty_.x0, dirty_.y0, dirty_.x1, dirty_.y1);
+    dirty_.clear();
   }
   const PyramidProbe p = pyramid_probe(box, cam_, {pyramid_.width(), pyramid_.height()}, kRelativePad, kSpan);
   if (p.kind == PyramidProbe::Kind::no_samples || (p.kind == PyramidProbe::Kind::probe && pyramid_.occludes(p))) {

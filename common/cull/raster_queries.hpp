@@ -50,7 +50,7 @@ class RasterQueries final : public OcclusionQueries {
   CpuOccluders& occ_;
   Camera cam_;
   DepthPyramid pyramid_;
-  int dirty_x0_ = 0, dirty_y0_ = 0, dirty_x1_ = -1, dirty_y1_ = -1;  // level 0 behind the raster here
+  PixelRect dirty_;  // level 0 behind the raster here
   std::vector<uint8_t> answers_;
   Stats stats_;
 };

@@ -70,7 +70,7 @@ void main() {
 )";
 
 // The box as both classes draw it: camera-relative, padded, rounded to float; `near` when the
-// padded box is within reach of the near rectangle (both sides are drawn then).
+// padded box is within reach of the near rectangle (not drawn then: it counts as visible).
 //
 // The pad is the larger of a relative epsilon (float rounding of the corners) and
 // BoxQuerier::kPadSubpixels sub-pixel steps at the distance of the box's farthest corner: moving
@@ -146,6 +146,9 @@ void BoxDrawState::begin(const GlApi& gl, const Camera& cam) {
   eye = cam.eye;
   reach = near_reach(cam);
   pixel_pad = pad_per_unit_distance(gl, cam, subpixel_step);
+  GLint viewport[4] = {0, 0, 0, 0};
+  gl.GetIntegerv(GL_VIEWPORT, viewport);
+  pixels = uint64_t(std::max(viewport[2], 1)) * uint64_t(std::max(viewport[3], 1));
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl.ProgramUniformMatrix4fv(program, view_projection_loc, 1, GL_FALSE, glm::value_ptr(view_projection));
   query_state(gl, program, vao);
@@ -178,16 +181,15 @@ uint32_t BoxQuerier::issue(const Aabb& box) {
   }
   const uint32_t handle = next_++;
   ++queries_issued_;
+  if (near_.size() < pool_.size()) near_.resize(pool_.size());
+  const DrawnBox b = box.empty() ? DrawnBox{} : drawn_box(box, box_.eye, box_.reach, box_.pixel_pad);
+  near_[handle] = !box.empty() && b.near;
+  if (near_[handle]) return handle;  // visible, not drawn
   gl_.BeginQuery(GL_SAMPLES_PASSED, pool_[handle]);
   if (!box.empty()) {
-    const DrawnBox b = drawn_box(box, box_.eye, box_.reach, box_.pixel_pad);
     gl_.ProgramUniform3f(box_.program, min_loc_, b.lo.x, b.lo.y, b.lo.z);
     gl_.ProgramUniform3f(box_.program, max_loc_, b.hi.x, b.hi.y, b.hi.z);
-    // The padded box within reach of the near rectangle: its front faces may be clipped where
-    // the back faces are not (or the eye may be inside it): draw both sides, as without culling.
-    if (b.near) gl_.Disable(GL_CULL_FACE);
     gl_.DrawArrays(GL_TRIANGLES, 0, 36);
-    if (b.near) gl_.Enable(GL_CULL_FACE);
   }
   gl_.EndQuery(GL_SAMPLES_PASSED);
   return handle;
@@ -197,6 +199,7 @@ uint64_t BoxQuerier::result(uint32_t handle) {
   if (handle >= next_)
     throw std::out_of_range("BoxQuerier: query handle " + std::to_string(handle) +
                             " not issued in this batch (" + std::to_string(next_) + " issued)");
+  if (near_[handle]) return box_.pixels;
   GLuint64 samples = 0;
   gl_.GetQueryObjectui64v(pool_[handle], GL_QUERY_RESULT, &samples);
   return samples;
@@ -204,6 +207,7 @@ uint64_t BoxQuerier::result(uint32_t handle) {
 
 bool BoxQuerier::ready(uint32_t handle) const {
   if (handle >= next_) throw std::out_of_range("BoxQuerier: query handle not issued in this batch");
+  if (near_[handle]) return true;
   GLuint64 available = 0;
   gl_.GetQueryObjectui64v(pool_[handle], GL_QUERY_RESULT_AVAILABLE, &available);
   return available != 0;
@@ -235,30 +239,21 @@ uint32_t BoxBatchCounter::issue(const Aabb& box) {
 void BoxBatchCounter::draw() {
   drawn_ = true;
   counts_.assign(boxes_.size(), 0);
-  // Buffer slots: the culled (far) boxes first, then those drawn on both sides; empty ones none.
+  // Buffer slots: the boxes drawn; empty ones none, near ones none (the viewport's pixels, as BoxQuerier).
   slot_.assign(boxes_.size(), ~0u);
   std::vector<glm::vec4> data;
   data.reserve(2 * boxes_.size());
-  std::vector<DrawnBox> near;
-  std::vector<uint32_t> near_index;
   uint32_t n = 0;
   for (uint32_t i = 0; i < boxes_.size(); ++i) {
     if (boxes_[i].empty()) continue;
     const DrawnBox b = drawn_box(boxes_[i], box_.eye, box_.reach, box_.pixel_pad);
     if (b.near) {
-      near.push_back(b);
-      near_index.push_back(i);
+      counts_[i] = exact_ ? box_.pixels : 1;
       continue;
     }
     slot_[i] = n++;
     data.emplace_back(b.lo, 0.0f);
     data.emplace_back(b.hi, 0.0f);
-  }
-  const uint32_t far_count = n;
-  for (size_t k = 0; k < near.size(); ++k) {
-    slot_[near_index[k]] = n++;
-    data.emplace_back(near[k].lo, 0.0f);
-    data.emplace_back(near[k].hi, 0.0f);
   }
   if (n == 0) return;
   if (n > capacity_) {
@@ -273,16 +268,8 @@ void BoxBatchCounter::draw() {
   gl_.BindVertexArray(box_.vao);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, boxes_buf_);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, counts_buf_);
-  if (far_count > 0) {
-    gl_.ProgramUniform1i(box_.program, first_loc_, 0);
-    gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * far_count));
-  }
-  if (n > far_count) {
-    gl_.Disable(GL_CULL_FACE);
-    gl_.ProgramUniform1i(box_.program, first_loc_, GLint(far_count));
-    gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * (n - far_count)));
-    gl_.Enable(GL_CULL_FACE);
-  }
+  gl_.ProgramUniform1i(box_.program, first_loc_, 0);
+  gl_.DrawArrays(GL_TRIANGLES, 0, GLsizei(36 * n));
   ++draws_;
   gl_.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   std::vector<uint32_t> got(n);

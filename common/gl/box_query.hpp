@@ -11,12 +11,12 @@
 //
 // Front faces suffice: with the eye outside the box they cover its whole silhouette and lie in
 // front of its back faces, so a back-face fragment passes the depth test only where a front-face
-// one does. When the padded box comes within reach of the near rectangle (the eye inside it, or
-// its front faces possibly clipped by the near plane) both sides are drawn, as before.
-//
-// Limitation (callers decide these on the CPU, see visible_without_query): if the eye is inside
-// a box, or the box crosses the near plane, the query rasterises only far faces or nothing and
-// may return 0 samples although content inside the box is visible.
+// one does. A padded box within reach of the near rectangle (the eye inside it, or its front
+// faces possibly clipped by the near plane) is not drawn and counts the viewport's pixels:
+// the near plane may cut away its front faces where what the box holds lies beyond the plane,
+// and its back faces lie behind that content (hard:walls, the eye 0.002 before a wall with the
+// near plane at 0.001: the pad put the wall's flat box's front face before the plane, its back
+// face behind the wall drawn as an occluder, and the wall was culled; docs/hard_cases.md).
 //
 // Batched use: begin(cam); issue() a whole level; result() each handle (the first waits for the
 // GPU); reset() (or end_batch()) to recycle the handles; end() restores colour/depth writes.
@@ -46,6 +46,7 @@ struct BoxDrawState {
   glm::dvec3 eye{0.0};
   double reach = 0;      // eye to the near rectangle's corners, with slack
   double pixel_pad = 0;  // pad per unit of distance from the eye (BoxQuerier::kPadSubpixels)
+  uint64_t pixels = 0;   // the viewport's: what a near box counts
   // Takes `linked_program` (it must have u_view_projection) and makes the vertex array.
   void create(const GlApi& gl, GLuint linked_program);
   void destroy(const GlApi& gl);
@@ -99,12 +100,13 @@ class BoxQuerier final : public BoxTester {
  private:
   GLint min_loc_ = -1, max_loc_ = -1;
   std::vector<GLuint> pool_;  // GL_SAMPLES_PASSED query objects
+  std::vector<uint8_t> near_; // per handle of the batch: a near box (not drawn: the viewport's pixels)
   uint32_t next_ = 0;         // first unused query of the pool in this batch
 };
 
 // The same test for a whole batch in one draw (issue 16, "tighter batching"): issue() records the
-// box; the first result() draws every recorded box in one or two draw calls (boxes within reach of
-// the near rectangle without culling, as BoxQuerier) from a buffer, with a fragment shader that
+// box; the first result() draws every recorded box in one draw call (boxes within reach of the
+// near rectangle not: they count as BoxQuerier's) from a buffer, with a fragment shader that
 // runs only for fragments passing the depth test (early fragment tests) and counts them in its
 // box's counter in a shader storage buffer; the counters are read back once. Same boxes, same
 // triangles, same depth test as BoxQuerier (a single-sampled framebuffer; depth writes off, so

@@ -268,19 +268,8 @@ void HcQuerier::begin(const Camera& cam, const float* depth) {
 void HcQuerier::depth_added(std::span<const Aabb> drawn) {
   stale_ = built_;
   const int w = ctx_.width(), h = ctx_.height();
-  auto grow = [&](int x0, int y0, int x1, int y1) {
-    const bool empty = dirty_x0_ > dirty_x1_;
-    dirty_x0_ = empty ? x0 : std::min(dirty_x0_, x0);
-    dirty_y0_ = empty ? y0 : std::min(dirty_y0_, y0);
-    dirty_x1_ = empty ? x1 : std::max(dirty_x1_, x1);
-    dirty_y1_ = empty ? y1 : std::max(dirty_y1_, y1);
-  };
-  if (drawn.empty()) grow(0, 0, w - 1, h - 1);
-  for (const Aabb& box : drawn) {
-    const BoxFootprint fp = box_footprint(box, cam_, {w, h});  // widened by a pixel each side
-    if (fp.kind == BoxFootprint::Kind::NearPlane) grow(0, 0, w - 1, h - 1);
-    if (fp.kind == BoxFootprint::Kind::OnScreen) grow(fp.x0, fp.y0, fp.x1, fp.y1);
-  }
+  if (drawn.empty()) dirty_.add({0, 0, w - 1, h - 1});
+  for (const Aabb& box : drawn) dirty_.add_box(box, cam_, {w, h});
   q_begin(cam_);
 }
 
@@ -304,14 +293,14 @@ void HcQuerier::cpu_refresh() {
     ++stats_.builds;
     return;
   }
-  if (dirty_x0_ > dirty_x1_) return;
+  if (dirty_.empty()) return;
   double boxes = 0;
   for (const PyramidProbe& p : probes_)
     boxes += p.kind == PyramidProbe::Kind::probe ? double(probe_pixels(p)) : p.kind == PyramidProbe::Kind::query ? double(w) * h : 0.0;
-  const double dirty = double(dirty_x1_ - dirty_x0_ + 1) * double(dirty_y1_ - dirty_y0_ + 1);
-  if (dirty > boxes) return;
-  ctx_.read_depth(dirty_x0_, dirty_y0_, dirty_x1_ - dirty_x0_ + 1, dirty_y1_ - dirty_y0_ + 1, cpu_pyramid_->level0(w, h));
-  cpu_pyramid_->build_levels(dirty_x0_, dirty_y0_, dirty_x1_, dirty_y1_);
+  if (dirty_.pixels() > boxes) return;
+  const PixelRect& d = dirty_;
+  ctx_.read_depth(d.x0, d.y0, d.x1 - d.x0 + 1, d.y1 - d.y0 + 1, cpu_pyramid_->level0(w, h));
+  cpu_pyramid_->build_levels(d.x0, d.y0, d.x1, d.y1);
   stale_ = false;
   clear_dirty();
   ++stats_.refreshes;
@@ -396,17 +385,10 @@ void HcQuerier::resolve() {
     }
 }
 
-void HcQuerier::clear_dirty() {
-  dirty_x0_ = dirty_y0_ = 0;
-  dirty_x1_ = dirty_y1_ = -1;
-}
+void HcQuerier::clear_dirty() { dirty_.clear(); }
 
 bool HcQuerier::clean_under(const Aabb& box) const {
-  if (dirty_x0_ > dirty_x1_) return true;
-  const BoxFootprint fp = box_footprint(box, cam_, {ctx_.width(), ctx_.height()});
-  if (fp.kind == BoxFootprint::Kind::Offscreen) return true;
-  return fp.kind == BoxFootprint::Kind::OnScreen &&
-         (fp.x1 < dirty_x0_ || fp.x0 > dirty_x1_ || fp.y1 < dirty_y0_ || fp.y0 > dirty_y1_);
+  return dirty_.empty() || !dirty_.touches(box_footprint(box, cam_, {ctx_.width(), ctx_.height()}));
 }
 
 uint64_t HcQuerier::result(uint32_t handle) {

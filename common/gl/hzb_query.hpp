@@ -170,7 +170,7 @@ class HcQuerier final : public OcclusionQueries {
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
   // cpu_pyramid: pixels drawn since level 0 was read (inclusive; empty when x0 > x1).
-  int dirty_x0_ = 0, dirty_y0_ = 0, dirty_x1_ = -1, dirty_y1_ = -1;
+  PixelRect dirty_;
   void cpu_refresh();
   bool clean_under(const Aabb& box) const;  // no pixel of its footprint drawn since read back
   void clear_dirty();

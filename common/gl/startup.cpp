@@ -43,13 +43,15 @@ Enclosures find_enclosures(const std::string& who, const Scene& scene, const Hie
 }
 
 SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
-                       int width, int height, const std::function<void(const LoadedScene&)>& before_gl) {
+                       int width, int height, const std::function<void(const LoadedScene&)>& before_gl,
+                       const std::function<void(const LoadedScene&, const GlContext&)>& before_upload) {
   SceneGl s;
   s.loaded = in_own_arena([&] { return std::make_unique<LoadedScene>(load_and_build(scene, who, with_lod)); });
   if (before_gl) before_gl(*s.loaded);
   LodData* lod = s.loaded->lod.get();
   s.renderables = std::make_unique<Renderables>(s.loaded->hierarchy, lod);
   s.ctx = start_gl(who, backend, width, height);
+  if (before_upload) before_upload(*s.loaded, *s.ctx);
   // The driver keeps its own copy of the geometry: the CPU arrays are freed as they are uploaded.
   const double t0 = now_ms();
   s.renderer = std::make_unique<SceneRenderer>(

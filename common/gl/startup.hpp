@@ -45,9 +45,11 @@ struct SceneGl {
 };
 
 // load_and_build(scene, who, with_lod), then `before_gl` (e.g. check the camera path against
-// the scene before paying for a context, or find_enclosures while the geometry is on the CPU),
-// then start_gl() and a SceneRenderer (with the LODs), which releases the CPU geometry.
+// the scene before paying for a context), then start_gl(), `before_upload` (what needs the
+// geometry on the CPU and the renderer: find_enclosures, a CPU copy for a software renderer) and
+// a SceneRenderer (with the LODs), which releases the CPU geometry.
 SceneGl start_scene_gl(const std::string& who, const SceneOptions& scene, bool with_lod, GlBackend backend,
-                       int width, int height, const std::function<void(const LoadedScene&)>& before_gl = nullptr);
+                       int width, int height, const std::function<void(const LoadedScene&)>& before_gl = nullptr,
+                       const std::function<void(const LoadedScene&, const GlContext&)>& before_upload = nullptr);
 
 }  // namespace occ

@@ -106,10 +106,12 @@ const char* hc_test_name(HcTest t) {
 void add_hc_options(Cli& cli, HcChoices& c) {
   cli.choice<HcOrder>("hc-order", &c.order, {{"levels", HcOrder::levels}, {"near-first", HcOrder::near_first}},
                       "HC query batches: a hierarchy level each, or nearest boxes first in shells");
+  cli.choice<std::optional<bool>>(
+      "adaptive-queries", &c.adaptive_queries, {{"auto", std::nullopt}, {"on", true}, {"off", false}},
+      "assume nodes whose queries keep coming back visible visible for a while (no query; with a depth pyramid "
+      "(--hc-test pyramid, cpu-pyramid) still tested against it, so one that became occluded leaves V at once); "
+      "auto = off where HC tests on the CPU (the start-up says so), on elsewhere");
   const std::tuple<const char*, bool*, const char*> switches[] = {
-      {"adaptive-queries", &c.adaptive_queries,
-       "assume nodes whose queries keep coming back visible visible for a while (no query; with a depth pyramid "
-       "(--hc-test pyramid, cpu-pyramid) still tested against it, so one that became occluded leaves V at once)"},
       {"occluder-fusion", &c.occluder_fusion,
        "HC draws (depth only) what each batch found visible before the next batch's queries"},
       {"sealed", &c.sealed,
@@ -135,7 +137,9 @@ void add_hc_options(Cli& cli, HcChoices& c) {
                        "triangles in memory (not streamed within --geometry-budget), else the OR stays in GL. "
                        "Same frames");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
-             "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off)");
+             "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off); "
+             "auto = 0 where HC tests on the CPU (the start-up says so), " +
+                 std::to_string(HcChoices::kAutoHoldFrames) + " elsewhere");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {
