@@ -10,7 +10,8 @@
 # at. --remote-dir: the checkout on every host (default: the same path as here; binaries in its
 # build/bin, or OCC_BIN's path when set). --remote-out: the work folder on each host (default
 # /tmp/occswitch-USER-PID), removed at the end. --ssh-config FILE: ssh -F FILE (default: your ssh
-# setup; ssh runs with BatchMode, so keys, not passwords). Before anything starts each host is
+# setup; ssh runs with BatchMode, so keys, not passwords; OCC_SSH_CONNECT_TIMEOUT_S, default 10, its
+# ConnectTimeout). Before anything starts each host is
 # checked (reachable, the script and binaries there); a fresh cluster key (or --cluster-key-file)
 # goes to every host, mode 0600. The nodes pick their ports; this script carries each node's
 # HOST:PORT (and a failure's error line, the render client's end) between the hosts' rendezvous
@@ -20,6 +21,9 @@
 set -uo pipefail
 source "$(dirname "$0")/lib.sh"
 exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
+connect_timeout=${OCC_SSH_CONNECT_TIMEOUT_S:-10}
+[[ $connect_timeout =~ ^[1-9][0-9]{0,4}$ ]] ||
+  occ_die "OCC_SSH_CONNECT_TIMEOUT_S '$connect_timeout': expected whole seconds, 1 to 99999"
 
 hosts="" scene="" path="walk" frames=60 out="out/cluster_hosts" remote_dir=$here remote_out="" ssh_config=""
 key_file="" rest=()
@@ -45,7 +49,7 @@ mkdir -p "$out"
 rm -f "$out"/*.log "$out"/frame_*.png "$out"/stats.csv
 
 # Each call its own connection (a rank's ends with it: the rank hangs up).
-ssh_cmd=(ssh ${ssh_config:+-F "$ssh_config"} -o BatchMode=yes -o ConnectTimeout=10 -o ControlMaster=no)
+ssh_cmd=(ssh ${ssh_config:+-F "$ssh_config"} -o BatchMode=yes -o ConnectTimeout="$connect_timeout" -o ControlMaster=no)
 ssh_() { timeout 60 "${ssh_cmd[@]}" "$@"; }  # a short call: bounded, so a trap is never held up long
 q() { local s; s=$(printf '%q ' "$@"); printf '%s' "${s% }"; }  # words quoted for the remote shell
 say() { echo "cluster: $*" >&2; }

@@ -103,7 +103,9 @@ TEST_F(Hosts, AWrongScenePathOrAnUnreachableHostIsNamedAndNothingIsLeft) {
   const std::string h0 = hosts_.substr(0, hosts_.find(','));
   const std::string nobody = h0.substr(0, h0.rfind('.') + 1) + std::to_string(std::stoi(h0.substr(h0.rfind('.') + 1)) + 20);
   const std::string hosts = h0 + "," + nobody + "," + hosts_.substr(hosts_.rfind(',') + 1);
+  ::setenv("OCC_SSH_CONNECT_TIMEOUT_S", "2", 1);  // ssh's wait for the host that is not there
   const Outcome gone = cluster(hosts, kScene, "walk:10");
+  ::unsetenv("OCC_SSH_CONNECT_TIMEOUT_S");
   EXPECT_EQ(gone.code, 1) << gone.log;
   EXPECT_NE(gone.log.find("error: host " + nobody + " (node1): unreachable over ssh"), std::string::npos) << gone.log;
   expect_nothing_left();
