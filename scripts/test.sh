@@ -13,6 +13,10 @@
 #                                killed and one restarted, also with a cluster key and in latest
 #                                camera mode), then
 #                                those tests (ctest arguments replace the default selection)
+# The normal and the ASan+UBSan suites run as many tests at a time as the machine has CPUs, at
+# most 4 (CTEST_PARALLEL_LEVEL, or a -j among the ctest arguments, sets another number); most of
+# their time is waits and process start-ups, and every test is written for a loaded machine. The
+# TSan suite runs one at a time (its recovery tests' timing under TSan is tight).
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"  # --version
 occ_help_first "$@"  # before anything is installed or built
@@ -61,6 +65,10 @@ case "$MODE" in
     scripts/build.sh
     ;;
 esac
+if [ "$MODE" != tsan ]; then
+  cpus=$(nproc)
+  export CTEST_PARALLEL_LEVEL=${CTEST_PARALLEL_LEVEL:-$((cpus < 4 ? cpus : 4))}
+fi
 BUILD_DIR=${OCC_BUILD_DIR:-build}
 # The scripts the tests run (cluster.sh, netlab.sh, ...) take the binaries of this build.
 export OCC_BIN=${OCC_BIN:-$PWD/$BUILD_DIR/bin}
