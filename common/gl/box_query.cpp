@@ -108,11 +108,9 @@ double subpixel_step(const GlApi& gl) {
 }
 
 // The pad in world units per unit of distance from the eye: kPadSubpixels sub-pixel steps (1/64
-// px on llvmpipe) for the current viewport's height.
-double pad_per_unit_distance(const GlApi& gl, const Camera& cam, double step) {
-  GLint viewport[4] = {0, 0, 0, 0};
-  gl.GetIntegerv(GL_VIEWPORT, viewport);
-  return BoxQuerier::kPadSubpixels * step * 2.0 * std::tan(cam.fovy_rad * 0.5) / std::max(1, viewport[3]);
+// px on llvmpipe) for a viewport `viewport_height` pixels tall.
+double pad_per_unit_distance(const Camera& cam, double step, int viewport_height) {
+  return BoxQuerier::kPadSubpixels * step * 2.0 * std::tan(cam.fovy_rad * 0.5) / std::max(1, viewport_height);
 }
 
 // Colour and depth writes off, reverse-Z depth test, back faces culled.
@@ -145,9 +143,9 @@ void BoxDrawState::destroy(const GlApi& gl) {
 void BoxDrawState::begin(const GlApi& gl, const Camera& cam) {
   eye = cam.eye;
   reach = near_reach(cam);
-  pixel_pad = pad_per_unit_distance(gl, cam, subpixel_step);
   GLint viewport[4] = {0, 0, 0, 0};
   gl.GetIntegerv(GL_VIEWPORT, viewport);
+  pixel_pad = pad_per_unit_distance(cam, subpixel_step, viewport[3]);
   pixels = uint64_t(std::max(viewport[2], 1)) * uint64_t(std::max(viewport[3], 1));
   const glm::mat4 view_projection(cam.projection() * cam.view_rotation());
   gl.ProgramUniformMatrix4fv(program, view_projection_loc, 1, GL_FALSE, glm::value_ptr(view_projection));
