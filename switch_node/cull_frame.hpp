@@ -84,8 +84,6 @@ class CullFrame {
   const CullTotals& totals() const { return totals_; }
   const HcQuerier& querier() const { return querier_; }
   bool hc_on_cpu() const;  // hc_tests_on_cpu() for this frame's OR
-  // The HC choices, their auto settings resolved (HcChoices::resolved).
-  const HcChoices& choices() const { return choices_; }
   // HC's tests on the CPU (hc_on_cpu()); null otherwise.
   const RasterQueries* raster_queries() const { return raster_queries_ ? &*raster_queries_ : nullptr; }
 
