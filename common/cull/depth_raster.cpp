@@ -112,7 +112,8 @@ void DepthRaster::clear() {
 }
 
 DepthRaster::V DepthRaster::project(const glm::dvec4& p) const {
-  return {(p.x / p.w * 0.5 + 0.5) * width_, (p.y / p.w * 0.5 + 0.5) * height_, p.z / p.w, p.w};
+  const double r = 1.0 / p.w;  // within an ulp or two of dividing each: far below the margins
+  return {(p.x * r * 0.5 + 0.5) * width_, (p.y * r * 0.5 + 0.5) * height_, p.z * r, p.w};
 }
 
 void DepthRaster::draw(const glm::dmat4& clip_from_object, std::span<const glm::vec3> positions,
@@ -148,7 +149,9 @@ bool DepthRaster::run(const glm::dmat4& clip_from_object, std::span<const glm::v
   auto vertex = [&](uint32_t v) {
     if (stamp_[v] != draw_) {
       stamp_[v] = draw_;
-      const glm::dvec4 c = clip_from_object * glm::dvec4(glm::dvec3(positions[v]), 1.0);
+      const glm::vec3& o = positions[v];
+      const glm::dvec4 c = clip_from_object[0] * double(o.x) + clip_from_object[1] * double(o.y) +
+                           clip_from_object[2] * double(o.z) + clip_from_object[3];
       clip_[v] = c;
       if (c.w - c.z >= 0 && c.w > 0) window_[v] = project(c);
     }
@@ -175,17 +178,20 @@ bool DepthRaster::run(const glm::dmat4& clip_from_object, std::span<const glm::v
       // Most triangles of a detailed mesh cover no pixel centre, or face away: done with them
       // here. A test widens the box by its margin (and more: what GL's snapping may add).
       const V &p = window_[i[0]], &q = window_[i[1]], &r = window_[i[2]];
-      const double grow = test ? (kNearEdge + 2.0) / kSub : 0.0;
-      const double x0 = std::min({p.x, q.x, r.x}) - grow, x1 = std::max({p.x, q.x, r.x}) + grow;
-      const double y0 = std::min({p.y, q.y, r.y}) - grow, y1 = std::max({p.y, q.y, r.y}) + grow;
-      if (std::ceil(x0 - 0.5) > std::floor(x1 - 0.5) || std::ceil(y0 - 0.5) > std::floor(y1 - 0.5) || x1 < 0.5 ||
-          y1 < 0.5 || x0 > width_ - 0.5 || y0 > height_ - 0.5)
-        continue;  // (draw: leaving one out only makes HC prove less)
-      if (!test && faces != Faces::both) {
+      if (!test && faces != Faces::both) {  // facing away: the cheapest test first
         const double area = (q.x - p.x) * (r.y - p.y) - (r.x - p.x) * (q.y - p.y);
         const double edge_on = 4.0 / (kSub * kSub);  // well clear of what snapping may flip
         if ((faces == Faces::ccw && area < -edge_on) || (faces == Faces::cw && area > edge_on)) continue;
       }
+      const double grow = test ? (kNearEdge + 2.0) / kSub : 0.0;
+      const double x0 = std::min({p.x, q.x, r.x}) - grow, x1 = std::max({p.x, q.x, r.x}) + grow;
+      const double y0 = std::min({p.y, q.y, r.y}) - grow, y1 = std::max({p.y, q.y, r.y}) + grow;
+      if (x1 < 0.5 || y1 < 0.5 || x0 > width_ - 0.5 || y0 > height_ - 0.5) continue;
+      // No pixel centre (k + 0.5) within [x0, x1] or [y0, y1]: only a box narrower than a pixel
+      // can miss them all, so the rounding is done for those only.
+      if ((x1 - x0 < 1.0 && std::ceil(x0 - 0.5) > std::floor(x1 - 0.5)) ||
+          (y1 - y0 < 1.0 && std::ceil(y0 - 0.5) > std::floor(y1 - 0.5)))
+        continue;  // (draw: leaving one out only makes HC prove less)
     }
     if (adjacency) {
       for (int k = 0; k < 3; ++k) {
@@ -201,8 +207,9 @@ bool DepthRaster::run(const glm::dmat4& clip_from_object, std::span<const glm::v
           const double ew = (q.x - p.x) * (w.y - p.y) - (q.y - p.y) * (w.x - p.x);
           // Both well off the line (1/16 pixel): neither triangle is edge-on to either
           // rasteriser, whose snapping would otherwise decide whether it covers anything.
-          const double off = kOffLine * std::sqrt((q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y));
-          other_side = (er > off && ew < -off) || (er < -off && ew > off);
+          // (|e| > off, squared: off = kOffLine |q - p|)
+          const double off2 = kOffLine * kOffLine * ((q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y));
+          other_side = ((er > 0) != (ew > 0)) && er != 0 && ew != 0 && er * er > off2 && ew * ew > off2;
         } else {
           // A corner in front of the near plane (the edge is clipped): the sides of the plane
           // through the eye and the edge, in clip space (x, y, w), where the visible parts of
