@@ -42,11 +42,16 @@
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
 # --node-raster-threads N (default 0): llvmpipe's rasteriser threads in each switch node
-# (LP_NUM_THREADS for the nodes only; the render client keeps $LP_NUM_THREADS, default 1). 0
+# (LP_NUM_THREADS for the nodes only). 0
 # rasterises on the node's own thread: its work is many small passes it waits for (OR flushes,
 # HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
 # paired runs: frame interval 0.92-0.98x against 1 (docs/results.md). It also keeps the nodes
 # clear of a Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
+# --client-raster-threads N|auto (default auto): the render client's llvmpipe rasteriser threads
+# (its LP_NUM_THREADS). auto: 0 where the nodes are pinned (below: the client has the other
+# cores, and a rasteriser thread of its own would only hand its work over and compete with the
+# nodes for theirs; paired runs at 512^2, 2 cores: schependomlaan 21.0 -> 19.0 ms, the saw 11.1
+# -> 9.9, the engine 8.7 -> 7.4, Sponza 5.5 -> 5.2, docs/results.md), else $LP_NUM_THREADS, or 1.
 # --pin-nodes auto|on|off (default auto: on where this machine has fewer than 4 CPUs): both switch
 # nodes run on this process's last CPU (taskset), the render client on any. With three processes
 # on two cores the render client, whose frame the user waits for, then keeps a core while the
@@ -67,7 +72,7 @@ source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 restart_nodes=3
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 client_threads=auto restart_nodes=3
 pin_nodes=auto
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
@@ -77,6 +82,7 @@ while [ $# -gt 0 ]; do
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --no-key) key_file=none; shift ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
+    --client-raster-threads) occ_need_value "$@"; client_threads=$2; shift 2 ;;
     --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
     --pin-nodes) occ_need_value "$@"; pin_nodes=$2; shift 2 ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
@@ -87,6 +93,8 @@ done
 [ -n "$scene" ] || occ_die "--scene is required (e.g. --scene city)"
 [[ "$node_threads" =~ ^[0-9]+$ ]] && [ "$node_threads" -le 64 ] ||
   occ_die "--node-raster-threads '$node_threads': expected a whole number from 0 to 64"
+[ "$client_threads" = auto ] || { [[ "$client_threads" =~ ^[0-9]+$ ]] && [ "$client_threads" -le 64 ]; } ||
+  occ_die "--client-raster-threads '$client_threads': expected auto or a whole number from 0 to 64"
 [[ "$restart_nodes" =~ ^[0-9]+$ ]] || occ_die "--restart-nodes '$restart_nodes': expected a whole number (0: never)"
 # The CPUs this script may use: their count and the last one (the nodes' CPU with --pin-nodes).
 read -r cpu_count cpu_last < <(python3 -c 'import os; a = sorted(os.sched_getaffinity(0)); print(len(a), a[-1])')
@@ -100,7 +108,11 @@ case "$pin_nodes" in
   off) ;;
   *) occ_die "--pin-nodes '$pin_nodes': expected auto, on or off" ;;
 esac
-[ ${#pin[@]} = 0 ] || echo "cluster: both switch nodes on CPU $cpu_last, the render client on any of $cpu_count (--pin-nodes $pin_nodes)" >&2
+if [ "$client_threads" = auto ]; then
+  client_threads=${LP_NUM_THREADS:-1}
+  [ ${#pin[@]} = 0 ] || client_threads=0
+fi
+[ ${#pin[@]} = 0 ] || echo "cluster: both switch nodes on CPU $cpu_last, the render client on any of $cpu_count with $client_threads rasteriser threads (--pin-nodes $pin_nodes)" >&2
 supervise=1  # --on-node-failure exit: a node's death ends the client, so it ends the run
 [[ " ${rvg_only[*]} " == *" --on-node-failure exit "* ]] && supervise=0
 if [ $window = 1 ]; then
@@ -132,7 +144,7 @@ if [ -z "$key_file" ]; then  # a fresh random key per run, readable by this user
   occ_make_key "$key_file"
 fi
 [ "$key_file" = none ] || common+=(--cluster-key-file "$key_file")
-export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
+export LP_NUM_THREADS=$client_threads  # the render client's (the nodes get theirs below)
 
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; }

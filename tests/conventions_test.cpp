@@ -118,6 +118,14 @@ TEST(Conventions, ClusterPrintsTheFailingProcessesOwnError) {
         << p.log();
     EXPECT_FALSE(fs::exists(dir / "e" / "node0.log")) << p.log();
   }
+  {  // a bad --client-raster-threads: said before any process starts
+    Proc p(cluster(dir / "g", {"--scene", "city:2x2:2:4:1", "--client-raster-threads", "-1"}), dir / "g.log");
+    EXPECT_EQ(p.wait(60s), 2);
+    EXPECT_NE(p.log().find("--client-raster-threads '-1': expected auto or a whole number from 0 to 64"),
+              std::string::npos)
+        << p.log();
+    EXPECT_FALSE(fs::exists(dir / "g" / "node0.log")) << p.log();
+  }
   {  // a bad --pin-nodes: said before any process starts
     Proc p(cluster(dir / "f", {"--scene", "city:2x2:2:4:1", "--pin-nodes", "always"}), dir / "f.log");
     EXPECT_EQ(p.wait(60s), 2);
@@ -147,10 +155,19 @@ std::string cpus_allowed(const std::string& pid) {
     if (line.rfind("Cpus_allowed_list:", 0) == 0) return line.substr(line.find_first_not_of(" \t", 18));
   return "";
 }
+// Process `pid`'s LP_NUM_THREADS ("unset" where it has none).
+std::string lp_threads(const std::string& pid) {
+  std::ifstream f("/proc/" + pid + "/environ");
+  for (std::string var; std::getline(f, var, '\0');)
+    if (var.rfind("LP_NUM_THREADS=", 0) == 0) return var.substr(15);
+  return "unset";
+}
 }  // namespace
 
 // --pin-nodes on: both switch nodes may run on the launcher's last CPU only, the render client on
-// all of them; off: the nodes too. (auto is on under 4 CPUs.)
+// all of them; off: the nodes too. (auto is on under 4 CPUs.) The render client's rasteriser
+// threads (--client-raster-threads auto): none where the nodes are pinned, else
+// $LP_NUM_THREADS (3 here); the nodes' 0 (--node-raster-threads) either way.
 TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
   cpu_set_t set;
   CPU_ZERO(&set);
@@ -162,11 +179,14 @@ TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
   const std::string all = cpus_allowed("self");
   const fs::path dir = fresh_dir("cluster_pin");
   for (const std::string mode : {"on", "off"}) {
-    Proc p(cluster(dir / mode, {"--scene", "city:2x2:2:4:1", "--path", "walk:8000", "--no-images", "--pin-nodes", mode}),
-           dir / (mode + ".log"));
+    std::vector<std::string> args = {"/usr/bin/env", "LP_NUM_THREADS=3"};
+    for (const std::string& a :
+         cluster(dir / mode, {"--scene", "city:2x2:2:4:1", "--path", "walk:8000", "--no-images", "--pin-nodes", mode}))
+      args.push_back(a);
+    Proc p(args, dir / (mode + ".log"));
     // Each process's CPUs, read while it runs (the nodes from their start, the client once
     // it is started: it runs for seconds).
-    std::string seen[3];
+    std::string seen[3], threads[3];
     const char* names[3] = {"node0", "node1", "render_client"};
     const auto until = std::chrono::steady_clock::now() + 120s;
     while (std::chrono::steady_clock::now() < until && p.running() && seen[2].empty()) {
@@ -178,7 +198,7 @@ TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
         if (seen[k].empty() && started && fs::exists(pid)) {
           std::string id = read_file(pid);
           id.erase(id.find_last_not_of(" \n") + 1);
-          if (!id.empty()) seen[k] = cpus_allowed(id);
+          if (!id.empty()) seen[k] = cpus_allowed(id), threads[k] = lp_threads(id);
         }
       }
       std::this_thread::sleep_for(5ms);
@@ -188,7 +208,10 @@ TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
     EXPECT_EQ(seen[0], nodes) << "--pin-nodes " << mode << ": node 0";
     EXPECT_EQ(seen[1], nodes) << "--pin-nodes " << mode << ": node 1";
     EXPECT_EQ(seen[2], all) << "--pin-nodes " << mode << ": the render client";
+    EXPECT_EQ(threads[0], "0") << "--pin-nodes " << mode << ": node 0";
+    EXPECT_EQ(threads[2], mode == "on" ? "0" : "3") << "--pin-nodes " << mode << ": the render client";
     EXPECT_EQ(p.log().find("both switch nodes on CPU") != std::string::npos, mode == "on") << p.log();
+    EXPECT_EQ(p.log().find("with 0 rasteriser threads") != std::string::npos, mode == "on") << p.log();
   }
 }
 
