@@ -155,7 +155,13 @@ std::string cpus_allowed(const std::string& pid) {
     if (line.rfind("Cpus_allowed_list:", 0) == 0) return line.substr(line.find_first_not_of(" \t", 18));
   return "";
 }
-// Process `pid`'s LP_NUM_THREADS ("unset" where it has none).
+// The file name of process `pid`'s program ("" where it is gone).
+std::string program_of(const std::string& pid) {
+  std::error_code ec;
+  return fs::read_symlink("/proc/" + pid + "/exe", ec).filename().string();
+}
+// Process `pid`'s LP_NUM_THREADS ("unset" where it has none): the environment its program
+// started with.
 std::string lp_threads(const std::string& pid) {
   std::ifstream f("/proc/" + pid + "/environ");
   for (std::string var; std::getline(f, var, '\0');)
@@ -198,7 +204,12 @@ TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
         if (seen[k].empty() && started && fs::exists(pid)) {
           std::string id = read_file(pid);
           id.erase(id.find_last_not_of(" \n") + 1);
-          if (!id.empty()) seen[k] = cpus_allowed(id), threads[k] = lp_threads(id);
+          // Once the pid runs the program itself (before, a shell or taskset about to start it:
+          // the launcher's environment, not the one it gives the program) and its environment
+          // reads back (cluster.sh sets LP_NUM_THREADS for all three; mid-exec it reads empty).
+          const std::string threads_now = id.empty() ? "unset" : lp_threads(id);
+          if (program_of(id) == (k == 2 ? "render_client" : "switch_node") && threads_now != "unset")
+            seen[k] = cpus_allowed(id), threads[k] = threads_now;
         }
       }
       std::this_thread::sleep_for(5ms);
