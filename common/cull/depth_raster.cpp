@@ -207,9 +207,10 @@ bool DepthRaster::run(const glm::dmat4& clip_from_object, std::span<const glm::v
           const double ew = (q.x - p.x) * (w.y - p.y) - (q.y - p.y) * (w.x - p.x);
           // Both well off the line (1/16 pixel): neither triangle is edge-on to either
           // rasteriser, whose snapping would otherwise decide whether it covers anything.
-          // (|e| > off, squared: off = kOffLine |q - p|)
+          // |e| > off compared squared (off = kOffLine |q - p|: no square root per edge).
           const double off2 = kOffLine * kOffLine * ((q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y));
-          other_side = ((er > 0) != (ew > 0)) && er != 0 && ew != 0 && er * er > off2 && ew * ew > off2;
+          const bool opposite = (er > 0 && ew < 0) || (er < 0 && ew > 0);
+          other_side = opposite && er * er > off2 && ew * ew > off2;
         } else {
           // A corner in front of the near plane (the edge is clipped): the sides of the plane
           // through the eye and the edge, in clip space (x, y, w), where the visible parts of
