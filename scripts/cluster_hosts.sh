@@ -107,13 +107,21 @@ forward() {  # k file
   done
   forwarded+=("$2")
 }
+# The forwarding runs in a subshell of its own while this shell only waits for the render client:
+# a Ctrl-C's trap then never interrupts this shell inside a command substitution (bash 5.2 can
+# misparse the trap's text there: "unexpected EOF while looking for matching `)'").
+forwarder() {
+  while kill -0 "${pids[2]}" 2>/dev/null && kill -0 $$ 2>/dev/null; do
+    forward 0 node0.addr; forward 1 node1.addr
+    forward 0 node0.failed; forward 1 node1.failed; forward 2 render_client.failed
+    occ_quiet_sleep 0.3
+  done
+}
+forwarder &
+pids+=($!)
 status=0
-while kill -0 "${pids[2]}" 2>/dev/null; do
-  forward 0 node0.addr; forward 1 node1.addr
-  forward 0 node0.failed; forward 1 node1.failed; forward 2 render_client.failed
-  occ_quiet_sleep 0.3
-done
 wait "${pids[2]}" || status=1
+kill "${pids[3]}" 2>/dev/null; wait "${pids[3]}" 2>/dev/null
 forward 2 render_client.done || forward 2 render_client.failed
 for k in 0 1; do  # the nodes end with the render client's goodbye (or its failure): 30 s
   for _ in $(seq 300); do kill -0 "${pids[$k]}" 2>/dev/null || break; sleep 0.1; done
