@@ -59,6 +59,11 @@
 # most (paired runs, 512^2: the bridge orbit 1.70 -> 1.34 ms, sgd_bodo walk 3.43 -> 2.73, the
 # duplex orbit 3.69 -> 3.15, docs/results.md); heavy ones, where all three are busy anyway, gain
 # nothing. With four CPUs or more each process has its own.
+# --host-cpus CORES (root): each of the three processes in a CPU cgroup of its own with CORES
+# cores of CPU time (scripts/lib.sh), as on three hosts of CORES cores each: none takes time from
+# another (the nodes are not pinned, the render client's rasteriser threads as without pinning).
+# The groups are removed at exit. scripts/limit_table.py --host-cpus measures the single-process
+# renders under the same budget.
 # --hosts HOST0,HOST1,HOSTC runs the three processes on three hosts over ssh instead
 # (scripts/cluster_hosts.sh --help, docs/clusters.md).
 # Membership: every run makes a fresh random cluster key (DIR/cluster.key, mode 0600) and gives
@@ -73,7 +78,7 @@ MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
 scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 client_threads=auto restart_nodes=3
-pin_nodes=auto
+pin_nodes=auto host_cpus=""
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -85,6 +90,7 @@ while [ $# -gt 0 ]; do
     --client-raster-threads) occ_need_value "$@"; client_threads=$2; shift 2 ;;
     --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
     --pin-nodes) occ_need_value "$@"; pin_nodes=$2; shift 2 ;;
+    --host-cpus) occ_need_value "$@"; host_cpus=$2; shift 2 ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;
@@ -99,6 +105,12 @@ done
 # The CPUs this script may use: their count and the last one (the nodes' CPU with --pin-nodes).
 read -r cpu_count cpu_last < <(python3 -c 'import os; a = sorted(os.sched_getaffinity(0)); print(len(a), a[-1])')
 pin=()
+if [ -n "$host_cpus" ]; then
+  occ_cpu_cores "$host_cpus" --host-cpus
+  [ "$pin_nodes" = on ] && occ_die "--pin-nodes on: not with --host-cpus (each process has CPU time of its own there)"
+  pin_nodes=off
+  cpu_root=$(occ_cpu_groups_root) || exit 2
+fi
 case "$pin_nodes" in
   auto) [ "$cpu_count" -ge 2 ] && [ "$cpu_count" -lt 4 ] && command -v taskset >/dev/null && pin=(taskset -c "$cpu_last") ;;
   on)
@@ -112,6 +124,7 @@ if [ "$client_threads" = auto ]; then
   client_threads=${LP_NUM_THREADS:-1}
   [ ${#pin[@]} = 0 ] || client_threads=0
 fi
+[ -z "$host_cpus" ] || echo "cluster: node 0, node 1 and the render client each in a CPU group of $host_cpus cores (--host-cpus), the render client with $client_threads rasteriser threads" >&2
 [ ${#pin[@]} = 0 ] || echo "cluster: both switch nodes on CPU $cpu_last, the render client on any of $cpu_count with $client_threads rasteriser threads (--pin-nodes $pin_nodes)" >&2
 supervise=1  # --on-node-failure exit: a node's death ends the client, so it ends the run
 [[ " ${rvg_only[*]} " == *" --on-node-failure exit "* ]] && supervise=0
@@ -187,6 +200,19 @@ if [ $netns = 1 ]; then
   [ -n "$link" ] && relay_args=(--delay-ms "$l_delay" --jitter-ms "${l_jitter:-0}")
 fi
 
+# --host-cpus: a CPU group per process (hg0, hg1, hgc: the prefix that starts a command in it),
+# removed at exit once the processes have ended.
+hg0=() hg1=() hgc=()
+if [ -n "$host_cpus" ]; then
+  groups=$cpu_root/occswitch-cluster-$$
+  remove_groups() { cleanup; wait 2>/dev/null; occ_cpu_group_remove "$groups"/{node0,node1,render_client} "$groups"; }
+  if [ $netns = 1 ]; then trap 'teardown; remove_groups' EXIT; else trap remove_groups EXIT; fi
+  occ_cpu_group_make "$groups"
+  for g in node0 node1 render_client; do occ_cpu_group_make "$groups/$g" "$host_cpus"; done
+  hg0=("${occ_in_cpu_group[@]}" "$groups/node0") hg1=("${occ_in_cpu_group[@]}" "$groups/node1")
+  hgc=("${occ_in_cpu_group[@]}" "$groups/render_client")
+fi
+
 # The process's own error lines (its log's "error:" lines, else its last line) and where its log is.
 report_failure() { occ_report_failure "$1" "$2" "${3:-$out/$1.log}"; }
 
@@ -215,8 +241,8 @@ start_relay() {
 # its old one, where the render client and node 1 look for it), its port in LOG's .port file.
 # Sets node_pid; OUT/nodeID.pid says which process it is.
 start_node() {
-  local ns=("${in_a[@]}") peer=()
-  [ "$1" = 1 ] && ns=("${in_b[@]}") peer=(--peer "$peer0")
+  local ns=("${hg0[@]}" "${in_a[@]}") peer=()
+  [ "$1" = 1 ] && ns=("${hg1[@]}" "${in_b[@]}") peer=(--peer "$peer0")
   "${ns[@]}" "${pin[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id "$1" --scene "$scene" "${peer[@]}" \
     --listen "$listen" --port "$2" --port-file "${3%.log}.port" "${common[@]}" "${node_only[@]}" >"$3" 2>&1 &
   node_pid=$!
@@ -243,7 +269,7 @@ if [ -z "$link" ] && [ "$netns" = 0 ] && [ "${OCC_START_AT_ONCE:-0}" = 1 ]; then
   node0_pid=$node_pid
   start_node 1 "$p1" "$out/node1.log"
   node1_pid=$node_pid
-  "$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "127.0.0.1:$p0" \
+  "${hgc[@]}" "$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "127.0.0.1:$p0" \
     --connect "127.0.0.1:$p1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
   rvg_pid=$!
   pids+=($rvg_pid)
@@ -269,7 +295,7 @@ if [ -n "$link" ]; then
   start_relay relay_rvg1 "$c1" "${in_c[@]}"
   c1=127.0.0.1:$(wait_port "$out/relay_rvg1.port" "${pids[-1]}" relay_rvg1) || { cleanup; exit 1; }
 fi
-"${in_c[@]}" "$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "$c0" \
+"${hgc[@]}" "${in_c[@]}" "$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --connect "$c0" \
   --connect "$c1" "${common[@]}" "${rvg_only[@]}" >"$out/render_client.log" 2>&1 &
 rvg_pid=$!
 pids+=($rvg_pid)

@@ -18,11 +18,13 @@ visible ones on the same cameras, all repeats together; beside it the share of s
 floor: the same ratio for the single-process stop-and-wait baseline (render_client --reference
 --cull stop-and-wait --exact: front to back, each leaf's box queried against the depth of
 everything nearer), over all frames from --skip on, one untimed run: what testing boxes cannot
-prove hidden, whoever tests them. Prints a markdown table and writes it to OUT/limit.md (rows
+prove hidden, whoever tests them. --host-cpus CORES (root): the timed runs as on hosts of CORES
+cores each (scripts/lib.sh's CPU groups): each single-process render in a group of its own, the
+cluster with --host-cpus (each of its three processes in one). Prints a markdown table and writes it to OUT/limit.md (rows
 also in OUT/limit.csv). Asserts nothing about speed.
 
   scripts/limit_table.py --scene S --path P [--scene S2 --path P2 ...] [--sizes 512,1024]
-                         [--repeats N] [--skip K] [--out DIR]
+                         [--repeats N] [--skip K] [--host-cpus CORES] [--out DIR] [-- cluster.sh flags]
 """
 import argparse
 import csv
@@ -33,6 +35,7 @@ import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+LIB = os.path.join(HERE, "lib.sh")
 ROOT = os.path.dirname(HERE)
 BIN = os.environ.get("OCC_BIN", os.path.join(ROOT, "build", "bin"))
 
@@ -76,15 +79,20 @@ def pvs_over_exact(d, skip):
 def measure(scene, path, size, args, out):
     view = ["--width", str(size), "--height", str(size)]
     ref = [os.path.join(BIN, "render_client"), "--reference", "--scene", scene, "--path", path, *view]
+    # The timed runs: with --host-cpus each in a CPU group of its own (the cluster: one per process).
+    timed, cluster_flags = ref, list(args.cluster_args)
+    if args.host_cpus:
+        timed = ["bash", "-c", 'source "$0" && occ_run_in_cpu_group "$@"', LIB, args.host_cpus, *ref]
+        cluster_flags += ["--host-cpus", args.host_cpus]
     runs = {"oracle": [], "none": [], "frustum": [], "cluster": []}
     for r in range(args.repeats):
         d = os.path.join(out, f"r{r}")
         os.makedirs(d, exist_ok=True)
         print(f"limit_table: {scene} {path} {size}^2, repeat {r + 1} of {args.repeats}", file=sys.stderr)
-        run(ref + ["--cull", "none", "--exact", "--no-images", "--out", f"{d}/none"], f"{d}/none.log")
-        run(ref + ["--cull", "frustum", "--no-images", "--out", f"{d}/frustum"], f"{d}/frustum.log")
+        run(timed + ["--cull", "none", "--exact", "--no-images", "--out", f"{d}/none"], f"{d}/none.log")
+        run(timed + ["--cull", "frustum", "--no-images", "--out", f"{d}/frustum"], f"{d}/frustum.log")
         run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--no-images",
-             "--on-node-failure", "exit", "--out", f"{d}/cluster", *args.cluster_args], f"{d}/cluster.log")
+             "--on-node-failure", "exit", "--out", f"{d}/cluster", *cluster_flags], f"{d}/cluster.log")
         runs["oracle"].append(column(f"{d}/none/stats.csv", "oracle_ms", args.skip))
         runs["none"].append(column(f"{d}/none/stats.csv", "render_ms", args.skip))
         runs["frustum"].append(column(f"{d}/frustum/stats.csv", "render_ms", args.skip))
@@ -143,6 +151,8 @@ def main():
     ap.add_argument("--sizes", default="512,1024", help="viewport sizes, square (default 512,1024)")
     ap.add_argument("--repeats", type=int, default=1, help="interleaved runs of each (default 1)")
     ap.add_argument("--skip", type=int, default=3, help="frames left out at the start (default 3)")
+    ap.add_argument("--host-cpus", default="", metavar="CORES",
+                    help="root: the timed runs as on hosts of CORES cores each (CPU groups; default: none)")
     ap.add_argument("--out", default="out/limit", help="output folder (default out/limit)")
     ap.add_argument("cluster_args", nargs="*", help="after --: more scripts/cluster.sh flags")
     args = ap.parse_args()
@@ -154,6 +164,13 @@ def main():
         sizes = [int(s) for s in args.sizes.split(",")]
     except ValueError:
         die(f"--sizes '{args.sizes}': expected sizes like 512,1024")
+    if args.host_cpus:
+        try:
+            ok = 0.05 <= float(args.host_cpus) <= os.cpu_count()
+        except ValueError:
+            ok = False
+        if not ok:
+            die(f"--host-cpus '{args.host_cpus}': expected a number of cores from 0.05 to {os.cpu_count()}")
     for b in ("render_client", "switch_node", "frame_diff"):
         if not os.access(os.path.join(BIN, b), os.X_OK):
             die(f"{BIN}/{b} not found: build first (scripts/build.sh)")

@@ -226,6 +226,101 @@ TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
   }
 }
 
+namespace {
+// Where this machine makes CPU groups (scripts/lib.sh occ_cpu_groups_root): cgroup v1's cpu
+// hierarchy, or v2 with the cpu controller; "" where neither.
+std::string cpu_groups_root() {
+  if (fs::exists("/sys/fs/cgroup/cpu/cpu.cfs_quota_us")) return "/sys/fs/cgroup/cpu";
+  if (fs::exists("/sys/fs/cgroup/cgroup.controllers") &&
+      (" " + read_file("/sys/fs/cgroup/cgroup.controllers")).find(" cpu") != std::string::npos)
+    return "/sys/fs/cgroup";
+  return "";
+}
+// Process `pid`'s CPU group, relative to that root ("" where it is gone): v1's line for a
+// hierarchy whose controllers include cpu ("1:cpu:/a/b" or "1:cpu,cpuacct:/a/b"), else v2's "0::/a/b".
+std::string cpu_group_of(const std::string& pid) {
+  std::ifstream f("/proc/" + pid + "/cgroup");
+  std::string v2;
+  for (std::string line; std::getline(f, line);) {
+    const size_t a = line.find(':'), b = line.find(':', a + 1);
+    if (a == std::string::npos || b == std::string::npos) continue;
+    const std::string controllers = "," + line.substr(a + 1, b - a - 1) + ",";
+    if (controllers.find(",cpu,") != std::string::npos) return line.substr(b + 1);
+    if (controllers == ",,") v2 = line.substr(b + 1);
+  }
+  return v2;
+}
+// A group's CPU quota as "QUOTA PERIOD" (microseconds), v1 or v2.
+std::string cpu_quota(const fs::path& group) {
+  auto first_line = [](const fs::path& p) {
+    std::string s = read_file(p);
+    return s.substr(0, s.find('\n'));
+  };
+  if (fs::exists(group / "cpu.max")) return first_line(group / "cpu.max");
+  return first_line(group / "cpu.cfs_quota_us") + " " + first_line(group / "cpu.cfs_period_us");
+}
+}  // namespace
+
+// --host-cpus 0.5: node 0, node 1 and the render client each in a CPU group of its own with half a
+// core's time (1 ms per 2 ms), none pinned, the render client with $LP_NUM_THREADS rasteriser
+// threads as on a host of its own; the groups are gone after the run. Bad values are one error.
+TEST(Conventions, ClusterHostCpusGivesEachProcessCpuTimeOfItsOwn) {
+  const fs::path dir = fresh_dir("cluster_host_cpus");
+  for (const std::string bad : {"0", "abc", "1e3", "-1", "99"}) {
+    Proc p(cluster(dir / "bad", {"--scene", "city:2x2:2:4:1", "--host-cpus", bad}), dir / "bad.log");
+    EXPECT_EQ(p.wait(30s), 2) << p.log();
+    EXPECT_NE(p.log().find("error: --host-cpus '" + bad + "': expected a number of cores from 0.05 to "),
+              std::string::npos)
+        << p.log();
+  }
+  Proc both(cluster(dir / "bad", {"--scene", "city:2x2:2:4:1", "--host-cpus", "0.5", "--pin-nodes", "on"}),
+            dir / "both.log");
+  EXPECT_EQ(both.wait(30s), 2) << both.log();
+  EXPECT_NE(both.log().find("error: --pin-nodes on: not with --host-cpus"), std::string::npos) << both.log();
+
+  const std::string root = cpu_groups_root();
+  if (::geteuid() != 0 || root.empty()) GTEST_SKIP() << "needs root and a cgroup CPU controller";
+  const std::string all = cpus_allowed("self");
+  std::vector<std::string> args = {"/usr/bin/env", "LP_NUM_THREADS=3"};
+  for (const std::string& a : cluster(dir / "run", {"--scene", "city:2x2:2:4:1", "--path", "walk:8000",
+                                                     "--no-images", "--host-cpus", "0.5"}))
+    args.push_back(a);
+  Proc p(args, dir / "run.log");
+  std::string group[3], quota[3], cpus[3], threads[3];
+  const char* names[3] = {"node0", "node1", "render_client"};
+  const auto until = std::chrono::steady_clock::now() + 120s;
+  while (std::chrono::steady_clock::now() < until && p.running() && group[2].empty()) {
+    for (int k = 0; k < 3; ++k) {
+      const fs::path pid = dir / "run" / (std::string(names[k]) + ".pid");
+      const bool started = k == 2 || fs::exists(dir / "run" / (std::string(names[k]) + ".port"));
+      if (!group[k].empty() || !started || !fs::exists(pid)) continue;
+      std::string id = read_file(pid);
+      id.erase(id.find_last_not_of(" \n") + 1);
+      // Once the pid runs the program itself (before: the shell that puts it in its group).
+      if (id.empty() || program_of(id) != (k == 2 ? "render_client" : "switch_node")) continue;
+      const std::string g = cpu_group_of(id), t = lp_threads(id);
+      if (g.empty() || t == "unset") continue;
+      group[k] = g, cpus[k] = cpus_allowed(id), threads[k] = t;
+      quota[k] = cpu_quota(fs::path(root + g));
+    }
+    std::this_thread::sleep_for(5ms);
+  }
+  EXPECT_EQ(p.wait(300s), 0) << p.log();
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(fs::path(group[k]).filename().string(), names[k]) << group[k];
+    EXPECT_EQ(fs::path(group[k]).parent_path().filename().string().rfind("occswitch-cluster-", 0), 0u) << group[k];
+    EXPECT_EQ(fs::path(group[k]).parent_path(), fs::path(group[0]).parent_path()) << group[k];
+    EXPECT_EQ(quota[k], "1000 2000") << names[k];
+    EXPECT_EQ(cpus[k], all) << names[k] << ": not pinned";
+  }
+  EXPECT_EQ(threads[0], "0");
+  EXPECT_EQ(threads[2], "3");
+  EXPECT_NE(p.log().find("each in a CPU group of 0.5 cores (--host-cpus)"), std::string::npos) << p.log();
+  if (!group[0].empty()) {
+    EXPECT_FALSE(fs::exists(root + fs::path(group[0]).parent_path().string())) << "left behind";
+  }
+}
+
 TEST(Conventions, NetlabTakesCameraModeAsEverywhere) {
   const fs::path dir = fresh_dir("netlab_flags");
   Proc p({"/bin/bash", script("netlab.sh"), "--scene", "city", "--mode", "latest"}, dir / "mode.log");

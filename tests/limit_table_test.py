@@ -3,7 +3,7 @@
 table, run end to end on one small view (the office walked through its walls): its row holds every
 column, the ratios are those of its own medians, the cluster's frames equal brute force's, and
 neither the switch's PVS nor the box floor (stop-and-wait) draws fewer triangles than the exactly
-visible ones. Bad arguments are one error line. Run by ctest (LimitTable.*) with the binaries'
+visible ones. Bad arguments are one error line; --host-cpus runs through CPU groups. Run by ctest (LimitTable.*) with the binaries'
 folder as its argument; asserts nothing about speed."""
 import csv
 import math
@@ -62,6 +62,25 @@ class LimitTable(unittest.TestCase):
             self.assertNotEqual(p.returncode, 0)
             self.assertIn("limit_table: error: 2 --scene but 1 --path", p.stderr)
             self.assertEqual(os.listdir(tmp), [])
+
+    def test_host_cpus(self):
+        """--host-cpus: a bad value is one error before anything runs; with root and a cgroup CPU
+        controller the timed runs go through CPU groups (the cluster's log says so) and none is
+        left behind."""
+        with tempfile.TemporaryDirectory() as tmp:
+            p = run(["--scene", "office", "--path", "walk:12", "--host-cpus", "lots"], tmp)
+            self.assertNotEqual(p.returncode, 0)
+            self.assertIn("limit_table: error: --host-cpus 'lots': expected a number of cores", p.stderr)
+            self.assertEqual(os.listdir(tmp), [])
+        root = "/sys/fs/cgroup/cpu" if os.path.exists("/sys/fs/cgroup/cpu/cpu.cfs_quota_us") else None
+        if os.geteuid() != 0 or root is None:
+            self.skipTest("needs root and cgroup v1's cpu hierarchy")
+        with tempfile.TemporaryDirectory() as tmp:
+            p = run(["--scene", "office", "--path", "walk:8", "--sizes", "64", "--skip", "2", "--host-cpus", "0.5"], tmp)
+            self.assertEqual(p.returncode, 0, p.stdout[-2000:] + p.stderr[-2000:])
+            with open(os.path.join(tmp, "0_64", "r0", "cluster.log")) as f:
+                self.assertIn("each in a CPU group of 0.5 cores (--host-cpus)", f.read())
+            self.assertEqual([g for g in os.listdir(root) if g.startswith("occswitch-")], [])
 
 
 if __name__ == "__main__":
