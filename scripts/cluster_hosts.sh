@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --hosts|--scene|--path|--frames|--out|--remote-dir|--remote-out|--ssh-config) occ_set "$@"; shift 2 ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
-    --netns|--link|--window|--record|--pin-nodes) occ_die "$1 runs on one machine: not with --hosts" ;;
+    --netns|--link|--window|--record|--pin-nodes|--host-cpus) occ_die "$1 runs on one machine: not with --hosts" ;;
     -h|--help) occ_usage; exit 0 ;;
     --full-sets|--no-images) rest+=("$1"); shift ;;
     --*) occ_need_value "$@"; rest+=("$1" "$2"); shift 2 ;;

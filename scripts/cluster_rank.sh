@@ -37,7 +37,7 @@ while [ $# -gt 0 ]; do
     --rendezvous|--scene|--path|--frames|--out|--address|--wait|--rank|--restart-nodes) occ_set "$@"; shift 2 ;;
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --node-raster-threads) occ_need_value "$@"; node_threads=$2; shift 2 ;;
-    --window|--netns|--link) occ_die "$1 is a scripts/cluster.sh option (one machine)" ;;
+    --window|--netns|--link|--pin-nodes|--host-cpus) occ_die "$1 is a scripts/cluster.sh option (one machine)" ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;
   esac

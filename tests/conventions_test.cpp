@@ -278,6 +278,17 @@ TEST(Conventions, ClusterHostCpusGivesEachProcessCpuTimeOfItsOwn) {
             dir / "both.log");
   EXPECT_EQ(both.wait(30s), 2) << both.log();
   EXPECT_NE(both.log().find("error: --pin-nodes on: not with --host-cpus"), std::string::npos) << both.log();
+  // One machine only: not over ssh, not per rank under a job launcher.
+  Proc hosts({"/bin/bash", script("cluster.sh"), "--hosts", "a,b,c", "--scene", "city", "--host-cpus", "0.5"},
+             dir / "hosts.log");
+  EXPECT_EQ(hosts.wait(30s), 2) << hosts.log();
+  EXPECT_NE(hosts.log().find("error: --host-cpus runs on one machine: not with --hosts"), std::string::npos)
+      << hosts.log();
+  Proc rank({"/bin/bash", script("cluster_rank.sh"), "--rank", "0", "--scene", "city", "--host-cpus", "0.5"},
+            dir / "rank.log");
+  EXPECT_EQ(rank.wait(30s), 2) << rank.log();
+  EXPECT_NE(rank.log().find("error: --host-cpus is a scripts/cluster.sh option (one machine)"), std::string::npos)
+      << rank.log();
 
   const std::string root = cpu_groups_root();
   if (::geteuid() != 0 || root.empty()) GTEST_SKIP() << "needs root and a cgroup CPU controller";
