@@ -118,10 +118,11 @@ forwarder() {
   done
 }
 forwarder &
-pids+=($!)
+forwarder_pid=$!
+pids+=($forwarder_pid)  # (cleanup stops it with the rest)
 status=0
 wait "${pids[2]}" || status=1
-kill "${pids[3]}" 2>/dev/null; wait "${pids[3]}" 2>/dev/null
+kill $forwarder_pid 2>/dev/null; wait $forwarder_pid 2>/dev/null
 forward 2 render_client.done || forward 2 render_client.failed
 for k in 0 1; do  # the nodes end with the render client's goodbye (or its failure): 30 s
   for _ in $(seq 300); do kill -0 "${pids[$k]}" 2>/dev/null || break; sleep 0.1; done

@@ -154,8 +154,7 @@ occ_cpu_group_make() {
     [ -e "$1/cgroup.subtree_control" ] && echo +cpu >"$1/cgroup.subtree_control"
     return 0
   fi
-  local quota
-  local period=${OCC_CPU_PERIOD_US:-2000}
+  local period=${OCC_CPU_PERIOD_US:-2000} quota
   quota=$(awk -v c="$2" -v p="$period" 'BEGIN { printf "%d", c * p + 0.5 }')
   if [ -e "$1/cpu.cfs_quota_us" ]; then
     echo "$period" >"$1/cpu.cfs_period_us" && echo "$quota" >"$1/cpu.cfs_quota_us"

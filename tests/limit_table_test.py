@@ -3,8 +3,8 @@
 table, run end to end on one small view (the office walked through its walls): its row holds every
 column, the ratios are those of its own medians, the cluster's frames equal brute force's, and
 neither the switch's PVS nor the box floor (stop-and-wait) draws fewer triangles than the exactly
-visible ones. Bad arguments are one error line; --host-cpus runs through CPU groups. Run by ctest (LimitTable.*) with the binaries'
-folder as its argument; asserts nothing about speed."""
+visible ones. Bad arguments are one error line; --host-cpus runs through CPU groups. Run by ctest
+(LimitTable.*) with the binaries' folder as its argument; asserts nothing about speed."""
 import csv
 import math
 import os
