@@ -8,6 +8,7 @@ visible ones. Bad arguments are one error line; --host-cpus runs through CPU gro
 import csv
 import math
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -65,8 +66,9 @@ class LimitTable(unittest.TestCase):
 
     def test_host_cpus(self):
         """--host-cpus: a bad value is one error before anything runs; with root and a cgroup CPU
-        controller the timed runs go through CPU groups (the cluster's log says so) and none is
-        left behind."""
+        controller the timed runs go through CPU groups (the cluster's log says so), the
+        single-process renders' figures are their CPU time over the cores, and no group is left
+        behind."""
         with tempfile.TemporaryDirectory() as tmp:
             p = run(["--scene", "office", "--path", "walk:12", "--host-cpus", "lots"], tmp)
             self.assertNotEqual(p.returncode, 0)
@@ -80,6 +82,15 @@ class LimitTable(unittest.TestCase):
             self.assertEqual(p.returncode, 0, p.stdout[-2000:] + p.stderr[-2000:])
             with open(os.path.join(tmp, "0_64", "r0", "cluster.log")) as f:
                 self.assertIn("each in a CPU group of 0.5 cores (--host-cpus)", f.read())
+            # The single-process frames are timed by their CPU time over the group's 0.5 cores.
+            with open(os.path.join(tmp, "limit.csv")) as f:
+                row = next(csv.DictReader(f))
+            for name, stats, col in (("oracle", "none", "oracle_cpu_ms"), ("none", "none", "cpu_ms"),
+                                     ("frustum", "frustum", "cpu_ms")):
+                with open(os.path.join(tmp, "0_64", "r0", stats, "stats.csv")) as f:
+                    cpu = [float(r[col]) for r in list(csv.DictReader(f))[2:]]
+                self.assertAlmostEqual(float(row[f"{name}_median_ms"]), statistics.median(cpu) / 0.5, delta=0.006,
+                                       msg=name)
             self.assertEqual([g for g in os.listdir(root) if g.startswith("occswitch-")], [])
 
 
