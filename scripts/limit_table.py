@@ -66,13 +66,12 @@ def column(stats, name, skip):
     return [float(r[name]) for r in rows[skip:]]
 
 
-def single(stats, what, args):
-    """A single-process render's frame times (what: "oracle" or "render"): wall clock, or with
-    --host-cpus its CPU time over the group's cores (the module's docstring says why)."""
+def single(stats, wall, cpu, args):
+    """A single-process render's frame times: its column `wall` (wall clock), or with --host-cpus
+    its column `cpu` (CPU time) over the group's cores (the module's docstring says why)."""
     if not args.host_cpus:
-        return column(stats, f"{what}_ms", args.skip)
-    cpu = column(stats, "oracle_cpu_ms" if what == "oracle" else "cpu_ms", args.skip)
-    return [c / float(args.host_cpus) for c in cpu]
+        return column(stats, wall, args.skip)
+    return [c / float(args.host_cpus) for c in column(stats, cpu, args.skip)]
 
 
 def p99(v):
@@ -107,9 +106,9 @@ def measure(scene, path, size, args, out):
         run(timed + ["--cull", "frustum", "--no-images", "--out", f"{d}/frustum"], f"{d}/frustum.log")
         run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--no-images",
              "--on-node-failure", "exit", "--out", f"{d}/cluster", *cluster_flags], f"{d}/cluster.log")
-        runs["oracle"].append(single(f"{d}/none/stats.csv", "oracle", args))
-        runs["none"].append(single(f"{d}/none/stats.csv", "render", args))
-        runs["frustum"].append(single(f"{d}/frustum/stats.csv", "render", args))
+        runs["oracle"].append(single(f"{d}/none/stats.csv", "oracle_ms", "oracle_cpu_ms", args))
+        runs["none"].append(single(f"{d}/none/stats.csv", "render_ms", "cpu_ms", args))
+        runs["frustum"].append(single(f"{d}/frustum/stats.csv", "render_ms", "cpu_ms", args))
         runs["cluster"].append(column(f"{d}/cluster/stats.csv", "frame_interval_ms", args.skip))
     pvs = [pvs_over_exact(os.path.join(out, f"r{r}"), args.skip) for r in range(args.repeats)]
     drawn_tri, exact_tri, occlusion_frames, frames = (sum(p[k] for p in pvs) for k in range(4))
