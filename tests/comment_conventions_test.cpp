@@ -38,10 +38,11 @@ const std::vector<std::string> kNotYetChecked = {
 };
 
 // Directories (relative to the source root, or any directory of these names) that hold no source
-// of ours: build trees, run outputs, version control, third-party code, prose.
+// of ours: build trees, run outputs, version control, shared data, third-party code, prose.
 bool skipped_directory(const std::string& rel, const std::string& name) {
   if (name.empty() || name[0] == '.') return true;  // .git, .ci, editor state
   if (name.rfind("build", 0) == 0 || name.rfind("out", 0) == 0) return rel == name;  // top-level build*/, out*/
+  if (rel == "shared") return true;  // scenes and tools beside a checkout, not ours
   if (name == "Testing" || name == "third_party" || name == "external" || name == "_deps") return true;
   return rel == "docs";
 }
