@@ -37,8 +37,8 @@ inline long rss_mb() { return status_mb("VmRSS:"); }
 // Transparent huge pages for large heap blocks (glibc's tunable glibc.malloc.hugetlb=1: malloc
 // madvises its large mappings MADV_HUGEPAGE; this kernel's THP mode is "madvise"). The geometry
 // the processes stage and llvmpipe's copy of it are large blocks written once, and with 4 KiB
-// pages their page faults were half of start-up on these (paravirtualised) machines: plant:13,
-// one process, upload 10.9 -> 4.5 s, CPU 12.9 -> 7.2 s, same peak RSS. glibc reads tunables only
+// pages their page faults were a large part of start-up on paravirtualised machines (measured on
+// plant:13; peak RSS unchanged). glibc reads tunables only
 // when a process starts, so the process executes itself again, once, with the tunable added to
 // GLIBC_TUNABLES (same pid, arguments and descriptors). OCC_HUGE_PAGES=0 turns this off; if the
 // exec fails the process simply goes on with small pages. Call first thing in main().
@@ -59,8 +59,8 @@ inline void use_huge_pages(char** argv) {
 // thread a malloc arena of its own, so what fn allocates lives there, and so do the holes left when
 // the scene's CPU geometry is freed as it is uploaded, between the names, boxes and indexes that
 // stay. In the main arena those holes made every malloc of llvmpipe's 64 KiB binning blocks (its
-// main thread allocates and frees thousands a second) search long free lists: _int_malloc took
-// ~8 % of a plant:13 process's CPU, 0.2 % with the load on its own thread (perf).
+// main thread allocates and frees thousands a second) search long free lists (perf showed
+// _int_malloc high on a plant:13 process; with the load on its own thread it is negligible).
 template <class F>
 auto in_own_arena(F&& fn) -> decltype(fn()) {
   std::optional<decltype(fn())> result;

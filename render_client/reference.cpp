@@ -48,7 +48,7 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 //   exact_added/exact_removed: how the exact set changed from the frame before (its own id churn:
 //     what an incremental visible set could save at best on this path, scripts/spikes_report.py);
 //   oracle_ms/oracle_cpu_ms: a shaded render of exactly the visible nodes, what a renderer that
-//     knew visibility for free would pay (the scene's own frame-to-frame variation, issue 15);
+//     knew visibility for free would pay (the scene's own frame-to-frame variation);
 //   oracle_diff_pixels: where that render differs from the frame (0 unless the item buffer missed
 //     a visible node; -1 with --no-images: not compared).
 struct ExactStats {

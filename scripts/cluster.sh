@@ -42,23 +42,20 @@
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
 # --node-raster-threads N (default 0): llvmpipe's rasteriser threads in each switch node
-# (LP_NUM_THREADS for the nodes only). 0
-# rasterises on the node's own thread: its work is many small passes it waits for (OR flushes,
-# HC box tests), and three processes already fill this machine's cores. Duplex orbit 512^2,
-# paired runs: frame interval 0.92-0.98x against 1 (docs/results.md). It also keeps the nodes
-# clear of a Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
+# (LP_NUM_THREADS for the nodes only). 0 rasterises on the node's own thread: its work is many
+# small passes it waits for (OR flushes, HC box tests), and three processes already fill this
+# machine's cores (0 measured faster than 1: docs/results.md). It also keeps the nodes clear of a
+# Mesa 22.3 rasteriser-thread race that can corrupt the heap (docs/hard_cases.md).
 # --client-raster-threads N|auto (default auto): the render client's llvmpipe rasteriser threads
 # (its LP_NUM_THREADS). auto: 0 where the nodes are pinned (below: the client has the other
 # cores, and a rasteriser thread of its own would only hand its work over and compete with the
-# nodes for theirs; paired runs at 512^2, 2 cores: schependomlaan 21.0 -> 19.0 ms, the saw 11.1
-# -> 9.9, the engine 8.7 -> 7.4, Sponza 5.5 -> 5.2, docs/results.md), else $LP_NUM_THREADS, or 1.
+# nodes for theirs; measured faster on two cores, docs/results.md), else $LP_NUM_THREADS, or 1.
 # --pin-nodes auto|on|off (default auto: on where this machine has fewer than 4 CPUs): both switch
 # nodes run on this process's last CPU (taskset), the render client on any. With three processes
 # on two cores the render client, whose frame the user waits for, then keeps a core while the
 # nodes work; left to float, a node's thread preempts its rasteriser mid-frame. Light views gain
-# most (paired runs, 512^2: the bridge orbit 1.70 -> 1.34 ms, sgd_bodo walk 3.43 -> 2.73, the
-# duplex orbit 3.69 -> 3.15, docs/results.md); heavy ones, where all three are busy anyway, gain
-# nothing. With four CPUs or more each process has its own.
+# most (docs/results.md); heavy ones, where all three are busy anyway, gain nothing. With four
+# CPUs or more each process has its own.
 # --host-cpus CORES (root): each of the three processes in a CPU cgroup of its own with CORES
 # cores of CPU time (scripts/lib.sh), as on three hosts of CORES cores each: none takes time from
 # another (the nodes are not pinned, the render client's rasteriser threads as without pinning).
@@ -308,7 +305,7 @@ fi
 # would otherwise wait for it until their --timeout-ms). A node dying later leaves the client
 # degraded (docs/recovery.md): the run goes on, and the node is started again on its port while
 # --restart-nodes allows (the client's rejoiner takes it back). Once the client is done the nodes
-# get 30 s to finish; a restarted node that had not rejoined by then is stopped.
+# get up to 30 s to finish; a restarted node that had not rejoined by then is stopped.
 status=0
 deadline=$((SECONDS + MAX_SECONDS))
 declare -A running=([render_client]=$rvg_pid [node0]=$node0_pid [node1]=$node1_pid)

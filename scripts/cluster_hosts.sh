@@ -124,7 +124,7 @@ status=0
 wait "${pids[2]}" || status=1
 kill $forwarder_pid 2>/dev/null; wait $forwarder_pid 2>/dev/null
 forward 2 render_client.done || forward 2 render_client.failed
-for k in 0 1; do  # the nodes end with the render client's goodbye (or its failure): 30 s
+for k in 0 1; do  # the nodes end with the render client's goodbye (or its failure): waits up to 30 s
   for _ in $(seq 300); do kill -0 "${pids[$k]}" 2>/dev/null || break; sleep 0.1; done
   kill -0 "${pids[$k]}" 2>/dev/null && { say "${role[$k]} on ${host[$k]} still running: stopped"; kill "${pids[$k]}"; }
   wait "${pids[$k]}" || status=1

@@ -82,9 +82,9 @@ occ_report_failure() {
 # redirected like this: it says its line with occ_trap_say, on fd 3 where the script kept its own
 # stderr (exec 3>&2 at its start), else on stderr. No process is started: a timed read on a FIFO
 # that nothing writes (opened once, its name removed at once), because the supervision loops
-# tick ten times a second for the whole run, and a fork and exec of sleep(1) each time took 4-5 %
-# of a 2-core machine's CPU from the processes they supervise (perf record -a, a cluster run of
-# the pipes). Where no FIFO can be made, sleep(1).
+# tick ten times a second for the whole run, and a fork and exec of sleep(1) each time took a
+# noticeable share of a 2-core machine's CPU from the processes they supervise (perf record -a).
+# Where no FIFO can be made, sleep(1).
 occ_quiet_sleep() {
   {
     if [ -z "${occ_tick_fd:-}" ]; then
@@ -123,9 +123,9 @@ occ_frames_path() {
 # share CORES cores of CPU time (a CFS quota per period: OCC_CPU_PERIOD_US, default 2000), so that
 # each process of the cluster runs as on a host of its own with that many cores, on one machine:
 # none takes time from another, and a single-process render measured the same way gets the same
-# machine. A short period keeps that budget steady: with 10 ms a 2 ms frame ran unthrottled in
-# bursts (the duplex's oracle at 0.66 cores: 2.2 ms median, p99 8.8-11.7; with 2 ms: 3.4-3.7, p99
-# 5.9). Root and the kernel's CPU controller (cgroup v1's cpu hierarchy, or v2 with cpu) needed.
+# machine. A short period keeps that budget steady: with a period much longer than a frame, a
+# frame runs unthrottled in bursts and then waits (a heavy p99; docs/results.md). Root and the
+# kernel's CPU controller (cgroup v1's cpu hierarchy, or v2 with cpu) needed.
 #
 # occ_cpu_cores VALUE FLAG: VALUE must be a number of cores, 0.05 up to this machine's CPUs.
 occ_cpu_cores() {

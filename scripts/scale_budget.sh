@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Memory and frame rate against scene size with the geometry resident within a budget and with
-# all of it resident (issue 38, docs/scale.md): the switch (three processes) on the generated plant
+# all of it resident (docs/scale.md): the switch (three processes) on the generated plant
 # at several sizes, one run per size and mode, on one path. Per run: mean fps, the median and p99
 # frame interval, the peak resident memory of the three processes together, the time from the
 # start of the cluster to its first frame, and the render client's waits for geometry. Writes

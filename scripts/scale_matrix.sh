@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Frame time and memory against scene size (issue 16, docs/scale.md): the generated plant at
+# Frame time and memory against scene size (docs/scale.md): the generated plant at
 # several sizes, rendered by frustum culling and CHC (one process each) and by the switch (three
 # processes), --no-images, on one path. Per size and method: mean and median frame time, mean
 # nodes drawn (visible set for the switch), triangles per frame, peak resident memory (the sum

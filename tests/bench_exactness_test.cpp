@@ -1,4 +1,4 @@
-// Issue 13: the single-process occlusion baselines must draw brute force's frames exactly, not
+// The single-process occlusion baselines must draw brute force's frames exactly, not
 // within a tolerance. Stop-and-wait and CHC used to shade leaves in traversal order, so wherever
 // two coplanar surfaces tie in depth the first-drawn one won and the frame differed from
 // `--cull none` (5 pixels on this duplex walk, 127 in one frame at 400x300) although every

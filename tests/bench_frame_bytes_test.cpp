@@ -1,4 +1,4 @@
-// Issue 13: bytes_received in the render client's stats.csv is the size of the messages that
+// bytes_received in the render client's stats.csv is the size of the messages that
 // belong to the frame (camera, diff chunks, EndOfFrame), even when the transport's io thread has
 // read many frames ahead. It used to be a difference of the connection's byte counter, which
 // charged a frame with whatever the io thread had read meanwhile (0 B on some frames, several

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 13: scripts/bench_report.py's arithmetic on hand-made stats.csv files (signs, ratios,
+"""scripts/bench_report.py's arithmetic on hand-made stats.csv files (signs, ratios,
 wrong pixels, CPU columns and the three-machine model). Run by ctest (BenchReport.Arithmetic)."""
 import csv
 import importlib.util
@@ -43,10 +43,10 @@ class Fixture:
         write(f"{out}/frustum/stats.csv", REF_COLS, [[f, 40, 2000, 50.0, 0, 45.0] for f in range(4)])
         write(f"{out}/stop-and-wait/stats.csv", REF_COLS, [[f, 5, 500, 200.0, 50, 150.0] for f in range(4)])
         write(f"{out}/chc/stats.csv", REF_COLS, [[f, 8, 800, 25.0, 20, 20.0] for f in range(4)])
-        # GigaWalk: 20 ms frames (50 fps); server OR 6 + HC 1 ms, RVG 5 ms.
+        # GigaWalk: frame_ms 20 (50 fps); server OR 6 + HC 1, RVG 5 (ms columns).
         write(f"{out}/gigawalk/stats.csv", CLUSTER_COLS,
               [cluster_row(f, 20.0, 1, 1, 300, 1.0, 6.0, 0.0, 5.0) for f in range(4)])
-        # Switch: 12.5 ms frames (80 fps); ids per frame inc_ids (incremental) against full_ids.
+        # Switch: frame_ms 12.5 (80 fps); ids per frame inc_ids (incremental) against full_ids.
         write(f"{out}/switch/stats.csv", CLUSTER_COLS,
               [cluster_row(f, 12.5, inc_ids, 0, 400, 8.0, 4.0, 1.0 + f, 6.0) for f in range(4)])
         write(f"{out}/switch_full/stats.csv", CLUSTER_COLS,
@@ -128,7 +128,7 @@ class Report(unittest.TestCase):
         self.assertAlmostEqual(float(rows["switch"]["model_ms_three_machines"]), expect, places=2)
         # GigaWalk: max(server 1 + 6 + bytes, RVG 5) = 7.0024
         self.assertAlmostEqual(float(rows["gigawalk"]["model_ms_three_machines"]), 7.0, places=2)
-        # A 5 ms link delay lands on the switch's chain of HCs once per frame.
+        # A link delay (--model-delay-ms 5) lands on the switch's chain of HCs once per frame.
         rows5, md5 = fx.run("--model-delay-ms", "5")
         self.assertAlmostEqual(float(rows5["switch"]["model_ms_three_machines"]),
                                ((15 + t) + (16 + t) + (17 + t) + max(6, (5 + 4 - 4) / 2)) / 4, places=2)

@@ -1,4 +1,4 @@
-// Issue 17 item 4/5: --version everywhere (one version, the VERSION file), script --help prints
+// --version everywhere (one version, the VERSION file), script --help prints
 // help without installing or building, and scripts/video.sh makes an MP4 (skipped without ffmpeg).
 #include <gtest/gtest.h>
 
@@ -76,7 +76,7 @@ TEST(Conventions, VideoFromFrames) {
 }
 
 // scripts/cluster.sh names the failing process with its own error line, and stops the others at
-// once instead of letting them wait for it (a bad --path took 31 s: the nodes' --timeout-ms).
+// once instead of letting them wait for it until the nodes' --timeout-ms.
 namespace {
 std::vector<std::string> cluster(const fs::path& out, std::vector<std::string> extra) {
   std::vector<std::string> a = {"/bin/bash", script("cluster.sh"), "--out", out.string(), "--width", "64", "--height", "48"};
@@ -262,9 +262,9 @@ std::string cpu_quota(const fs::path& group) {
 }  // namespace
 
 // --host-cpus 0.5: node 0, node 1 and the render client each in a CPU group of its own with half a
-// core's time (1 ms per 2 ms), none pinned, the render client with $LP_NUM_THREADS rasteriser
-// threads as on a host of its own; the groups are gone after the run (stopped by Ctrl-C). Bad values
-// are one error.
+// core's time (a 1 ms quota per 2 ms period), none pinned, the render client with $LP_NUM_THREADS
+// rasteriser threads as on a host of its own; the groups are gone after the run (stopped by
+// Ctrl-C). Bad values are one error.
 TEST(Conventions, ClusterHostCpusGivesEachProcessCpuTimeOfItsOwn) {
   const fs::path dir = fresh_dir("cluster_host_cpus");
   for (const std::string bad : {"0", "abc", "1e3", "-1", "99"}) {

@@ -168,7 +168,7 @@ TEST(Hzb, RedrawnPixelsAreTheUnionOfTheDrawnBoxesFootprints) {
   EXPECT_FALSE(r.touches(m));
 }
 
-// ---- The HC pyramid probe (issue 16): level choice, rectangle, depth bound; GL-free.
+// ---- The HC pyramid probe: level choice, rectangle, depth bound; GL-free.
 
 TEST(HzbProbe, LevelCountHalvesRoundingUpToOneTexel) {
   EXPECT_EQ(pyramid_level_count({1, 1}), 1u);

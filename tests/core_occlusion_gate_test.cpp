@@ -93,7 +93,7 @@ TEST(OcclusionGate, TheFirstTrialComesAtOnceAndMeasuresBothModesBeforeDeciding) 
 TEST(OcclusionGate, NeverTriesWhereOcclusionCullsMostTriangles) {
   OcclusionGate g{{}};
   // Without occlusion frames would be faster (say, a machine with spare cores), but the frustum
-  // set is 3x the visible set: a trial would risk a run of heavy frames (issue 15).
+  // set is 3x the visible set: a trial would risk a run of heavy frames.
   Sim s{[](uint32_t, bool occ) { return occ ? 18.0 : 13.0; }, 1000, 3000};
   s.run(g, 500);
   EXPECT_EQ(g.trials(), 0u);
@@ -167,9 +167,9 @@ TEST(OcclusionGate, ATrialIsBracketedSoADriftingPathDoesNotDecideIt) {
   for (double slope : {1.5, -1.5})
     for (bool off_faster : {true, false}) {
       OcclusionGate g{{}};
-      // 100 ms at frame 0 rising 1.5 ms a frame, or 300 ms falling as fast: over the 11 frames
-      // between two windows more than the 10 % by which the faster mode beats the other on the
-      // same view (0.9x).
+      // A frame time rising steadily, or falling as fast: over the 11 frames between two windows
+      // it drifts by more than the margin by which the faster mode beats the other on the same
+      // view (0.9x).
       Sim s{[=](uint32_t f, bool occ) { return ((slope > 0 ? 100.0 : 300.0) + slope * f) * (occ == off_faster ? 1.0 : 0.9); }};
       s.run(g, 100);
       if (off_faster)
@@ -239,12 +239,11 @@ TEST(OcclusionGate, ATrialWaitsForAFullBaselineAndEndsAtAClearLoss) {
   EXPECT_FALSE(g.decided_occlusion());
 }
 
-// A path whose content falls unevenly (Sponza's walk: 147 k triangles in view, then 15 k): each
-// frame costs 0.5 ms + its frustum set's triangles / 15,000 per ms, the slower mode 1.15x that
-// (within lose x: every window runs in full). The bracket's means, before and after a trial,
-// made the later, lighter window look faster (the old gate: 33 and 39 of the last 60 frames in
-// the faster mode where frames without occlusion are faster); judged on the frames' content,
-// the gate keeps to the faster mode but for its trials, whichever mode it starts with.
+// A path whose content falls unevenly (a full view narrowing, as on Sponza's walk): each frame
+// costs a constant plus a time proportional to its frustum set's triangles, the slower mode 1.15x
+// that (within lose x: every window runs in full). The bracket's means, before and after a trial,
+// would make the later, lighter window look faster; judged on the frames' content, the gate
+// keeps to the faster mode but for its trials, whichever mode it starts with.
 TEST(OcclusionGate, ADriftingPathIsJudgedByItsFramesContent) {
   const auto triangles = [](uint32_t f) { return uint64_t(15000 + 135000 * std::exp(-double(f) / 8.0)); };
   for (bool start_on : {true, false}) {

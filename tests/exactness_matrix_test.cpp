@@ -1,4 +1,4 @@
-// Every culling method draws brute force's frames exactly, pixel for pixel (issue 33): CHC and
+// Every culling method draws brute force's frames exactly, pixel for pixel: CHC and
 // stop-and-wait (one process), the switch (three processes), the switch's frustum sets culled by the
 // render client in two passes, and the depth-readback occlusion server (GigaWalk), against
 // `--cull none`, on

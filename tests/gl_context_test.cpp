@@ -75,7 +75,7 @@ TEST_P(GlContextBackend, CanBeMovedBetweenThreadsAndRecreated) {
 INSTANTIATE_TEST_SUITE_P(Backends, GlContextBackend, testing::Values(GlBackend::Egl, GlBackend::OSMesa),
                          [](const auto& info) { return info.param == GlBackend::Egl ? "Egl" : "OSMesa"; });
 
-// The renderer class (issue 34): from GL_RENDERER and GL_VENDOR alone.
+// The renderer class: from GL_RENDERER and GL_VENDOR alone.
 TEST(RendererClass, SoftwareRasterisersAndGpus) {
   EXPECT_EQ(classify_renderer("llvmpipe (LLVM 15.0.6, 256 bits)", "Mesa/X.org"), RendererClass::software);
   EXPECT_EQ(classify_renderer("softpipe", "Mesa"), RendererClass::software);

@@ -106,7 +106,7 @@ TEST(CpuOr, NeverNearerThanGlAndHidesOnlyWhatGlHides) {
       EXPECT_EQ(hidden_but_shown, 0u) << "of " << hidden << " leaves found hidden, GL's query saw samples";
       // It must prove something, or the checks above say nothing; and it covers nearly what GL
       // covers: it leaves out only centres within rounding of an outline (a few percent where
-      // thin parts are tessellated finer than a pixel: the pipes at 203 x 117 lose 2.9 %).
+      // thin parts are tessellated finer than a pixel, as the pipes' at low resolution).
       EXPECT_GT(hidden, 0u) << "of " << tested;
       EXPECT_LE(lost, covered / 20) << "of " << covered << " pixels GL covers, left uncovered";
     }

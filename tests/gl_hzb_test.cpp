@@ -1,4 +1,4 @@
-// HC's GPU depth pyramid (issue 16, common/gl/hzb_query.hpp) on a real GL context: its levels equal
+// HC's GPU depth pyramid (common/gl/hzb_query.hpp) on a real GL context: its levels equal
 // the CPU pyramid's, it never proves a box occluded whose occlusion query passes, and the switch
 // step finds the same visible sets with --hc-test pyramid and cpu-pyramid as with queries.
 #include <gtest/gtest.h>
@@ -407,7 +407,7 @@ TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
 }
 
 // Not a check (no timing assertions): what a build and a test dispatch cost at 1024 x 1024 here.
-// A benchmark, 20 s of the suite (more under the sanitizers), so only when asked:
+// A benchmark, too slow for every run of the suite (more so under the sanitizers), so only when asked:
 //   OCC_BENCH=1 build/bin/gl_hzb_test --gtest_filter=GpuDepthPyramid.PrintsItsCostAt1024
 TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   if (!std::getenv("OCC_BENCH")) GTEST_SKIP() << "a benchmark: OCC_BENCH=1 runs it";

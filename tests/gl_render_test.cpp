@@ -268,7 +268,7 @@ TEST(BoxQuerier, EyeInsideBoxCountsTheViewportWithoutDrawing) {
   EXPECT_TRUE(visible_without_query(around_eye, f.cam));
 }
 
-// Issue 16: the geometry goes to GL in small segments (hundreds here) and, with Upload::release,
+// The geometry goes to GL in small segments (hundreds here) and, with Upload::release,
 // the CPU arrays are freed as they go. The frames (full detail, leaf LODs, HLODs, item ids) must
 // be those of the default upload, and what culling needs must survive the release.
 TEST(SceneRenderer, StreamedUploadWithReleaseDrawsTheSameFramesAndFreesTheArrays) {
@@ -459,7 +459,7 @@ TEST(SceneRenderer, PlantSolidsLookTheSameWithBackFacesCulled) {
   const size_t pixels = frames * size_t(kSize) * kSize;
   std::cout << "plant single- vs double-sided: " << differing << " of " << pixels << " pixels differ\n";
   EXPECT_GT(shown, pixels / 2);             // the views show the plant
-  EXPECT_LT(differing, pixels / 1000 + 1);  // under 0.1 %
+  EXPECT_LT(differing, pixels / 1000 + 1);  // at most 0.1 %
 }
 
 // The exact count's glass (reference --exact): a BLEND item counts as shown when it passes the

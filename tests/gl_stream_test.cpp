@@ -1,4 +1,4 @@
-// Geometry resident within a budget (issue 38): SceneRenderer streaming its pieces through a
+// Geometry resident within a budget: SceneRenderer streaming its pieces through a
 // GeometryPool far smaller than the scene (so pieces are evicted and read again, and draw calls are
 // cut into windows) draws the frames of the resident upload, pixel for pixel and query for query;
 // the same from a scene and LODs read lazily from their caches; and --geometry-budget's values.

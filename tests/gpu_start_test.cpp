@@ -1,4 +1,4 @@
-// Issue 34: the binaries start with only EGL present. No binary links OSMesa (and through it
+// The binaries start with only EGL present. No binary links OSMesa (and through it
 // libLLVM) or Xlib; with OSMesa made unloadable (OCC_OSMESA_LIBRARY naming a file that does not
 // exist) a render still goes through EGL with the same frames, and asking for OSMesa, or for a
 // window without Xlib (OCC_X11_LIBRARY), fails with one error line naming the library. And the
@@ -93,7 +93,7 @@ TEST(GpuStart, WindowWithoutXlibFailsWithOneErrorNamingIt) {
                    {"--window: cannot load Xlib " + kMissing, "OCC_X11_LIBRARY", "libX11"}, {.code = 1});
 }
 
-// Issue 34 item 3: scripts/gpu_bundle.sh, then the bundle's run_gpu.sh end to end on llvmpipe in a
+// scripts/gpu_bundle.sh, then the bundle's run_gpu.sh end to end on llvmpipe in a
 // folder that holds nothing else, with a bare environment (PATH without the build, no
 // LD_LIBRARY_PATH, a fresh HOME), through the bundle's own libglvnd and glibc (--libs bundled):
 // refused without --allow-software; with it, one table whose culling methods and cluster have no

@@ -1,4 +1,4 @@
-# Hard cases (issue 7), label "hard" (scripts/test.sh and CI run every label; `scripts/test.sh -L hard`
+# Hard cases, label "hard" (scripts/test.sh and CI run every label; `scripts/test.sh -L hard`
 # runs only these): numerical hard cases through the three real processes, translated scenes,
 # extreme viewports, rotation drift, faults and bad input at the listening ports, and the
 # depth-precision measurement (GL).

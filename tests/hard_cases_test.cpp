@@ -1,4 +1,4 @@
-// Numerical hard cases through the three real processes (issue 7): each pins exact cameras on a
+// Numerical hard cases through the three real processes: each pins exact cameras on a
 // generated hard-case scene (common/scene/scene_io.hpp, hard:* and offset:*) and requires the cluster
 // frame to equal the reference frame (no culling) for every frame: culling must stay
 // conservative however degenerate the camera or the geometry.

@@ -1,4 +1,4 @@
-// Extreme near/far (issue 7): near 1e-3, far 1e6. Measures what a conventional depth buffer
+// Extreme near/far: near 1e-3, far 1e6. Measures what a conventional depth buffer
 // would do ("before") against what the renderer does ("after": reverse-Z, GL_DEPTH_COMPONENT32F,
 // glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE), GL_GREATER, cleared to 0, occ::Camera's
 // projection), on pairs of full-screen planes at distance d and d * (1 + gap): the nearer plane

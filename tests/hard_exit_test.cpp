@@ -1,4 +1,4 @@
-// The occlusion switch's worst case (issue 15): the eye walks out of a closed room, through its
+// The occlusion switch's worst case: the eye walks out of a closed room, through its
 // wall, into a dense field of cubes. Nothing the room showed last frame hides the field, so an HC
 // that only tests against the OR's depth (the room) finds everything in the frustum visible: a
 // frame that draws hundreds of cubes where a handful show. HC's occluder fusion (near-first

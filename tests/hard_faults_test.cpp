@@ -1,4 +1,4 @@
-// Faults and bad input at the listening ports of the real switch nodes (issue 7): random bytes,
+// Faults and bad input at the listening ports of the real switch nodes: random bytes,
 // a client that connects and says nothing, a peer speaking another protocol version. Each is
 // refused with a logged reason naming the stranger's address ("occ_net: peer 127.0.0.1:PORT:
 // <reason>"), and the node keeps serving its real peers: the cluster run then completes with

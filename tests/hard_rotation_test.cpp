@@ -1,4 +1,4 @@
-// Camera orientation from many concatenated small rotations (issue 7): Camera::rotate_local
+// Camera orientation from many concatenated small rotations: Camera::rotate_local
 // re-normalises after every step, so a million small turns end where the directly computed
 // orientation is, and a path built that way renders through the three real processes exactly
 // like the directly computed path (reference renderer).

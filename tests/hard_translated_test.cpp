@@ -1,4 +1,4 @@
-// Scenes far from the origin (issue 7): the same scene translated by 1e4, 1e6 and 1e7 units
+// Scenes far from the origin: the same scene translated by 1e4, 1e6 and 1e7 units
 // (offset:DX,DY,DZ:<spec>, which moves the double-precision object transforms) seen by the same
 // cameras translated alike. Eye positions are double and rendering is camera-relative
 // (SceneRenderer subtracts the eye in double before rounding to float; BoxQuerier does the same

@@ -42,8 +42,8 @@ inline std::string write_path(const fs::path& file, const std::vector<occ::Camer
   return file.string();
 }
 
-// The cluster of the hard cases (cluster_run.hpp): lockstep cameras from a CSV path, 30 s
-// timeouts in the processes.
+// The cluster of the hard cases (cluster_run.hpp): lockstep cameras from a CSV path; the
+// processes' timeouts are 30 s.
 inline ClusterOptions hard_cluster(const std::string& scene, const std::string& path, const View& view) {
   ClusterOptions o(scene, path, view.args());
   o.timeout_ms = 30000;

@@ -17,12 +17,12 @@ add_dependencies(material_cluster_test switch_node render_client frame_diff)
 # a node killed, stalled or restarted mid-run: degraded frames, resync, frames equal to the reference
 occ_test(recovery_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_recovery_test.cpp)
 add_dependencies(recovery_test switch_node render_client frame_diff link_relay)
-# issue 18: cluster key (membership) and switch_node --serve (successive clients)
+# Cluster key (membership) and switch_node --serve (successive clients)
 occ_test(membership_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_membership_test.cpp)
 add_dependencies(membership_test switch_node render_client frame_diff occlusion_server link_relay)
-# issue 35: scripts/cluster_rank.sh under mpirun -np 3 (skipped without mpirun) and by hand
+# scripts/cluster_rank.sh under mpirun -np 3 (skipped without mpirun) and by hand
 occ_test(launcher_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_launcher_test.cpp)
 add_dependencies(launcher_test switch_node render_client frame_diff)
-# issue 35: scripts/cluster.sh --hosts over ssh, three namespaces with their own sshd (root, sshd)
+# scripts/cluster.sh --hosts over ssh, three namespaces with their own sshd (root, sshd)
 occ_test(hosts_test integration LOCK netns LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_hosts_test.cpp)
 add_dependencies(hosts_test switch_node render_client frame_diff)

@@ -43,7 +43,7 @@ TEST(Cli, RenderClientBadInputGetsOneNamedError) {
                    {"nan.csv", "line 2", "eye_z"});
   expect_one_error(run({ref, "--scene", "city:2x2:1:2:1"}, "noconnect"), {"--connect"});
   expect_one_error(run({ref, "--reference", "--scene", "city:0x2"}, "badcity"), {"city:0x2"});
-  // Retired modes (issue 32) are unknown values now; the tests' hook takes a count only.
+  // Retired modes are unknown values now; the tests' hook takes a count only.
   expect_one_error(run({ref, "--occlusion-gate", "selected"}, "gate_selected"), {"--occlusion-gate 'selected'"});
   expect_one_error(run({ref, "--two-pass", "alternate"}, "two_pass_alternate"), {"--two-pass 'alternate'"});
   ::setenv("OCC_TEST_ALTERNATE", "often", 1);

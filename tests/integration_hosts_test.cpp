@@ -1,4 +1,4 @@
-// scripts/cluster.sh --hosts (issue 35): the three processes on three hosts over ssh. The hosts are
+// scripts/cluster.sh --hosts: the three processes on three hosts over ssh. The hosts are
 // three network namespaces made by tests/ssh_netns.sh, each with its own address and its own sshd
 // (generated host and user keys) bound to that address only. Frames equal the reference; the
 // launcher leaves no process and no work folder behind on any host, also when one fails; an

@@ -1,4 +1,4 @@
-// The cluster under a job launcher (issue 35): scripts/cluster_rank.sh started as three ranks takes
+// The cluster under a job launcher: scripts/cluster_rank.sh started as three ranks takes
 // its role from the rank, the ranks meet through a rendezvous folder, and the frames equal the
 // reference renderer's. Under `mpirun -np 3` (skipped without mpirun: Debian's openmpi-bin,
 // scripts/setup.sh installs it) and, everywhere, as three processes given --rank by hand. A rank

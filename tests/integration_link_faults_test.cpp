@@ -21,7 +21,8 @@ void stop_link_mid_run(const std::string& name, const std::string& command) {
   o.relay_node1 = true;
   // The default, degrade: integration_recovery_test.cpp. The short receive timeout is the
   // client's only: the nodes' --timeout-ms also bounds their wait for the processes started after
-  // them, which takes seconds on a loaded machine (3000 ms there once left node 0 without a peer).
+  // them, which takes seconds on a loaded machine (a node timeout that short can leave node 0
+  // without a peer).
   o.client = {"--on-node-failure", "exit", "--timeout-ms", "3000"};
   Cluster c(fresh_dir(name), o);
   ASSERT_TRUE(c.start_and_show(10)) << c.logs();

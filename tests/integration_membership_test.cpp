@@ -1,4 +1,4 @@
-// Issue 18 items 2 and 3 through the real processes on loopback: a cluster key keeps processes
+// Cluster membership through the real processes on loopback: a cluster key keeps processes
 // without it (or with another) out of the slots, while the real client is served; with
 // switch_node --serve the node pair outlives its clients, one at a time: a second client while one
 // is served is told the cluster is busy (at once, not after a timeout), a client that dies does
@@ -228,7 +228,7 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   EXPECT_EQ(a["added"], b["added"]);
 }
 
-// Issue 32: a node's summary of a client counts that client's frames only (each client gets a
+// A node's summary of a client counts that client's frames only (each client gets a
 // fresh session: nothing is reset by hand, so no counter can be forgotten). Two clients one after
 // the other, neither with occlusion (--occlusion-gate off): every HC frame of each is a frustum
 // set, so each summary's frames without occlusion equal its own HC frames.

@@ -1,4 +1,4 @@
-// Degrade and resync (issue 18), through the real processes on loopback: a switch node killed or
+// Degrade and resync, through the real processes on loopback: a switch node killed or
 // stalled mid-run leaves the render client going on (--on-node-failure degrade, the default): the
 // other node serves alone, or the client frustum-culls; a node restarted on its port rejoins with
 // a resync and the switch resumes. Through all of it every frame equals the reference renderer's
@@ -118,7 +118,7 @@ TEST(Recovery, NodeKilledWhileTheOtherWaitsForItsStreamIsDroppedAtOnce) {
   ASSERT_EQ(c.control("stall").rfind("ok", 0), 0u);
   c.client().signal(SIGCONT);
   // The switch stops within a frame or two: each node waits for the other's stream. Stopped:
-  // no new frame for 3 s (a frame of this size takes milliseconds, also on a loaded machine).
+  // no new frame within 3 s (a frame of this size takes far less, also on a loaded machine).
   size_t shown = read_csv(c.stats())["frame"].size();
   for (int quiet = 0; quiet < 150;) {
     std::this_thread::sleep_for(20ms);
@@ -443,7 +443,7 @@ size_t expect_node1_serves_again(const fs::path& out, const std::string& path, s
   return back;
 }
 
-// scripts/cluster.sh supervises (issue 35): node 1 killed mid-run no longer ends the run. The
+// scripts/cluster.sh supervises: node 1 killed mid-run no longer ends the run. The
 // launcher says so, starts node 1 again with the same flags on its port, the render client takes it
 // back and the switch resumes; cluster.sh exits 0 and its summary says what happened.
 TEST(Recovery, LauncherRestartsAKilledNodeAndTheRunFinishes) {

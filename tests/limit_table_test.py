@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 37: scripts/limit_table.py, the one command that makes docs/results.md's "cluster / oracle"
+"""scripts/limit_table.py, the one command that makes docs/results.md's "cluster / oracle"
 table, run end to end on one small view (the office walked through its walls): its row holds every
 column, the ratios are those of its own medians, the cluster's frames equal brute force's, and
 neither the switch's PVS nor the box floor (stop-and-wait) draws fewer triangles than the exactly

@@ -1,4 +1,4 @@
-// The tau > 0 promise, checked end to end (issue 33): the full-detail reference and the cluster at
+// The tau > 0 promise, checked end to end: the full-detail reference and the cluster at
 // --pixel-error tau in {0.5, 1, 2, 5} write item buffers (render_client --item-buffer) and
 // frame_diff --items --check compares them. On the city the promise holds as stated: 0 objects
 // missing, every wrong pixel displaced by at most tau + 1. On the plant it holds for all but

@@ -117,7 +117,7 @@ TEST(Navigator, JumpToFollowsAPathCameraAndNearFarFollowTheEye) {
   EXPECT_DOUBLE_EQ(c.far_dist, path[1].far_dist);  // auto_near_far at the same eye
 }
 
-// Item 4 of issue 17: an unknown --path kind says so (not "cannot open camera path file").
+// An unknown --path kind says so (not "cannot open camera path file").
 TEST(CameraPathSpec, UnknownKindAndMissingCountSaySo) {
   auto error_of = [](const std::string& spec) -> std::string {
     try {

@@ -361,11 +361,11 @@ TEST_F(Tls, LargeAndSmallMessagesInBurstsArriveIntactAndInOrder) {
 // Messages queued while the TLS handshake ends are written once: the handshake's completion and
 // a write the owner queued meanwhile both started one, and the second wrote the first's bytes
 // again (a switch node once read a render client's hello twice: "expected proof, got hello").
-// The connector's first send comes 0-3 ms after it connected (across the connections), so that
+// The connector's first send comes up to 3 ms after it connected (across the connections), so that
 // some land as the handshake ends; each acceptor must receive exactly frames 0..n-1, in order,
 // then the connector's Bye. The window is a few instructions wide: with the handshake's
-// completion slowed by 3 ms (a sleep put there by hand) the old code failed here (152 messages
-// for 120); as it is, this passes on the old code too and guards the fix under load.
+// completion slowed by hand (a sleep put there) the old code failed here (messages arrived
+// twice); as it is, this passes on the old code too and guards the fix under load.
 TEST_F(Tls, MessagesQueuedWhileTheHandshakeEndsArriveOnce) {
   const net::ClusterKey key = key_of('k');
   constexpr uint32_t kConnections = 60, kMessages = 120;
@@ -383,7 +383,7 @@ TEST_F(Tls, MessagesQueuedWhileTheHandshakeEndsArriveOnce) {
     });
     auto conn = net::Connection::connect("127.0.0.1", listener->port(), 5s, log.options(&key));
     ASSERT_TRUE(conn) << conn.error();
-    std::this_thread::sleep_for(std::chrono::microseconds(50 * c));  // the first send, 0-3 ms in
+    std::this_thread::sleep_for(std::chrono::microseconds(50 * c));  // the first send, up to 3 ms in
     for (uint32_t f = 0; f < kMessages; ++f) {
       ASSERT_EQ(conn->send(wire::NodeDiff{f, {f}, {}}), std::nullopt);
       std::this_thread::sleep_for(std::chrono::microseconds(20));

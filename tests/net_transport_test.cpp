@@ -48,7 +48,7 @@ wire::Hello make_hello(wire::Role role, uint8_t node_id = 0, uint64_t fingerprin
 
 // "Returns when its timeout runs out, not long after": the bound catches a timeout taken in the
 // wrong unit or never armed (a hang is ctest's --timeout), not speed. It is far above the timeouts
-// of 100-600 ms so that a loaded 2-core machine under TSan never trips it.
+// (at most 600 ms) so that a loaded 2-core machine under TSan never trips it.
 constexpr double kPromptMs = 20000;
 
 double elapsed_ms(Clock::time_point since) {

@@ -304,7 +304,7 @@ TEST_F(Relay, RateCapsThroughput) {
 
 TEST_F(Relay, JitterNeverCorruptsOrReorders) {
   ASSERT_NO_FATAL_FAILURE(start([](auto& o) {
-    o.up = o.down = {2, 2, 0};  // releases spread over 0..4 ms
+    o.up = o.down = {2, 2, 0};  // releases spread over up to 4 ms
     o.max_queued_bytes = 1u << 20;
     o.seed = 7;
   }));

@@ -451,7 +451,7 @@ TEST_F(GltfFiles, LowPolySceneSkipsLodSelection) {
   EXPECT_TRUE(lod_benefit(*b.lod, b.hierarchy).worth_selecting());
 }
 
-// A glTF scene's cache (issue 38): written at the first start, read at the next while its files
+// A glTF scene's cache: written at the first start, read at the next while its files
 // are unchanged, rebuilt when one of them changed; read lazily where its arrays exceed the
 // geometry budget, and then each mesh read back is the mesh of the file.
 TEST_F(GltfFiles, SceneCacheIsReadUntilAFileChangesAndLazilyAboveTheBudget) {

@@ -109,7 +109,7 @@ TEST(Plant, BadSpecsNameTheSpec) {
   EXPECT_THROW(plant::generate_plant({0.0, 1}), InputError);
 }
 
-// ---- The scene cache (common/scene/scene_cache.hpp, issue 16).
+// ---- The scene cache (common/scene/scene_cache.hpp).
 
 namespace {
 

@@ -5,6 +5,6 @@ occ_test(window_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_
 target_link_libraries(window_test PRIVATE ${CMAKE_DL_LIBS})
 target_include_directories(window_test PRIVATE ${X11_INCLUDE_DIR})
 add_dependencies(window_test switch_node render_client)
-# Issue 17 items 4 and 5: --version, script --help, scripts/video.sh.
+# Conventions: --version, script --help, scripts/video.sh.
 occ_test(conventions_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/conventions_test.cpp)
 add_dependencies(conventions_test render_client switch_node occlusion_server frame_diff cull_overview link_relay)

@@ -20,14 +20,14 @@ constexpr double kGuard = 262144.0;          // 2^18 pixels: triangles reaching 
 constexpr double kOffsetSlope = 0.1;         // SceneRenderer::kOccluderSlopeOffset, as the GL OR's offset
 constexpr double kOffsetRelative = 1.0 / 1048576.0;
 // GL computes depth in float: z = P22 z_eye + P32, then z / w; far off the two terms nearly
-// cancel, so its error is a few ulps of P32 / w (0.3 % of the depth near the far plane), not of
-// the depth. Here it is computed in double and moved back by this many such ulps.
+// cancel, so its error is a few ulps of P32 / w (near the far plane far more than an ulp of the
+// depth), not of the depth. Here it is computed in double and moved back by this many such ulps.
 constexpr double kDepthUlps = 8.0;
 constexpr double kGuardBand = 8192;  // pixels: corners beyond are clipped by GL's own clipper
 constexpr double kNearEdge = 2.0;            // sub-pixels: GL's snapping may differ by one at each end
 constexpr double kOffLine = 1.0 / 16;         // pixels: an edge's triangles are not edge-on
 // A tested depth is moved forward by two float ulps of itself (relative, not absolute: depths
-// far off are small in reverse-Z, an absolute 1e-7 was 3 % of them and proved nothing there).
+// far off are small in reverse-Z, and an absolute bound such as 1e-7 would be a large part of them).
 constexpr double kStoreUlps = 0x1p-22;
 constexpr double kPadSubpixels = 4;  // BoxQuerier::kPadSubpixels (GL's query box, on screen)
 

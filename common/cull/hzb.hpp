@@ -59,7 +59,7 @@ struct PixelRect {
   double pixels() const { return empty() ? 0.0 : double(x1 - x0 + 1) * double(y1 - y0 + 1); }
 };
 
-// ---- The switch nodes' HC pyramid test (issue 16; GPU side in common/gl/hzb_query.*): the same
+// ---- The switch nodes' HC pyramid test (GPU side in common/gl/hzb_query.*): the same
 // pyramid, built on the GPU from HC's own depth buffer, proves boxes occluded before any occlusion
 // query is issued; boxes it cannot prove occluded get a real query. Everything but the texel reads
 // is decided here, on the CPU and without GL, so that it is unit tested.
@@ -111,8 +111,8 @@ class DepthPyramid {
   // pyramid, ends in texels where the part of the padded box inside the texel's pixels (widened
   // by a pixel each side) is strictly behind the texel's farthest depth (with the probe's depth
   // margin) or absent. A box's nearest depth over one texel is often much farther than its
-  // nearest corner: thin, slanted and large boxes are proven where the probe is not (a plant
-  // walk: 97 % of the boxes whose queries count 0 samples, against 74 %). Gives up (false) at a
+  // nearest corner: thin, slanted and large boxes are proven where the probe is not (on a plant
+  // walk it proves clearly more of the boxes whose queries count 0 samples). Gives up (false) at a
   // pixel it cannot prove, after max_texels texels, and for boxes within 1e-3 of the near plane
   // that the probe does not prove. Only for Kind::probe.
   bool occludes_refined(const PyramidProbe& p, const Aabb& box, const Camera& cam, double relative_pad,

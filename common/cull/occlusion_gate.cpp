@@ -61,7 +61,8 @@ std::optional<OcclusionGate::Compared> OcclusionGate::compare() const {
   for (const Sample& s : trial_samples_)
     if (s.cost > 0) (s.occlusion ? with : without).push_back(s);
   if (with.size() < 3 || without.size() < 3) return std::nullopt;
-  // Slopes between frames whose T differ by over 5 %: T that barely varies says nothing of b.
+  // Slopes only between frames whose T differ by more than 0.05 of the larger: T that barely
+  // varies says nothing of b.
   std::vector<double> slopes;
   for (size_t i = 0; i < without.size(); ++i)
     for (size_t j = i + 1; j < without.size(); ++j) {

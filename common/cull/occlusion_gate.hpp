@@ -1,4 +1,4 @@
-// Occlusion only where it pays, for the cluster as a whole (issue 14): the render client decides
+// Occlusion only where it pays, for the cluster as a whole: the render client decides
 // for every camera it sends whether the switch culls that frame with occlusion (the OR draws the
 // previous visible set, HC queries: the switch as designed) or without (the HC node sends the
 // frustum set at the chosen LODs: no OR, no queries; wire.hpp Camera.occlusion). It decides from
@@ -17,23 +17,22 @@
 //     failed trial doubles the wait before the next (first_hold .. max_hold); any of these
 //     windows ends early at a clear loss: give_up_frames settled frames in a row over give_up x
 //     the other mode's median, or lose_frames over lose x (a window of the clearly slower mode
-//     costs settle + 2 or 3 frames, not settle + window: 120 frames where occlusion takes 1.3-2x
-//     spend 17-19 frames with it instead of 29; where the path's own cost drifts by as much,
-//     as on Sponza's walk, the windows still run in full and the bracket decides);
+//     costs settle + a few frames, not settle + window; where the path's own cost drifts by as
+//     much, the windows still run in full and the bracket decides);
 //   - frames without occlusion run for `hold` frames (doubling while they keep winning), then
 //     occlusion is tried again the same way (B A B; a first trial that came before a full window
 //     of occlusion, B A B too); give_up_frames frames in a row without it that take give_up x
 //     the median (the view changed: culling may pay now) end them at once, and then the window
-//     with occlusion after them decides alone. One slow frame
-//     does not: on two cores a scheduling hiccup doubles a frame now and then (a 30-frame saw orbit at
-//     512^2: one 22 ms frame among 10-13 ms ones sent the rest of the orbit back to occlusion).
+//     with occlusion after them decides alone. One slow frame does not: on two cores a
+//     scheduling hiccup doubles a frame now and then, and one such frame must not send the rest
+//     of a run back to occlusion.
 // A trial is decided on the frames' own content, not only on their time: where both modes' frames
 // carry the frustum set's triangles T (frames with occlusion: those of the trial's windows, and of
 // the window before it where a trial could start), the frames without occlusion of the trial and
 // the windows around it are fitted as ms = a + b T (Theil-Sen: b the median of the pairwise
 // slopes, at least 0), and the median with occlusion is compared with that fit's median at the
 // same frames' T.
-// So a path whose cost falls or rises unevenly (Sponza's walk: 147 k triangles in view, then 15 k)
+// So a path whose cost falls or rises unevenly (a walk from a full view into a narrow one)
 // does not make the later window look faster; the bracket's means decide only where T is not
 // known or does not vary.
 // The render client's choice between two passes and one for those frustum sets (--two-pass) is a
@@ -66,9 +65,9 @@ class OcclusionGate {
     uint32_t trial_after = 0;
     double try_below = 1.6;
     // Below this ratio (but not under try_below) a trial still comes after `deferrals` checks
-    // found culling paying: it must be measured, not assumed (the engine at 1024^2: the frustum
-    // set 2.1x the visible set, yet frames of it faster on two cores). At or above it a trial
-    // would risk a run of heavy frames (issue 15).
+    // found culling paying: it must be measured, not assumed (a frustum set twice the visible
+    // set can still give faster frames on two cores). At or above it a trial would risk a run of
+    // heavy frames.
     double try_eventually_below = 2.5;
     uint32_t deferrals = 2;
     double margin = 0.95;
@@ -91,8 +90,8 @@ class OcclusionGate {
   // Camera.occlusion for the next camera sent: 0 (the frustum set) or 1.
   uint8_t wire_occlusion(uint32_t camera) const { return occlusion(camera) ? 1 : 0; }
   // Whether frame() of a frame with occlusion should carry the frustum set's triangles (a frustum
-  // cull on the render client: 2 ms a frame on the bridge's 25,600 objects, so computed only when
-  // asked: while a trial may start, and during a trial's windows).
+  // cull on the render client, which costs time on big scenes, so computed only when asked: while
+  // a trial may start, and during a trial's windows).
   bool wants_frustum_triangles() const;
   // A frame was displayed: whether its camera had occlusion, the interval since the previous
   // frame, the triangles drawn, and the frustum set's triangles: for a frame with occlusion when

@@ -1,4 +1,4 @@
-// Fuzz harnesses for the readers of files other people make (issue 36): glTF/GLB scenes, camera-path
+// Fuzz harnesses for the readers of files other people make: glTF/GLB scenes, camera-path
 // CSVs, and the binary scene and LOD caches. Each harness takes one input's bytes, hands them to
 // the reader through its public entry (a file in a private temporary folder, as a host reads
 // it), and checks the reader's contract:

@@ -1,7 +1,7 @@
 // render_client --window's culling overlay (the O key): boxes tinted over a finished frame, with
 // no depth test, so boxes hidden behind what the frame shows tint the pixels in front of them.
-// The tint is cull_overview's colour for occlusion-culled nodes (orange, 255,110,0) at 30 %
-// opacity per box face layer (front faces only, so each box tints its silhouette once).
+// The tint is cull_overview's colour for occlusion-culled nodes (orange, 255,110,0) at opacity
+// 0.3 per box face layer (front faces only, so each box tints its silhouette once).
 // Contracts: the GlContext is current on the calling thread for every call and outlives the
 // overlay.
 #pragma once

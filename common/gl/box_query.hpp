@@ -104,7 +104,7 @@ class BoxQuerier final : public BoxTester {
   uint32_t next_ = 0;         // first unused query of the pool in this batch
 };
 
-// The same test for a whole batch in one draw (issue 16, "tighter batching"): issue() records the
+// The same test for a whole batch in one draw ("tighter batching"): issue() records the
 // box; the first result() draws every recorded box in one draw call (boxes within reach of the
 // near rectangle not: they count as BoxQuerier's) from a buffer, with a fragment shader that
 // runs only for fragments passing the depth test (early fragment tests) and counts them in its

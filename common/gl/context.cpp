@@ -24,15 +24,14 @@ GlBackend parse_gl_backend(const std::string& name) {
 
 namespace {
 
-// llvmpipe's draw module mallocs the shaded vertices of every draw call (hundreds of KB) and
-// frees them at its end. Under glibc's defaults such blocks are mmapped and unmapped, or carved
-// from a heap top that is trimmed back, per draw: every frame then pays fresh page faults and
-// munmaps (perf: 36-44 % of a render process's samples in the kernel, 3.5x the frame time on the
-// ReciprocatingSaw). Keeping freed memory in the process makes the next draw reuse it. Process-
-// wide, once, before the first context; a user's own GLIBC_TUNABLES thresholds win (the
-// glibc.malloc.hugetlb=1 the processes add for themselves, common/memory.hpp, is not one: when
-// any malloc tunable turned this off, the heap top was trimmed and faulted back, 2 MiB zeroed
-// huge pages at a time, every frame: 14 faults a frame on the saw, clear_page 5 % of samples).
+// llvmpipe's draw module mallocs the shaded vertices of every draw call (hundreds of KB) and frees
+// them at its end. Under glibc's defaults such blocks are mmapped and unmapped, or carved from a
+// heap top that is trimmed back, per draw: every frame then pays fresh page faults and munmaps, and
+// a render process spends much of its time in the kernel (perf shows it). Keeping freed memory in
+// the process makes the next draw reuse it. Process-wide, once, before the first context; a user's
+// own GLIBC_TUNABLES thresholds win (the glibc.malloc.hugetlb=1 the processes add for themselves,
+// common/memory.hpp, is not one: when any malloc tunable turned this off, the heap top was trimmed
+// and faulted back, 2 MiB zeroed huge pages at a time, every frame).
 void keep_freed_memory() {
   static std::once_flag once;
   std::call_once(once, [] {

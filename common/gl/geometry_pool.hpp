@@ -1,4 +1,4 @@
-// Geometry resident within a budget (--geometry-budget, issue 38): one GL buffer of fixed size
+// Geometry resident within a budget (--geometry-budget): one GL buffer of fixed size
 // (the arena) holds the pieces a renderer has drawn lately — a piece is one scene mesh or one
 // LOD/HLOD mesh, its vertices followed by its indices — and a piece that a draw needs and that is
 // not resident is read (from the mapped cache or the CPU copy, through the Loader) and uploaded

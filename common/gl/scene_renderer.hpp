@@ -114,8 +114,8 @@ class SceneRenderer {
   // glPolygonOffset(-0.1, -0.1), switched off again after each draw). llvmpipe rasterises a
   // sliver seen almost edge-on at depths up to ~1e-4 (relative) in front of its own vertices,
   // beyond the query box's 1e-5 padding, so an occluder could hide its own box from the next HC
-  // although brute force shows it (issue 13: 16 pixels in frame 108 of the duplex layout walk,
-  // 16 in the 2.6 M city walk). Off by default: a renderer that queries each node before drawing
+  // although brute force shows it (a few pixels, seen on the duplex layout walk and the city
+  // walk). Off by default: a renderer that queries each node before drawing
   // it (CHC, stop-and-wait) does not need it, and toggling the state per draw costs llvmpipe.
   void set_occluder_offset(bool on) { occluder_offset_ = on; }
 

@@ -6,12 +6,11 @@ namespace occ::gl_detail {
 namespace {
 
 // One source for every variant, specialised by #defines. The per-draw data are instanced
-// attributes (divisor 1): on llvmpipe this took 10-15% less CPU per frame than an SSBO of
-// per-object records indexed per vertex (measured, 27k draws, 8M triangles). Lighting is per
-// fragment. Per vertex (Gouraud, like fixed-function GL) took 15-20 % less CPU per frame on the
-// duplex at 1024^2 and the saw at 512^2 (llvmpipe), but Gouraud shading depends on the
-// tessellation: a LOD no longer looks like the full detail it stands for (the city at tau 3 px:
-// up to 17 % of a frame's pixels off by more than 16 levels, against < 5 % per fragment).
+// attributes (divisor 1): on llvmpipe they cost less CPU per frame than an SSBO of per-object
+// records indexed per vertex (measured). Lighting is per fragment. Per vertex (Gouraud, like
+// fixed-function GL) costs llvmpipe less, but Gouraud shading depends on the tessellation: a LOD
+// no longer looks like the full detail it stands for (many more of a frame's pixels differ
+// visibly from the full detail than with per-fragment lighting).
 const char* const kVertexBody = R"(
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
@@ -101,8 +100,8 @@ void main() {
 #ifdef LIT
   // Headlight: directional, along the view axis (view-space z), two-sided. One interpolant (the
   // normal) instead of two: a light at the eye also needed the view-space position, and
-  // llvmpipe sets up every interpolant per triangle (saw 512^2 render ~10 % and duplex 1024^2
-  // ~5 % less time per frame, paired runs of render_client --reference).
+  // llvmpipe sets up every interpolant per triangle (one fewer measured faster with
+  // render_client --reference).
   // Flat: the triangle's own normal, from the screen derivatives of its view-space position
   // (a 2x2 quad's fragments all belong to one triangle, so they span its plane).
 #ifdef FLAT

@@ -1,4 +1,4 @@
-// Frames the render client culls for itself (issue 14, occlusion only where it pays; used by
+// Frames the render client culls for itself (occlusion only where it pays; used by
 // render_client/client.cpp). When the switch sends a frustum set (its gate found that occlusion
 // does not pay there: the OR would draw the visible set a second time, on the same two cores) or
 // no switch node serves, the render client draws the frame in two passes against the frame's own
@@ -38,8 +38,8 @@ class TwoPassDrawer {
   // Texels a box's proof may visit (DepthPyramid::occludes_refined) before it counts as shown.
   static constexpr int kProofTexels = 64;
   // Flush parts while drawing a frame (FlushSchedule::request): pass 1's depth is
-  // read back once llvmpipe has rasterised its last part, so small parts keep that wait short
-  // (saw 512^2, paired runs: 20k-triangle parts 11.0 ms a frame, 5k 10.1, 2.5k 10.5).
+  // read back once llvmpipe has rasterised its last part, so small parts keep that wait short.
+  // Triangles a part; chosen by measurement (paired runs on llvmpipe).
   static constexpr uint32_t kFlushTriangles = 4000;
 
   // The context, renderer, hierarchy and renderables outlive the drawer.

@@ -24,10 +24,11 @@ namespace occ {
 
 // What the LODs can save. The coarsest cut is the better of "every leaf at its coarsest level" and
 // "the root's children at their coarsest representation (HLOD or coarsest leaf level)"; `fraction`
-// is 1 - its triangles / the scene's triangles. A scene whose LODs save less than 10 % or fewer than
-// 20,000 triangles (2-4 ms of llvmpipe, at most) skips LOD selection: low-poly boxes, geometry the
-// simplifier cannot reduce. It draws full detail as with --pixel-error 0 and pays neither the
-// selection nor the LOD memory (load_and_build drops the data; every process decides the same).
+// is 1 - its triangles / the scene's triangles. A scene whose LODs save a fraction under
+// kMinFraction or fewer than kMinSavedTriangles triangles (little llvmpipe time) skips LOD
+// selection: low-poly boxes, geometry the simplifier cannot reduce. It draws full detail as with
+// --pixel-error 0 and pays neither the selection nor the LOD memory (load_and_build drops the data;
+// every process decides the same).
 struct LodBenefit {
   double fraction = 0;
   uint64_t saved_triangles = 0;

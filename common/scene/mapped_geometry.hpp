@@ -1,4 +1,4 @@
-// Geometry left in a cache file (--geometry-budget, issue 38): where each lazily loaded mesh's
+// Geometry left in a cache file (--geometry-budget): where each lazily loaded mesh's
 // arrays lie in the scene or LOD cache, so the GPU upload reads a mesh when a frame needs it
 // instead of every process holding the whole scene. The meshes themselves are loaded released
 // (Mesh::released, LodMesh::released): counts, boxes and clusters only. A mesh is read with one

@@ -1,8 +1,8 @@
-// The scene cache (issue 16): a generated scene and its hierarchy, preprocessed once, so the
-// next start of a big `plant:M` reads them instead of generating and building (plant:13: ~6 s of
-// generation and hierarchy build per process). One file per (scene spec, hierarchy parameters)
-// beside the LOD cache (lod_cache.hpp: same folder, `.scene` instead of `.lod`); the LODs stay in
-// their own cache, keyed by the hierarchy fingerprint this one restores.
+// The scene cache: a generated scene and its hierarchy, preprocessed once, so the next start of
+// a big `plant:M` reads them instead of generating and building them again in every process.
+// One file per (scene spec, hierarchy parameters) beside the LOD cache (lod_cache.hpp: same
+// folder, `.scene` instead of `.lod`); the LODs stay in their own cache, keyed by the hierarchy
+// fingerprint this one restores.
 //
 // Format: a header (magic "OCCSCN\r\n", format version, cache key, payload bytes, payload
 // StreamHash) and the payload: first the structure, the Scene (source, each mesh's name,

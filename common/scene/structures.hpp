@@ -9,11 +9,11 @@
 namespace occ {
 
 // bridge[:N]: N (1..200, default 16) spans of 30 m along a horizontal arc of radius 120 m (the
-// deck turns 14.3 degrees a span and rises 2 % along it), on a ground 20 m beyond its plan, each a separate set of concrete members
+// deck turns 14.3 degrees a span and rises 1 in 50 along it), on a ground 20 m beyond its plan, each a separate set of concrete members
 // (a deck slab 12 m wide and 0.3 m thick at y 8, two box girders under it, a pier with its cap at
 // the span's start, two parapets) and, inside the concrete with 5 cm of cover, its reinforcement as
 // separate objects: octagonal bars along and across the deck, along the girders with a stirrup
-// every 0.3 m, and up the pier with ties. About 600 objects a span, 87 % of them bars, which
+// every 0.3 m, and up the pier with ties. About 600 objects a span, most of them bars, which
 // never show: only the concrete is visible. The bars follow the arc, so their world boxes are
 // diagonal and poke out of the concrete that hides them.
 Scene bridge(int spans);

@@ -1,5 +1,5 @@
-// Single-process occlusion-culling baselines that render while they cull, for the benchmark
-// (issue 6): the naive stop-and-wait hierarchical query, and coherent hierarchical culling
+// Single-process occlusion-culling baselines that render while they cull, for the benchmark:
+// the naive stop-and-wait hierarchical query, and coherent hierarchical culling
 // (CHC, Bittner et al. 2004: previous-frame visibility, queries interleaved with rendering, no
 // waiting for previously visible leaves).
 //

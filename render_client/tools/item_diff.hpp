@@ -1,4 +1,4 @@
-// The tau > 0 error bound a user can check (frame_diff --items, issue 33): an item buffer of the
+// The tau > 0 error bound a user can check (frame_diff --items): an item buffer of the
 // full-detail reference against one of a tau frame, both written by render_client --item-buffer.
 //
 // Item buffers (DIR/items_NNNNN.png, RGBA8 read as a little-endian u32 per pixel, the frames'
