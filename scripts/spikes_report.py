@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Frame-time spikes, id churn and PVS size of cluster runs (issue 15, docs/spikes.md).
+"""Frame-time spikes, id churn and PVS size of cluster runs (docs/spikes.md).
 
   scripts/spikes_report.py RUN_DIR [--full-sets DIR] [--exact DIR [--exact-every K]] [--label L] [--dat F]
   scripts/spikes_report.py --table BEFORE_DIR AFTER_DIR      (two scripts/spikes_matrix.sh outputs)

@@ -41,7 +41,7 @@ case "$MODE" in
     # fast_unwind_on_malloc=0 would deadlock OSMesa: keep the default fast unwinder.
     # intercept_tls_get_addr=0: the sanitizer runtime guesses glibc's dynamic-TLS header from where
     # a block lands and can guess wrong; LeakSanitizer's tracer then dies at exit ("Tracer caught
-    # signal 11", google/sanitizers#1322), here in a switch node of ClusterLod.VisiblePixel... once
+    # signal 11", https://github.com/google/sanitizers/issues/1322), here in a switch node of ClusterLod.VisiblePixel... once
     # the heap's layout moved. Static TLS and every other root are still scanned.
     export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0:intercept_tls_get_addr=0
     export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0
