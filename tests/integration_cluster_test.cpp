@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cstdio>
 #include <map>
+#include <regex>
 #include <sstream>
 
 #include "cluster_run.hpp"
@@ -588,4 +589,32 @@ TEST(Cluster, RunTableAgreesWithStatsCsvAndTheNodesStartUp) {
   }
   EXPECT_EQ(names, "node 0 cpu-pyramid, node 1 cpu");
   EXPECT_EQ(rows.at("occlusion back end"), names);
+}
+
+// The reference's table (one process) says what its stats.csv says: the draw's median and p99,
+// the share of objects it did not draw, --exact's missed objects, and its back end (CHC: queries).
+TEST(Cluster, ReferenceRunTableAgreesWithItsStatsCsv) {
+  fs::path dir = fresh_dir("reference_table");
+  const Outcome ref = run_reference(dir, kCity, "orbit:8", {"--width", "64", "--height", "64", "--cull", "chc", "--exact"});
+  ASSERT_EQ(ref.code, 0) << ref.log;
+  std::string title;
+  // The reference's key=value line starts "reference (chc): "; the table ends before it.
+  const std::string log = std::regex_replace(ref.log, std::regex("\nreference \\(chc\\): "), "\nsummary: ");
+  const std::map<std::string, std::string> rows = run_table(log, &title);
+  EXPECT_EQ(title, "run (8 frames, one process: --reference --cull chc)") << ref.log;
+  auto stats = read_csv(dir / "stats.csv");
+  ASSERT_EQ(stats["frame"].size(), 8u);
+  ASSERT_EQ(rows.count("frame ms (draw)"), 1u) << ref.log;
+  std::istringstream cells(rows.at("frame ms (draw)"));
+  double median = -1, p99 = -1;
+  cells >> median >> p99;
+  EXPECT_NEAR(median, median_p99(stats["render_ms"]).first, 0.006) << ref.log;
+  EXPECT_NEAR(p99, median_p99(stats["render_ms"]).second, 0.006) << ref.log;
+  EXPECT_EQ(rows.at("wrong pixels"),
+            "not checked (frame_diff compares frames with a --cull frustum run's); --exact: " +
+                std::to_string(long(sum(stats["missed_visible"]))) + " visible objects not drawn");
+  EXPECT_EQ(sum(stats["missed_visible"]), 0.0);  // CHC is conservative
+  EXPECT_EQ(rows.at("occlusion back end"), "queries (GL occlusion queries)");
+  EXPECT_EQ(rows.count("culled (not drawn)"), 1u) << ref.log;
+  EXPECT_EQ(rows.count("bytes a frame"), 0u) << ref.log;  // one process
 }
