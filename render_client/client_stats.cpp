@@ -70,6 +70,7 @@ void RunStats::add(const FrameStats& row, Clock::time_point shown, uint64_t cpu_
   ++mode_frames_[int(row.mode)];
   rvg_ms_each_.push_back(row.rvg_ms);
   wait_ms_each_.push_back(row.wait_ms);
+  without_occlusion_ += row.hc_node >= 0 && row.occlusion == 0;
   if (row.hc_node == 0 || row.hc_node == 1) {
     node_or_ms_[row.hc_node].push_back(row.or_ms);
     node_hc_ms_[row.hc_node].push_back(row.hc_ms);
@@ -98,6 +99,7 @@ void RunStats::print_table(size_t leaves, uint64_t scene_triangles, const std::s
       sep = ", ";
     }
   }
+  if (without_occlusion_ > 0) title += format("; %zu served without occlusion", without_occlusion_);
   RunTable t(title + ")");
   t.times("frame ms", intervals_ms());
   t.times("render client draw ms", rvg_ms_each_);

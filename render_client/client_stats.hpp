@@ -84,6 +84,7 @@ class RunStats {
   std::vector<double> latency_;
   std::vector<double> rvg_ms_each_, wait_ms_each_;
   std::vector<double> node_or_ms_[2], node_hc_ms_[2];  // over the frames node k served
+  size_t without_occlusion_ = 0;  // frames a node served with the frustum set (Camera.occlusion 0)
   uint64_t visible_ = 0, bytes_ = 0, triangles_ = 0;
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0, wait_ms_ = 0;
   uint32_t camera_gap_max_ = 0;
