@@ -31,7 +31,7 @@
 //    79  u8[] name                 for logs
 //     .  u16  backend_bytes        <= kMaxBackendBytes
 //     .  u8[] occlusion_backend    a switch node's occlusion back end, as its start-up line names it
-//                                  (the render client's run summary); empty for the other roles.
+//                                  (the render client's run table); empty for the other roles.
 //                                  Lower-case ASCII letters, digits and '-' only
 //
 // Camera (101) — camera -> world rotation, camera looks down -Z, +Y up
