@@ -124,7 +124,7 @@ class Reader {
 
 // ---- sizes ----
 
-constexpr uint32_t kHelloFixedBytes = 79;
+constexpr uint32_t kHelloFixedBytes = 81;  // with name_bytes and backend_bytes, no text
 constexpr uint32_t kCameraBytes = 101;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
 constexpr uint32_t kEndOfFrameBytes = 68;
@@ -168,7 +168,7 @@ constexpr uint32_t list_bytes(void (*list)(ByteCount&, M&)) {
 constexpr void resync_fields(auto& io, auto& m) { io(m.frame, m.epoch, m.nodes); }
 static_assert(list_bytes<Resync>(resync_fields) == kResyncBytes);
 #if !defined(__clang__)  // clang 14 cannot build libstdc++'s std::string (Hello::name) in a constant expression
-static_assert(list_bytes<Hello>(hello_fields) == kHelloFixedBytes - 4 - 2 - 2);  // magic, version, name_bytes
+static_assert(list_bytes<Hello>(hello_fields) == kHelloFixedBytes - 4 - 2 - 2 - 2);  // magic, version, name_bytes, backend_bytes
 #endif
 static_assert(list_bytes<Camera>(camera_fields) == kCameraBytes);
 static_assert(list_bytes<EndOfFrame>(end_of_frame_fields) == kEndOfFrameBytes);
@@ -178,7 +178,7 @@ struct Bounds {
 };
 Bounds payload_bounds(Type t) {
   switch (t) {
-    case Type::hello: return {kHelloFixedBytes, kHelloFixedBytes + uint32_t(kMaxNameBytes)};
+    case Type::hello: return {kHelloFixedBytes, kHelloFixedBytes + uint32_t(kMaxNameBytes + kMaxBackendBytes)};
     case Type::camera: return {kCameraBytes, kCameraBytes};
     case Type::node_diff: return {kNodeDiffFixedBytes, kMaxPayloadBytes};
     case Type::end_of_frame: return {kEndOfFrameBytes, kEndOfFrameBytes};
@@ -244,6 +244,19 @@ std::optional<std::string> text_error(std::string_view what, const std::string& 
   return std::nullopt;
 }
 
+// A back-end name: short, lower-case ASCII letters, digits and '-' (it is a word in a table).
+std::optional<std::string> backend_error(const std::string& s) {
+  if (s.size() > kMaxBackendBytes)
+    return "occlusion_backend of " + num(s.size()) + " bytes exceeds " + num(kMaxBackendBytes);
+  for (size_t i = 0; i < s.size(); ++i) {
+    const char c = s[i];
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-'))
+      return "occlusion_backend: character " + hex(uint8_t(c), 2) + " at byte " + num(i) +
+             " (lower-case letters, digits and '-' only)";
+  }
+  return std::nullopt;
+}
+
 std::optional<std::string> viewport_error(uint32_t w, uint32_t h, uint32_t min_px) {
   if (w < min_px || h < min_px || w > kMaxViewportPx || h > kMaxViewportPx)
     return "viewport " + num(w) + "x" + num(h) + " outside [" + num(min_px) + ", " +
@@ -258,7 +271,8 @@ std::optional<std::string> check(const Hello& m) {
   if (static_cast<uint8_t>(m.auth) > static_cast<uint8_t>(Auth::cluster_key))
     return "unknown auth " + num(static_cast<uint8_t>(m.auth));
   if (m.auth == Auth::none && m.nonce != Nonce{}) return std::string("nonce without auth");
-  return text_error("name", m.name, kMaxNameBytes);
+  if (auto e = text_error("name", m.name, kMaxNameBytes)) return e;
+  return backend_error(m.occlusion_backend);
 }
 
 std::optional<std::string> check(const Camera& m) {
@@ -321,6 +335,7 @@ void put(Writer& w, const Hello& m) {
   w.u16(kProtocolVersion);
   hello_fields(w, m);
   w.str(m.name);
+  w.str(m.occlusion_backend);
 }
 
 void put(Writer& w, const Camera& m) { camera_fields(w, m); }
@@ -340,12 +355,16 @@ void put(Writer& w, const Bye& m) { w.str(m.reason); }
 void put(Writer& w, const Proof& m) { w(m.mac); }
 void put(Writer& w, const Resync& m) { resync_fields(w, m); }
 
-// Reads a u16-prefixed string; the caller has checked the fixed part.
-Result<std::string> get_str(Reader& r, std::string_view what) {
+// Reads a u16-prefixed string that `tail` more bytes follow (0: it ends the payload); the caller
+// has checked the fixed part.
+Result<std::string> get_str(Reader& r, std::string_view what, size_t tail = 0) {
   const uint16_t n = r.u16();
-  if (n != r.remaining())
+  if (tail == 0 && n != r.remaining())
     return Error{std::string(what) + " length " + num(n) + " does not match the " +
                  num(r.remaining()) + " bytes left in the payload"};
+  if (tail > 0 && size_t(n) + tail > r.remaining())
+    return Error{std::string(what) + " length " + num(n) + " leaves less than the " + num(tail) +
+                 " bytes that follow it in the " + num(r.remaining()) + " bytes left in the payload"};
   return r.bytes(n);
 }
 
@@ -359,9 +378,12 @@ Result<Message> get_hello(Reader& r) {
                  num(kProtocolVersion) + ")"};
   Hello m;
   hello_fields(r, m);
-  auto name = get_str(r, "name");
+  auto name = get_str(r, "name", 2);  // backend_bytes follows
   if (!name) return Error{name.error()};
   m.name = std::move(*name);
+  auto backend = get_str(r, "occlusion_backend");
+  if (!backend) return Error{backend.error()};
+  m.occlusion_backend = std::move(*backend);
   return Message{std::move(m)};
 }
 

@@ -13,7 +13,7 @@
 //                             7 resync
 //     2  u32  payload_bytes   <= kMaxPayloadBytes and within the type's size bounds below
 //
-// Hello (79 + name_bytes; 79..143) — first message on every connection, in both directions
+// Hello (81 + name_bytes + backend_bytes; 81..177) — first message on every connection, in both directions
 //     0  u32  magic           kMagic 0x5753434F (bytes "OCSW")
 //     4  u16  version         kProtocolVersion
 //     6  u8   role            0 switch_node, 1 render_client, 2 tool
@@ -29,6 +29,10 @@
 //    45  u8[32] nonce              auth 1: fresh random bytes for this connection; auth 0: all zero
 //    77  u16  name_bytes           <= kMaxNameBytes
 //    79  u8[] name                 for logs
+//     .  u16  backend_bytes        <= kMaxBackendBytes
+//     .  u8[] occlusion_backend    a switch node's occlusion back end, as its start-up line names it
+//                                  (the render client's run table); empty for the other roles.
+//                                  Lower-case ASCII letters, digits and '-' only
 //
 // Camera (101) — camera -> world rotation, camera looks down -Z, +Y up
 //     0  u32  frame
@@ -120,12 +124,14 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 7;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
+constexpr uint16_t kProtocolVersion = 8;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
                                           // 5: Camera.occlusion; 6: Camera.occlusion 2 (selected occluders);
-                                          // 7: Camera.occlusion 0 or 1 again (selected occluders retired)
+                                          // 7: Camera.occlusion 0 or 1 again (selected occluders retired);
+                                          // 8: Hello.occlusion_backend
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
+constexpr size_t kMaxBackendBytes = 32;
 constexpr size_t kMaxReasonBytes = 1024;
 constexpr uint32_t kMaxViewportPx = 16384;
 constexpr uint32_t kDefaultDiffChunkIds = 100;  // the paper's buffer size b
@@ -159,6 +165,7 @@ struct Hello {
   Auth auth = Auth::none;
   Nonce nonce{};  // auth none: all zero
   std::string name;
+  std::string occlusion_backend;  // switch_node: e.g. "cpu", "queries"; "" for the other roles
   bool operator==(const Hello&) const = default;
 };
 
@@ -228,7 +235,7 @@ using Message = std::variant<Hello, Camera, NodeDiff, EndOfFrame, Bye, Proof, Re
 Type type_of(const Message& m);
 
 // The rules a decoded message must satisfy beyond its layout (finite camera values, unit
-// quaternion, near/far, viewport, duplicate ids, string lengths and text, id count). nullopt when
+// quaternion, near/far, viewport, duplicate ids, string lengths and text, back-end names, id count). nullopt when
 // valid, else the reason, prefixed by the message type ("camera: near 0 <= 0"). decode() applies
 // exactly these rules; senders call it to fail locally instead of being rejected by the peer.
 std::optional<std::string> invalid_reason(const Message& m);

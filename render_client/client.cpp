@@ -74,7 +74,7 @@ class Client {
     for (const HNode& n : g_.hierarchy().nodes()) leaf_count_ += n.leaf() && n.item_count > 0;
     drawer_.emplace(o_, g_);
     links_.connect(make_hello(wire::Role::render_client, 0, {o_.width, o_.height}, g_.fingerprint(),
-                              g_.hierarchy().params(), o_.config, "render_client"));
+                              g_.hierarchy().params(), o_.config, "render_client", ""));
     if (!links_.is_switch()) gate_ = OcclusionGate({.policy = OcclusionGate::Policy::on});  // an occlusion_server always culls
   }
 
@@ -263,6 +263,8 @@ class Client {
 
   void summary() const {
     if (stats_.frames() == 0) return;
+    const std::string backends[2] = {links_.occlusion_backend(0), links_.occlusion_backend(1)};
+    stats_.print_table(leaf_count_, g_.scene().triangle_count(), backends);
     stats_.print(leaf_count_, g_.scene().triangle_count(), receiver_.resyncs(), gate_.frames_off());
     print_geometry_line(stdout, "render_client", g_.renderer->geometry_pool());
     if (links_.is_switch() && o_.occlusion_gate == OcclusionGate::Policy::automatic && o_.test_alternate == 0)

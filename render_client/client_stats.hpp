@@ -70,12 +70,21 @@ class RunStats {
   // The `summary:` line (and `modes:` when not all frames were the switch's): `leaves` and
   // `scene_triangles` of the scene, the resyncs and the gate's frames without occlusion.
   void print(size_t leaves, uint64_t scene_triangles, uint32_t resyncs, uint32_t frames_without_occlusion) const;
+  // The table a person reads (run_table.hpp), to print before print()'s line: fps, frame
+  // interval, each process's time a frame (the render client's draw and wait; each node's OR and
+  // HC over the frames it served, from their EndOfFrame), culled, bytes, and `backends[k]`, the
+  // occlusion back end switch node k named in its Hello ("" where none did).
+  void print_table(size_t leaves, uint64_t scene_triangles, const std::string (&backends)[2]) const;
 
  private:
+  std::vector<double> intervals_ms() const;  // each frame's frame_interval_ms, in order
   Clock::time_point start_;
   uint64_t last_cpu_us_ = 0;
   std::vector<Clock::time_point> shown_;
   std::vector<double> latency_;
+  std::vector<double> rvg_ms_each_, wait_ms_each_;
+  std::vector<double> node_or_ms_[2], node_hc_ms_[2];  // over the frames node k served
+  size_t without_occlusion_ = 0;  // frames a node served with the frustum set (Camera.occlusion 0)
   uint64_t visible_ = 0, bytes_ = 0, triangles_ = 0;
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0, wait_ms_ = 0;
   uint32_t camera_gap_max_ = 0;

@@ -35,6 +35,7 @@ void NodeLinks::connect(const wire::Hello& mine) {
     if (slot.conn) throw InputError("--connect: both addresses are switch node " + std::to_string(hello->node_id));
     slot.conn = std::make_unique<net::Connection>(std::move(*conn));
     slot.address = text;
+    slot.occlusion_backend = hello->occlusion_backend;
   }
   if (!nodes_[0].conn) throw InputError("--connect: a single server must be node 0 (an occlusion_server)");
   switch_ = bool(nodes_[1].conn);
@@ -140,6 +141,7 @@ void NodeLinks::rejoin_loop() {
       }
       std::lock_guard<std::mutex> lock(rejoin_mu_);
       rejoined_[k] = std::make_unique<net::Connection>(std::move(*conn));
+      rejoined_backend_[k] = hello->occlusion_backend;
       wanted_[k] = false;
       backoff[k] = Millis(200);
     }
@@ -156,6 +158,7 @@ void NodeLinks::take_rejoined(uint32_t frame) {
   for (int k = 0; k < 2; ++k) {
     if (!rejoined_[k]) continue;
     nodes_[k].conn = std::move(rejoined_[k]);
+    nodes_[k].occlusion_backend = rejoined_backend_[k];
     std::cerr << "render_client: frame " << frame << ": " << node_name(k) << " is back\n";
     need_resync_ = true;
   }

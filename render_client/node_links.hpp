@@ -42,6 +42,8 @@ class NodeLinks {
   // Its messages are stale until it echoes this Resync (0: none).
   uint32_t& await_epoch(int k) { return nodes_[k].await_epoch; }
   std::string node_name(int k) const;
+  // The occlusion back end switch node k named in its Hello (its latest, after a rejoin); "" if none.
+  const std::string& occlusion_backend(int k) const { return nodes_[k].occlusion_backend; }
   int members() const { return up(0) + up(1); }
   // The node serving frame `frame`: the switch's HC node, the one left, or none (-1).
   int server_of(uint32_t frame) const;
@@ -66,6 +68,7 @@ class NodeLinks {
   struct NodeLink {
     std::unique_ptr<net::Connection> conn;  // null: down (the rejoiner looks for it)
     std::string address;                    // its --connect
+    std::string occlusion_backend;          // from its Hello
     uint32_t await_epoch = 0;
   };
   std::string end_of(int k);
@@ -85,6 +88,7 @@ class NodeLinks {
   std::mutex rejoin_mu_;
   bool wanted_[2] = {false, false};
   std::unique_ptr<net::Connection> rejoined_[2];
+  std::string rejoined_backend_[2];  // the rejoined node's Hello.occlusion_backend
 };
 
 }  // namespace occ

@@ -21,6 +21,7 @@
 #include "render_client/baselines/single_process.hpp"
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
+#include "render_client/run_table.hpp"
 #include "render_client/scene_export.hpp"
 #include "render_client/viewer.hpp"
 
@@ -261,11 +262,34 @@ class ReferenceRun {
     out_->write_row(row.values());
     total_ms_ += row.render_ms;
     total_tris_ += st.triangles;
+    total_nodes_ += st.nodes_drawn;
+    if (row.exact) total_missed_ += row.exact->missed;
     frame_ms_.push_back(row.render_ms);
+  }
+
+  // The table a person reads (run_table.hpp), as the cluster's has it where it applies: one
+  // process, no bytes; the frame time is the draw's.
+  void print_table() const {
+    const size_t n = frame_ms_.size();
+    const bool queries = o_.cull == Cull::stop_and_wait || o_.cull == Cull::chc;
+    RunTable t(format("run (%zu frames, one process: --reference --cull %s)", n, cull_name(o_.cull)));
+    t.times("frame ms (draw)", frame_ms_);
+    t.text("fps", format("%.2f", 1000.0 * n / total_ms_));
+    t.text("culled (not drawn)",
+           format("%.1f %% of objects, %.1f %% of triangles",
+                  100.0 * (1.0 - double(total_nodes_) / n / std::max<size_t>(all_leaves_.size(), 1)),
+                  100.0 * (1.0 - double(total_tris_) / n / std::max<uint64_t>(g_.scene().triangle_count(), 1))));
+    std::string wrong = queries ? "not checked (frame_diff compares frames with a --cull frustum run's)"
+                                : "none by definition (the reference; frame_diff compares other runs with it)";
+    if (o_.exact) wrong += format("; --exact: %llu visible objects not drawn", (unsigned long long)total_missed_);
+    t.text("wrong pixels", wrong);
+    t.text("occlusion back end", queries ? "queries (GL occlusion queries)" : "none (no occlusion culling)");
+    t.print(stdout);
   }
 
   void summary() {
     if (frame_ms_.empty()) return;  // --window: the user quit before the first frame
+    print_table();
     std::sort(frame_ms_.begin(), frame_ms_.end());
     const size_t n = frame_ms_.size();
     std::printf("reference (%s): frames=%zu mean_ms=%.2f median_ms=%.2f mean_fps=%.2f triangles_per_frame=%.0f "
@@ -285,7 +309,7 @@ class ReferenceRun {
   std::optional<ExactVisibility> exact_;  // --exact
   std::vector<uint32_t> all_leaves_;
   double total_ms_ = 0;
-  uint64_t total_tris_ = 0;
+  uint64_t total_tris_ = 0, total_nodes_ = 0, total_missed_ = 0;
   std::vector<double> frame_ms_;
 };
 

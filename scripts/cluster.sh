@@ -411,7 +411,8 @@ while [ ${#running[@]} -gt 0 ]; do
   occ_quiet_sleep 0.1  # (no "Killed" line from bash for a node killed by a signal)
 done
 cleanup
-grep -h "^summary:" "$out/render_client.log" || true
+# The render client's table (from its "run (" title) and the key=value summary line after it.
+sed -n '/^run (/,/^summary:/p' "$out/render_client.log"
 grep -hE "HC frames|HC test" "$out/node0.log" "$out/node1.log" || true
 # What supervision did, per node that died: its deaths (status, time), restarts, and the frames
 # at which the render client dropped it and took it back (its own log lines).

@@ -139,6 +139,6 @@ cleanup
 for k in 0 1 2; do
   tr -d '\r' <"$out/${role[$k]}.ssh.log" | grep -E "^(error|cluster_rank|  )" >&2
 done
-grep -h "^summary:" "$out/render_client.log" 2>/dev/null
+sed -n '/^run (/,/^summary:/p' "$out/render_client.log" 2>/dev/null  # the run table and the summary line
 [ $status = 0 ] || echo "error: the cluster on $hosts failed (logs: $out)" >&2
 exit $status

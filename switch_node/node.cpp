@@ -475,8 +475,10 @@ class SwitchNode {
     } else if (o_.hc.test == HcTest::by_renderer)
       std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))
                 << " (--hc-test auto on a " << renderer_class_name(g_.ctx->renderer_class()) << " renderer)\n";
+    const std::string backend = occlusion_backend_name();
+    std::cerr << who_ << ": occlusion back end " << backend << "\n";
     mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
-                       g_.hierarchy().params(), o_.config, who_);
+                       g_.hierarchy().params(), o_.config, who_, backend);
     // Both nodes keep their listener for the whole run: node 0 takes a restarted node 1 through it
     // (the door hands it over), and it tells a second render client the cluster is busy.
     listener_.emplace(open_listener(who_, o_.listen));
@@ -499,6 +501,14 @@ class SwitchNode {
 
  private:
   int serve_one() { return Session(o_, g_, mine_, *listener_).run(); }
+
+  // The back end HC tests boxes with, as the start-up line, the Hello and the render client's
+  // summary name it: "cpu" where HC tests on the CPU (the OR's depth raster), else the --hc-test
+  // it stands for on this renderer. Valid once the scene and GL are up (run()).
+  std::string occlusion_backend_name() const {
+    if (hc_tests_on_cpu(g_.cpu_occluders != nullptr, o_.config, o_.hc)) return "cpu";
+    return hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()));
+  }
 
   const NodeOptions& o_;
   std::string who_;

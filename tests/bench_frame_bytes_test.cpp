@@ -63,7 +63,7 @@ TEST(FrameBytes, TheRenderClientChargesEachFrameWithItsOwnMessagesWhenItsIoThrea
             dir.string()},
            dir / "client.log");
   const wire::Hello mine = occ::make_hello(wire::Role::switch_node, 0, vp, ls.fingerprint, ls.hierarchy.params(),
-                                           occ::ClusterConfig{}, "scripted node");
+                                           occ::ClusterConfig{}, "scripted node", "scripted");
   auto peer = listener->accept_peer(mine, {wire::Role::render_client, std::nullopt}, 120s);
   ASSERT_TRUE(peer) << peer.error() << "\n" << rvg.log();
 

@@ -2,7 +2,12 @@
 // reference renderer frame by frame (conservative culling must not change a pixel).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
+#include <map>
+#include <regex>
+#include <sstream>
 
 #include "cluster_run.hpp"
 
@@ -478,4 +483,138 @@ TEST(ClusterBudget, PlantFarBelowItsSizeEqualsReferenceAndTheResidentCluster) {
   const Outcome diff = frame_diff(dir / "tau2_all", dir / "tau2_budget");
   EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
   EXPECT_NE(diff_summary(diff.log).find("differing_pixels=0"), std::string::npos) << differing_frames(diff.log);
+}
+
+namespace {
+
+// The render client's run table (render_client/run_table.hpp): its lines from the "run (" title
+// up to the summary: line, as label -> the text after the label.
+std::map<std::string, std::string> run_table(const std::string& log, std::string* title) {
+  std::map<std::string, std::string> rows;
+  const size_t begin = log.find("\nrun (");
+  const size_t end = log.find("\nsummary: ", begin);
+  if (begin == std::string::npos || end == std::string::npos) return rows;
+  std::istringstream lines(log.substr(begin + 1, end - begin - 1));
+  std::string line;
+  std::getline(lines, line);
+  *title = line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("  ", 0) != 0) continue;
+    const size_t gap = line.find("  ", 2);  // the label column ends at the first double space
+    if (gap == std::string::npos) continue;
+    const size_t value = line.find_first_not_of(' ', gap);
+    rows[line.substr(2, gap - 2)] = value == std::string::npos ? "" : line.substr(value);
+  }
+  return rows;
+}
+
+// The sorted values' element at n / 2 and at min(n - 1, n * 99 / 100), as the table takes them.
+std::pair<double, double> median_p99(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return {v[v.size() / 2], v[std::min(v.size() - 1, v.size() * 99 / 100)]};
+}
+
+double summary_value(const std::string& log, const std::string& key) {
+  const size_t at = log.find(" " + key + "=", log.find("summary: "));
+  return at == std::string::npos ? -1 : std::stod(log.substr(at + key.size() + 2));
+}
+
+}  // namespace
+
+// The table a person reads at the end of a run says what the run's stats.csv and logs say: its
+// medians are those of the stats.csv columns (the frame interval, the render client's draw, each
+// node's OR and HC over the frames it served), its bytes and culled share the summary line's, and
+// its back ends are those each node named at start-up (node 0 with the OR in GL tests with the
+// cpu-pyramid, node 1 on the CPU).
+TEST(Cluster, RunTableAgreesWithStatsCsvAndTheNodesStartUp) {
+  fs::path dir = fresh_dir("run_table");
+  ClusterOptions o = cluster(kCity, "orbit:16");
+  o.node0 = {"--or-raster", "gl"};
+  const ClusterRun r = run_cluster(dir, o);
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  ASSERT_EQ(r.node0_code, 0) << r.logs();
+  ASSERT_EQ(r.node1_code, 0) << r.logs();
+  std::string title;
+  const std::map<std::string, std::string> rows = run_table(r.rvg_log, &title);
+  EXPECT_EQ(title, "run (16 frames)") << r.rvg_log;
+  for (const char* label : {"frame ms", "render client draw ms", "render client wait ms", "node 0 OR ms", "node 0 HC ms",
+                            "node 1 OR ms", "node 1 HC ms", "fps", "culled (not drawn)", "wrong pixels", "bytes a frame",
+                            "occlusion back end"})
+    EXPECT_EQ(rows.count(label), 1u) << label << " missing:\n" << r.rvg_log;
+  if (rows.size() < 12) return;
+
+  auto stats = read_csv(dir / "stats.csv");
+  ASSERT_EQ(stats["frame"].size(), 16u);
+  // A time row: "median p99", each within the rounding of the table (2 decimals) and the CSV.
+  auto expect_times = [&](const std::string& label, const std::vector<double>& values) {
+    std::istringstream cells(rows.at(label));
+    double median = -1, p99 = -1;
+    cells >> median >> p99;
+    const auto [m, p] = median_p99(values);
+    EXPECT_NEAR(median, m, 0.006) << label << ": " << rows.at(label);
+    EXPECT_NEAR(p99, p, 0.006) << label << ": " << rows.at(label);
+  };
+  expect_times("frame ms", stats["frame_interval_ms"]);
+  expect_times("render client draw ms", stats["rvg_ms"]);
+  expect_times("render client wait ms", stats["wait_ms"]);
+  for (int k = 0; k < 2; ++k) {
+    std::vector<double> or_ms, hc_ms;
+    for (size_t f = 0; f < stats["frame"].size(); ++f)
+      if (stats["hc_node"][f] == k) {
+        or_ms.push_back(stats["or_ms"][f]);
+        hc_ms.push_back(stats["hc_ms"][f]);
+      }
+    ASSERT_EQ(or_ms.size(), 8u) << "node " << k;  // the switch: every other frame
+    expect_times("node " + std::to_string(k) + " OR ms", or_ms);
+    expect_times("node " + std::to_string(k) + " HC ms", hc_ms);
+  }
+  EXPECT_NEAR(summary_value(r.rvg_log, "frame_ms_median"), median_p99(stats["frame_interval_ms"]).first, 0.006);
+  char bytes[64];
+  std::snprintf(bytes, sizeof bytes, "%.0f B received from the nodes (mean)", sum(stats["bytes_received"]) / 16);
+  EXPECT_EQ(rows.at("bytes a frame"), bytes);
+  char culled[64];
+  std::snprintf(culled, sizeof culled, "%.1f %% of objects, %.1f %% of triangles", summary_value(r.rvg_log, "culled_pct"),
+                summary_value(r.rvg_log, "triangles_culled_pct"));
+  EXPECT_EQ(rows.at("culled (not drawn)"), culled);
+  EXPECT_EQ(rows.at("wrong pixels").rfind("not checked", 0), 0u) << rows.at("wrong pixels");  // the client compares sets
+  // "switch_node K: occlusion back end NAME", once, at start-up.
+  std::string names;
+  for (const auto& [k, log] : {std::pair{0, &r.node0_log}, std::pair{1, &r.node1_log}}) {
+    const std::string line = "switch_node " + std::to_string(k) + ": occlusion back end ";
+    const size_t at = log->find(line);
+    ASSERT_NE(at, std::string::npos) << *log;
+    EXPECT_EQ(log->find(line, at + 1), std::string::npos) << *log;
+    const std::string name = log->substr(at + line.size(), log->find('\n', at) - at - line.size());
+    names += (k ? ", node 1 " : "node 0 ") + name;
+  }
+  EXPECT_EQ(names, "node 0 cpu-pyramid, node 1 cpu");
+  EXPECT_EQ(rows.at("occlusion back end"), names);
+}
+
+// The reference's table (one process) says what its stats.csv says: the draw's median and p99,
+// the share of objects it did not draw, --exact's missed objects, and its back end (CHC: queries).
+TEST(Cluster, ReferenceRunTableAgreesWithItsStatsCsv) {
+  fs::path dir = fresh_dir("reference_table");
+  const Outcome ref = run_reference(dir, kCity, "orbit:8", {"--width", "64", "--height", "64", "--cull", "chc", "--exact"});
+  ASSERT_EQ(ref.code, 0) << ref.log;
+  std::string title;
+  // The reference's key=value line starts "reference (chc): "; the table ends before it.
+  const std::string log = std::regex_replace(ref.log, std::regex("\nreference \\(chc\\): "), "\nsummary: ");
+  const std::map<std::string, std::string> rows = run_table(log, &title);
+  EXPECT_EQ(title, "run (8 frames, one process: --reference --cull chc)") << ref.log;
+  auto stats = read_csv(dir / "stats.csv");
+  ASSERT_EQ(stats["frame"].size(), 8u);
+  ASSERT_EQ(rows.count("frame ms (draw)"), 1u) << ref.log;
+  std::istringstream cells(rows.at("frame ms (draw)"));
+  double median = -1, p99 = -1;
+  cells >> median >> p99;
+  EXPECT_NEAR(median, median_p99(stats["render_ms"]).first, 0.006) << ref.log;
+  EXPECT_NEAR(p99, median_p99(stats["render_ms"]).second, 0.006) << ref.log;
+  EXPECT_EQ(rows.at("wrong pixels"),
+            "not checked (frame_diff compares frames with a --cull frustum run's); --exact: " +
+                std::to_string(long(sum(stats["missed_visible"]))) + " visible objects not drawn");
+  EXPECT_EQ(sum(stats["missed_visible"]), 0.0);  // CHC is conservative
+  EXPECT_EQ(rows.at("occlusion back end"), "queries (GL occlusion queries)");
+  EXPECT_EQ(rows.count("culled (not drawn)"), 1u) << ref.log;
+  EXPECT_EQ(rows.count("bytes a frame"), 0u) << ref.log;  // one process
 }

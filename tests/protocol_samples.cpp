@@ -18,6 +18,7 @@ std::vector<Message> sample_messages() {
   hello.cluster_triangles = 2048;
   hello.config_hash = 0xfedcba9876543210ULL;
   hello.name = "switch-1 \xc3\xa9\xe2\x9c\x93";  // "switch-1 é✓"
+  hello.occlusion_backend = "cpu-pyramid";
   Hello keyed = hello;
   keyed.role = Role::render_client;
   keyed.auth = Auth::cluster_key;

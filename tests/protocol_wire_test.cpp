@@ -49,10 +49,12 @@ TEST(Wire, EveryMessageTypeRoundTrips) {
 }
 
 TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
-  EXPECT_EQ(encode(Hello{}).size(), 6u + 79u);
+  EXPECT_EQ(encode(Hello{}).size(), 6u + 81u);
   Hello named;
   named.name = "abc";
-  EXPECT_EQ(encode(named).size(), 6u + 79u + 3u);
+  EXPECT_EQ(encode(named).size(), 6u + 81u + 3u);
+  named.occlusion_backend = "cpu";
+  EXPECT_EQ(encode(named).size(), 6u + 81u + 3u + 3u);
   EXPECT_EQ(encode(Proof{}).size(), 6u + 32u);
   EXPECT_EQ(encode(Camera{}).size(), 6u + 101u);
   Camera frustum_only;
@@ -90,6 +92,12 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   EXPECT_EQ(k[6 + 76], 0xa5);
   EXPECT_EQ(field(k, 6 + 77, 2), 1u);  // name_bytes
   EXPECT_EQ(k[6 + 79], 'n');
+  EXPECT_EQ(field(k, 6 + 80, 2), 0u);  // backend_bytes, after the name
+  keyed.occlusion_backend = "queries";
+  const auto b = encode(keyed);
+  ASSERT_EQ(b.size(), 6u + 81u + 1u + 7u);
+  EXPECT_EQ(field(b, 6 + 80, 2), 7u);
+  EXPECT_EQ(std::string(b.begin() + 6 + 82, b.end()), "queries");
   Proof proof;
   proof.mac[0] = 0x11;
   proof.mac[31] = 0x22;
@@ -153,8 +161,13 @@ TEST(Wire, TrailingBytesAreRejected) {
   // Inside a payload: a string length or id count that does not cover the whole payload.
   auto hello = encode(Hello{});
   hello.push_back('x');
-  put_u32(hello, 2, 80);
+  put_u32(hello, 2, 82);
   EXPECT_NE(decode_error(hello).find("does not match"), std::string::npos) << decode_error(hello);
+  // A name longer than what is left before the back end's length.
+  auto long_name = encode(Hello{});
+  put_u16(long_name, 6 + 77, 1);
+  EXPECT_EQ(decode_error(long_name),
+            "hello: name length 1 leaves less than the 2 bytes that follow it in the 2 bytes left in the payload");
   auto diff = encode(NodeDiff{1, {1}, {}});
   diff.insert(diff.end(), {2, 0, 0, 0});
   put_u32(diff, 2, 20);
@@ -195,19 +208,22 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 7)");
+            "hello: unsupported protocol version 1 (this build speaks 8)");
   put_u16(bad_version, 10, 3);  // the cluster key without Resync
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 3 (this build speaks 7)");
+            "hello: unsupported protocol version 3 (this build speaks 8)");
   put_u16(bad_version, 10, 4);  // cameras without the occlusion byte
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 4 (this build speaks 7)");
+            "hello: unsupported protocol version 4 (this build speaks 8)");
   put_u16(bad_version, 10, 5);  // cameras whose occlusion byte is 0 or 1 only
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 5 (this build speaks 7)");
+            "hello: unsupported protocol version 5 (this build speaks 8)");
   put_u16(bad_version, 10, 6);  // cameras whose occlusion byte may be 2 (selected occluders, retired)
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 6 (this build speaks 7)");
+            "hello: unsupported protocol version 6 (this build speaks 8)");
+  put_u16(bad_version, 10, 7);  // hellos without the occlusion back end
+  EXPECT_EQ(decode_error(bad_version),
+            "hello: unsupported protocol version 7 (this build speaks 8)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
@@ -238,9 +254,42 @@ TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
   h = Hello{};
   h.name = std::string(kMaxNameBytes + 1, 'n');
   EXPECT_EQ(*invalid_reason(h), "hello: name of 65 bytes exceeds 64");
-  EXPECT_EQ(decode_error(encode(h)), "hello: payload of 144 bytes, expected 79..143");
+  EXPECT_EQ(decode_error(encode(h)), *invalid_reason(h));
   h.name.pop_back();
   EXPECT_TRUE(decode(encode(h)));
+  h.occlusion_backend = std::string(kMaxBackendBytes, 'b');
+  EXPECT_TRUE(decode(encode(h)));  // the longest Hello
+  EXPECT_EQ(encode(h).size(), kHeaderBytes + 177u);
+  h.occlusion_backend += 'b';
+  EXPECT_EQ(decode_error(encode(h)), "hello: payload of 178 bytes, expected 81..177");
+}
+
+TEST(Wire, HelloOcclusionBackendRoundTripsAndRejectsOtherCharacters) {
+  Hello h;
+  h.role = Role::switch_node;
+  for (const char* name : {"cpu", "queries", "cpu-pyramid", "gl2", ""}) {
+    h.occlusion_backend = name;
+    auto back = decode(encode(h));
+    ASSERT_TRUE(back) << name << ": " << back.error();
+    EXPECT_EQ(std::get<Hello>(*back).occlusion_backend, name);
+  }
+  const std::pair<std::string, std::string> bad[] = {
+      {"CPU", "hello: occlusion_backend: character 0x43 at byte 0 (lower-case letters, digits and '-' only)"},
+      {"cpu pyramid", "hello: occlusion_backend: character 0x20 at byte 3 (lower-case letters, digits and '-' only)"},
+      {"gl\n", "hello: occlusion_backend: character 0x0a at byte 2 (lower-case letters, digits and '-' only)"},
+      {"\xc3\xa9", "hello: occlusion_backend: character 0xc3 at byte 0 (lower-case letters, digits and '-' only)"},
+      {std::string(kMaxBackendBytes + 1, 'a'), "hello: occlusion_backend of 33 bytes exceeds 32"},
+  };
+  for (const auto& [name, reason] : bad) {
+    h.occlusion_backend = name;
+    EXPECT_EQ(invalid_reason(h).value_or(""), reason);
+    EXPECT_EQ(decode_error(encode(h)), reason);
+  }
+  // The back end's length must match the bytes after it.
+  h.occlusion_backend = "cpu";
+  auto bytes = encode(h);
+  put_u16(bytes, 6 + 79, 2);
+  EXPECT_EQ(decode_error(bytes), "hello: occlusion_backend length 2 does not match the 3 bytes left in the payload");
 }
 
 TEST(Wire, HelloRejectsUnknownAuthAndANonceWithoutAuth) {

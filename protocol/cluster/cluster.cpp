@@ -50,7 +50,8 @@ std::optional<std::string> viewport_mismatch(const wire::Camera& w, const Viewpo
 const char* camera_mode_name(CameraMode m) { return m == CameraMode::lockstep ? "lockstep" : "latest"; }
 
 wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
-                       const BuildParams& build, const ClusterConfig& config, const std::string& name) {
+                       const BuildParams& build, const ClusterConfig& config, const std::string& name,
+                       const std::string& occlusion_backend) {
   wire::Hello h;
   h.role = role;
   h.node_id = node_id;
@@ -62,6 +63,7 @@ wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uin
   h.cluster_triangles = build.cluster_triangles;
   h.config_hash = config.hash();
   h.name = name;
+  h.occlusion_backend = occlusion_backend;
   return h;
 }
 

@@ -60,8 +60,11 @@ void add_hc_options(Cli& cli, HcChoices& c);
 const char* hc_test_name(HcTest t);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
+// `occlusion_backend`: a switch node's back end as its start-up line names it (wire.hpp's rules:
+// lower-case letters, digits, '-'); "" for the render client and tools.
 wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uint64_t scene_fingerprint,
-                       const BuildParams& build, const ClusterConfig& config, const std::string& name);
+                       const BuildParams& build, const ClusterConfig& config, const std::string& name,
+                       const std::string& occlusion_backend);
 
 // --camera-mode, --full-sets, --pixel-error, --visible-pixel-lod, --front-tracking.
 void add_cluster_options(Cli& cli, ClusterConfig& c);

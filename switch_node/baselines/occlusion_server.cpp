@@ -69,7 +69,7 @@ int serve(const ServerOptions& o) {
   net::Listener listener = open_listener(who, o.listen);
   const ClusterConfig config;  // lockstep, incremental: what the render client expects by default
   const wire::Hello mine =
-      make_hello(wire::Role::switch_node, 0, {o.width, o.height}, g.fingerprint(), h.params(), config, who);
+      make_hello(wire::Role::switch_node, 0, {o.width, o.height}, g.fingerprint(), h.params(), config, who, "depth-readback");
   net::PeerExpectation expect{wire::Role::render_client, std::nullopt};
   expect.key = o.key ? &*o.key : nullptr;
   auto peer = listener.accept_peer(mine, expect, net::Millis(o.timeout_ms), net::Millis(2000), net::keyed_options(expect.key));
