@@ -1,6 +1,6 @@
 // HC's GPU depth pyramid (issue 16, common/gl/hzb_query.hpp) on a real GL context: its levels equal
 // the CPU pyramid's, it never proves a box occluded whose occlusion query passes, and the switch
-// step finds the same visible sets with --hc-test pyramid and cpu-pyramid as with queries.
+// step finds the same visible sets with --backend gpu-pyramid and cpu-pyramid as with queries.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +10,7 @@
 
 #include "common/camera_path.hpp"
 #include "common/gl/context.hpp"
+#include "common/gl/gl_depth_backend.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/two_pass.hpp"
@@ -179,7 +180,7 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
   }
 }
 
-// The converse proof (DepthPyramid::shows, HcTest::cpu_pyramid) against the occlusion query, box
+// The converse proof (DepthPyramid::shows, HcStrategy::cpu_pyramid) against the occlusion query, box
 // by box on the read-back depth: "shows" only where the query counts a sample, and for a good
 // share of the boxes whose queries pass (one that proves nothing would pass the first check).
 TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
@@ -257,7 +258,7 @@ TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
 }
 
 // The switch step over a walk, as a switch node runs it (near-first batches, occluder fusion
-// between batches, visibility hold; adaptive queries where asked), once per --hc-test.
+// between batches, visibility hold; adaptive queries where asked), once per GL back end (--backend queries, gpu-pyramid, cpu-pyramid).
 // Without adaptive queries the visible sets of every frame are those of queries only (tau = 0),
 // and the pyramid did prove boxes occluded. With them the pyramid tests what they skip
 // (cheap_tests()): every set holds the leaves that show (the item buffer), and fewer leaves are
@@ -268,50 +269,38 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
   Plant p(w, hgt, "plant:0.3", frames);
   const Renderables renderables(p.h, nullptr);
   ClusterConfig config;
-  auto replay = [&](HcTest test, HcQuerier::Stats* stats, bool adaptive = false) {
-    HcQuerier querier(*p.ctx, test, false);  // tau = 0: no sample counts needed
+  auto replay = [&](HcStrategy test, HcQuerier::Stats* stats, bool adaptive = false) {
+    GlDepthBackend backend(*p.ctx, *p.renderer, renderables, test, false);  // tau = 0: no sample counts needed
     const SwitchStep step(renderables, config, hgt);
     QuerySkipper skipper(p.h.size());
     VisibilityHold hold(p.h.size(), 2);
     DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
     VisibleSet visible(renderables.count());
     std::vector<std::vector<uint32_t>> sets;
-    std::vector<uint8_t> drawn;
     for (int f = 0; f < frames; ++f) {
       const Camera& cam = p.path[size_t(f)];
       std::vector<uint32_t> occluders(visible.ids().begin(), visible.ids().end());
       std::sort(occluders.begin(), occluders.end());
-      drawn.assign(renderables.count(), 0);
-      for (uint32_t id : occluders) drawn[id] = 1;
-      p.renderer->begin_frame(cam, false);
-      p.renderer->draw_renderables(renderables, occluders, SceneRenderer::Mode::DepthOnly);
-      HcOptions o{.choices = {.order = HcOrder::near_first, .adaptive_queries = adaptive}, .skipper = &skipper};
-      o.occluders = [&](std::span<const uint32_t> found) {
-        std::vector<uint32_t> fresh;
-        for (uint32_t id : found)
-          if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
-        p.renderer->draw_renderables(renderables, fresh, SceneRenderer::Mode::DepthOnly);
-        std::vector<Aabb> boxes;
-        for (uint32_t id : fresh) boxes.push_back(p.h.node(renderables.node_of(id)).box);
-        querier.depth_added(boxes);
-      };
-      querier.begin(cam);
-      step.hc(uint32_t(f), visible, cam, querier, o, nowhere, &hold);
-      querier.end();
+      backend.begin(cam);
+      backend.draw(occluders);
+      HcOptions o{.choices = {.adaptive_queries = adaptive}, .skipper = &skipper};
+      backend.begin_tests(uint32_t(f), cam);
+      step.hc(uint32_t(f), visible, cam, backend, o, nowhere, &hold);
+      backend.end_tests();
       std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
       std::sort(v.begin(), v.end());
       sets.push_back(std::move(v));
     }
-    *stats = querier.stats();
+    *stats = backend.querier().stats();
     return sets;
   };
   HcQuerier::Stats q{}, py{}, cp{};
-  const auto reference = replay(HcTest::queries, &q);
-  const auto pyramid = replay(HcTest::pyramid, &py);
-  const auto cpu = replay(HcTest::cpu_pyramid, &cp);
+  const auto reference = replay(HcStrategy::queries, &q);
+  const auto pyramid = replay(HcStrategy::pyramid, &py);
+  const auto cpu = replay(HcStrategy::cpu_pyramid, &cp);
   for (int f = 0; f < frames; ++f) {
-    ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--hc-test pyramid, frame " << f;
-    ASSERT_EQ(cpu[size_t(f)], reference[size_t(f)]) << "--hc-test cpu-pyramid, frame " << f;
+    ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--backend gpu-pyramid, frame " << f;
+    ASSERT_EQ(cpu[size_t(f)], reference[size_t(f)]) << "--backend cpu-pyramid, frame " << f;
   }
   EXPECT_EQ(cp.tests, q.tests);
   EXPECT_EQ(cp.occluded, q.occluded);
@@ -336,11 +325,11 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
               (unsigned long long)cp.builds, (unsigned long long)cp.refreshes);
 
   HcQuerier::Stats qa{}, pya{}, cpa{};
-  const auto trusting = replay(HcTest::queries, &qa, true);
+  const auto trusting = replay(HcStrategy::queries, &qa, true);
   size_t kept_by_queries = 0, kept[2] = {0, 0};
   for (int f = 0; f < frames; ++f) kept_by_queries += trusting[size_t(f)].size();
-  const auto cheap_pyramid = replay(HcTest::pyramid, &pya, true);
-  const auto cheap_cpu = replay(HcTest::cpu_pyramid, &cpa, true);
+  const auto cheap_pyramid = replay(HcStrategy::pyramid, &pya, true);
+  const auto cheap_cpu = replay(HcStrategy::cpu_pyramid, &cpa, true);
   std::vector<uint32_t> leaves;
   for (uint32_t id = 0; id < p.h.size(); ++id)
     if (p.h.node(id).leaf() && p.h.node(id).item_count > 0) leaves.push_back(id);
@@ -375,7 +364,7 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
 // kRetryFrames frames; the answers stay the queries' counts.
 TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
   Plant p(128, 128, "plant:0.05", 1);
-  HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
+  HcQuerier q(*p.ctx, HcStrategy::cpu_pyramid, true);
   const Camera& cam = p.path[0];
   const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
   p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
@@ -390,7 +379,7 @@ TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
 // (boxes proven occluded answer 0, none is answered "shows" without its count).
 TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
   Plant p(192, 160, "plant:0.05", 3);
-  HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
+  HcQuerier q(*p.ctx, HcStrategy::cpu_pyramid, true);
   for (const Camera& cam : p.path) {
     const std::vector<Aabb> boxes = test_boxes(p, cam, 400);
     p.draw_occluders(cam);
@@ -427,7 +416,7 @@ TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   const std::vector<Aabb> boxes = test_boxes(p, p.path[1], 4000);
   std::vector<PyramidProbe> batch;
   for (const Aabb& b : boxes)
-    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, HcQuerier::policy(HcTest::pyramid).span); pr.kind == PyramidProbe::Kind::probe)
+    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, HcQuerier::policy(HcStrategy::pyramid).span); pr.kind == PyramidProbe::Kind::probe)
       batch.push_back(pr);
   std::vector<uint32_t> occluded;
   double test_ms = 1e9;

@@ -213,9 +213,9 @@ std::vector<float> GpuDepthPyramid::read_level(uint32_t level) const {
   return out;
 }
 
-HcQuerier::Policy HcQuerier::policy(HcTest test) {
+HcQuerier::Policy HcQuerier::policy(HcStrategy test) {
   Policy p;
-  if (test == HcTest::cpu_pyramid) p.min_decided_screens = 0.25;
+  if (test == HcStrategy::cpu_pyramid) p.min_decided_screens = 0.25;
   return p;
 }
 
@@ -226,30 +226,20 @@ uint64_t probe_pixels(const PyramidProbe& p) {
 }
 }  // namespace
 
-HcTest hc_test_for(HcTest test, RendererClass renderer) {
-  if (test != HcTest::by_renderer) return test;
-  return renderer == RendererClass::hardware ? HcTest::queries : HcTest::cpu_pyramid;
-}
-
-OrRaster or_raster_for(OrRaster raster, RendererClass renderer) {
-  if (raster != OrRaster::by_renderer) return raster;
-  return renderer == RendererClass::hardware ? OrRaster::gl : OrRaster::cpu;
-}
-
-HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
-    : test_(hc_test_for(test, ctx.renderer_class())),
+HcQuerier::HcQuerier(GlContext& ctx, HcStrategy test, bool sample_counts, const Policy& policy)
+    : test_(test),
       sample_counts_(sample_counts),
-      policy_(test == HcTest::by_renderer ? HcQuerier::policy(test_) : policy),
+      policy_(policy),
       ctx_(ctx),
       queries_(ctx) {
-  if (test_ == HcTest::cpu_pyramid) {
+  if (test_ == HcStrategy::cpu_pyramid) {
     cpu_pyramid_ = std::make_unique<DepthPyramid>();
     counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);
   }
-  if (test_ == HcTest::pyramid) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
+  if (test_ == HcStrategy::pyramid) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
 }
 
-void HcQuerier::begin(const Camera& cam, const float* depth) {
+void HcQuerier::begin(const Camera& cam) {
   // cpu_pyramid: the frame just ended decided boxes covering that many pixels; frames whose
   // pyramid would not pay do without it, with a frame with the pyramid every kRetryFrames to look again.
   if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
@@ -259,7 +249,6 @@ void HcQuerier::begin(const Camera& cam, const float* depth) {
   if (use_pyramid_) frames_off_ = 0;
   proven_frame_ = 0;
   cam_ = cam;
-  cpu_depth_ = depth;
   built_ = stale_ = false;
   clear_dirty();
   q_begin(cam);
@@ -280,12 +269,7 @@ void HcQuerier::depth_added(std::span<const Aabb> drawn) {
 void HcQuerier::cpu_refresh() {
   const int w = ctx_.width(), h = ctx_.height();
   if (!built_) {
-    float* level0 = cpu_pyramid_->level0(w, h);
-    if (cpu_depth_)
-      std::copy_n(cpu_depth_, size_t(w) * size_t(h), level0);
-    else
-      ctx_.read_depth(level0);
-    cpu_depth_ = nullptr;
+    ctx_.read_depth(cpu_pyramid_->level0(w, h));
     cpu_pyramid_->build_levels();
     built_ = true;
     stale_ = false;

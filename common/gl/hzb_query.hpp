@@ -1,4 +1,5 @@
-// HC's occlusion tests with a GPU depth pyramid in front of the occlusion queries (issue 16).
+// HC's occlusion tests against GL's depth: occlusion queries, a GPU depth pyramid in front of them, or a
+// CPU depth pyramid read back once a frame.
 //
 // GpuDepthPyramid: a hierarchical depth pyramid of farthest depths (reverse-Z: the MIN of 2 x 2
 // texels), built by a compute shader from the context's depth texture (GlContext::depth_texture),
@@ -8,12 +9,12 @@
 // probe from a small shader storage buffer. Level contents equal DepthPyramid::build on the same
 // depth (min is exact), so the CPU DepthPyramid::occludes is the shader's specification.
 //
-// HcQuerier: the OcclusionQueries HC uses (switch nodes, cull_overview), by HcTest:
+// HcQuerier: the OcclusionQueries of the GL back ends (gl_depth_backend.hpp), by HcStrategy:
 //   queries      every box is a real occlusion query (BoxQuerier): what a hardware GPU would choose;
 //   pyramid      each batch's boxes are first tested against the GPU pyramid in one dispatch; only
 //                those it cannot prove occluded become real queries (issued together, then read);
 //                nothing is read back but one word per probe;
-//   cpu_pyramid  the llvmpipe default (issue 14): HC's depth read back once a frame (glReadPixels)
+//   cpu_pyramid  HC's depth read back once a frame (glReadPixels)
 //                into a DepthPyramid (common/cull/hzb) that proves boxes occluded
 //                (DepthPyramid::occludes) and, without sample counts and until occluder fusion
 //                draws more, boxes that show (DepthPyramid::shows: answered 1 with no test); the
@@ -22,8 +23,7 @@
 //                near plane, which stay queries (the counting shader runs for every passing
 //                fragment). Frames whose pyramid decides boxes covering less than
 //                Policy::min_decided_screens viewports (a running average) do without it,
-//                retrying every kRetryFrames. On llvmpipe a box's test is the cost of rasterising
-//                it, so this is where HC's time went (docs/results.md).
+//                retrying every kRetryFrames.
 // The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"), a box shown
 // on the CPU has a sample its query would count, and the batch draw counts the same samples:
 // the results, and so the visible sets, are those of `queries` (without `sample_counts` a
@@ -34,9 +34,7 @@
 // depth_added() says more depth was drawn into the same buffer within the frame (occluder
 // fusion). Depth only ever gets nearer then (GL_GREATER, depth writes on), so the pyramid built
 // before it still proves only true occlusion: it stays in use (conservative; it just proves a
-// little less) and is rebuilt only for batches of at least Policy::rebuild_min_probes probes (a
-// build at 1024 x 1024 costs about as much as a hundred queries here, and rebuilding for every
-// batch proved only a few per cent more boxes: docs/scale.md).
+// little less) and is rebuilt only for batches of at least Policy::rebuild_min_probes probes.
 // Contracts: the GlContext is current on the calling thread and outlives the querier; nothing
 // draws into the depth buffer between begin()/depth_added() and the batch's results but the
 // querier itself (its queries write no depth).
@@ -82,31 +80,25 @@ class GpuDepthPyramid {
   GLint count_loc_ = -1, src_size_loc_[2] = {-1, -1}, dst_size_loc_[2] = {-1, -1}, two_loc_[2] = {-1, -1};
 };
 
-// The test HcTest::by_renderer stands for on a renderer of class `renderer`: queries on a hardware
-// GPU (batched occlusion queries against the OR's depth, nothing read back on the frame's path),
-// cpu_pyramid on a software renderer (llvmpipe: reading depth back is a memcpy, queries are
-// rasterised). Any other test is returned as it is. HcQuerier applies it to the test it is given.
-HcTest hc_test_for(HcTest test, RendererClass renderer);
-// --or-raster auto: cpu on a software renderer, gl on a hardware GPU; other choices as given.
-OrRaster or_raster_for(OrRaster raster, RendererClass renderer);
+// How HcQuerier tests a box (the GL back ends, gl_depth_backend.hpp).
+enum class HcStrategy { queries, pyramid, cpu_pyramid };
 
 class HcQuerier final : public OcclusionQueries {
  public:
-  // When the pyramid is used, and how it tests (defaults per HcTest: policy()).
+  // When the pyramid is used, and how it tests (defaults per HcStrategy: policy()).
   struct Policy {
     size_t rebuild_min_probes = 256;   // pyramid: rebuild a stale pyramid (depth_added) for batches this large
     // cpu_pyramid, > 0: frames whose pyramid decides (proves occluded or showing) boxes whose
     // rectangles cover fewer pixels than this many viewports (average) do without it (batch).
     double min_decided_screens = 0;
-    // Probe rectangles span at most span x span texels (hzb.hpp): 2 proved a third of the boxes
-    // the queries found occluded on a plant walk, 16 nearly two thirds (docs/scale.md).
+    // Probe rectangles span at most span x span texels (hzb.hpp).
     int span = 16;
     // cpu_pyramid: boxes whose screen rectangle covers more pixels are queries (with the eye or the near
     // plane in reach: always), smaller ones are counted by the batch draw.
     double batch_max_pixels = 16384;
   };
   static constexpr uint32_t kRetryFrames = 8;
-  static Policy policy(HcTest test);
+  static Policy policy(HcStrategy test);
 
   struct Stats {
     uint64_t tests = 0;            // issue() calls: boxes tested
@@ -126,15 +118,12 @@ class HcQuerier final : public OcclusionQueries {
   };
 
   // `sample_counts`: result() must be the number of samples (visible-pixel LOD), not just > 0.
-  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts = true) : HcQuerier(ctx, test, sample_counts, policy(test)) {}
-  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy);
-  HcTest mode() const { return test_; }
+  HcQuerier(GlContext& ctx, HcStrategy test, bool sample_counts = true) : HcQuerier(ctx, test, sample_counts, policy(test)) {}
+  HcQuerier(GlContext& ctx, HcStrategy test, bool sample_counts, const Policy& policy);
+  HcStrategy mode() const { return test_; }
 
-  // A frame's tests against a freshly drawn depth buffer, from `cam`. `depth`: that buffer as the
-  // CPU already holds it (what GlContext::write_depth uploaded: width x height, GL's row order,
-  // alive until the frame's first batch resolves); cpu_pyramid builds from it instead of reading
-  // GL's back.
-  void begin(const Camera& cam, const float* depth = nullptr);
+  // A frame's tests against a freshly drawn depth buffer, from `cam`.
+  void begin(const Camera& cam);
   // More depth was drawn into this frame's buffer (occluder fusion); restores the query state.
   // `drawn`: the world boxes of what was drawn (cpu_pyramid then refreshes only their screen
   // rectangles); empty: anything, anywhere.
@@ -158,7 +147,7 @@ class HcQuerier final : public OcclusionQueries {
   uint32_t q_issue(const Aabb& box);
   uint64_t q_result(uint32_t h);
 
-  HcTest test_;
+  HcStrategy test_;
   bool sample_counts_;
   Policy policy_;
   GlContext& ctx_;
@@ -166,7 +155,6 @@ class HcQuerier final : public OcclusionQueries {
   std::unique_ptr<BoxBatchCounter> counter_;  // cpu_pyramid only
   std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid only
   std::unique_ptr<DepthPyramid> cpu_pyramid_;  // cpu_pyramid only
-  const float* cpu_depth_ = nullptr;           // begin()'s depth, until the pyramid is built
   Camera cam_;
   bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
   // cpu_pyramid: pixels drawn since level 0 was read (inclusive; empty when x0 > x1).
