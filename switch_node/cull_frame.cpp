@@ -4,7 +4,10 @@
 #include <stdexcept>
 
 #include "common/cull/cpu_backend.hpp"
+#include "common/gl/gl_cpu_pyramid_tests.hpp"
 #include "common/gl/gl_depth_backend.hpp"
+#include "common/gl/gl_pyramid_tests.hpp"
+#include "common/gl/gl_query_tests.hpp"
 #include "common/hash.hpp"
 
 namespace occ {
@@ -35,10 +38,12 @@ std::unique_ptr<OcclusionBackend> make_backend(const BackendChoice& c, GlContext
     case BackendKind::cpu:
       if (!cpu) throw std::logic_error("make_backend: the CPU back end without the scene's triangles on the CPU");
       return std::make_unique<CpuBackend>(*cpu, r, !config.lod());
-    case BackendKind::queries: return std::make_unique<GlDepthBackend>(ctx, renderer, r, HcStrategy::queries, counts);
-    case BackendKind::gpu_pyramid: return std::make_unique<GlDepthBackend>(ctx, renderer, r, HcStrategy::pyramid, counts);
+    case BackendKind::queries:
+      return std::make_unique<GlDepthBackend>(ctx, renderer, r, std::make_unique<QueryTests>(ctx));
+    case BackendKind::gpu_pyramid:
+      return std::make_unique<GlDepthBackend>(ctx, renderer, r, std::make_unique<GpuPyramidTests>(ctx));
     case BackendKind::cpu_pyramid:
-      return std::make_unique<GlDepthBackend>(ctx, renderer, r, HcStrategy::cpu_pyramid, counts);
+      return std::make_unique<GlDepthBackend>(ctx, renderer, r, std::make_unique<CpuPyramidTests>(ctx, counts));
   }
   throw std::logic_error("make_backend: unknown back end");
 }

@@ -195,7 +195,7 @@ void occluded_half_walk(FakeQueries& fast, CullStats& plain, CullStats& skip,
   }
 }
 
-// A querier with a cheap test (HcQuerier's depth pyramid) that proves every occluded box.
+// A querier with a cheap test (a depth pyramid's) that proves every occluded box.
 struct CheapFakeQueries : FakeQueries {
   uint32_t cheap = 0;
   bool cheap_tests() const override { return true; }

@@ -7,10 +7,15 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <memory>
 
 #include "common/camera_path.hpp"
 #include "common/gl/context.hpp"
 #include "common/gl/gl_depth_backend.hpp"
+#include "common/gl/gl_cpu_pyramid_tests.hpp"
+#include "common/gl/gl_pyramid_tests.hpp"
+#include "common/gl/gl_query_tests.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/two_pass.hpp"
@@ -82,7 +87,7 @@ std::vector<uint64_t> query_counts(Plant& p, const Camera& cam, const std::vecto
 
 // `frames` frames of `q` testing `boxes` from `cam` against a cleared depth buffer: every answer
 // must be the expected count.
-void expect_answers_on_cleared_depth(Plant& p, HcQuerier& q, const Camera& cam, const std::vector<Aabb>& boxes,
+void expect_answers_on_cleared_depth(Plant& p, GlDepthTests& q, const Camera& cam, const std::vector<Aabb>& boxes,
                                      const std::vector<uint64_t>& expected, int frames) {
   for (int f = 0; f < frames; ++f) {
     p.renderer->begin_frame(cam, false);
@@ -180,7 +185,7 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
   }
 }
 
-// The converse proof (DepthPyramid::shows, HcStrategy::cpu_pyramid) against the occlusion query, box
+// The converse proof (DepthPyramid::shows, --backend cpu-pyramid) against the occlusion query, box
 // by box on the read-back depth: "shows" only where the query counts a sample, and for a good
 // share of the boxes whose queries pass (one that proves nothing would pass the first check).
 TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
@@ -264,13 +269,15 @@ TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
 // (cheap_tests()): every set holds the leaves that show (the item buffer), and fewer leaves are
 // kept than by queries,
 // which take what they skip on trust.
-TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
+TEST(GlDepthTests, EveryStrategyFindsTheVisibleSetsOfQueriesOnAWalk) {
   const int w = 256, hgt = 192, frames = 24;
   Plant p(w, hgt, "plant:0.3", frames);
   const Renderables renderables(p.h, nullptr);
   ClusterConfig config;
-  auto replay = [&](HcStrategy test, HcQuerier::Stats* stats, bool adaptive = false) {
-    GlDepthBackend backend(*p.ctx, *p.renderer, renderables, test, false);  // tau = 0: no sample counts needed
+  // `tests` answer the replay; `keep` reads their counts when it ends.
+  auto replay = [&](std::unique_ptr<GlDepthTests> tests, bool adaptive,
+                    const std::function<void(const GlDepthTests&)>& keep) {
+    GlDepthBackend backend(*p.ctx, *p.renderer, renderables, std::move(tests));
     const SwitchStep step(renderables, config, hgt);
     QuerySkipper skipper(p.h.size());
     VisibilityHold hold(p.h.size(), 2);
@@ -291,19 +298,29 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       std::sort(v.begin(), v.end());
       sets.push_back(std::move(v));
     }
-    *stats = backend.querier().stats();
+    keep(backend.tests());
     return sets;
   };
-  HcQuerier::Stats q{}, py{}, cp{};
-  const auto reference = replay(HcStrategy::queries, &q);
-  const auto pyramid = replay(HcStrategy::pyramid, &py);
-  const auto cpu = replay(HcStrategy::cpu_pyramid, &cp);
+  OcclusionCounts q;
+  GpuPyramidTests::Stats py;
+  CpuPyramidTests::Stats cp;
+  auto counts_into = [](OcclusionCounts& c) { return [&c](const GlDepthTests& t) { c = t.counts(); }; };
+  auto gpu_into = [](GpuPyramidTests::Stats& s) {
+    return [&s](const GlDepthTests& t) { s = dynamic_cast<const GpuPyramidTests&>(t).stats(); };
+  };
+  auto cpu_into = [](CpuPyramidTests::Stats& s) {
+    return [&s](const GlDepthTests& t) { s = dynamic_cast<const CpuPyramidTests&>(t).stats(); };
+  };
+  // tau = 0: no sample counts needed.
+  const auto reference = replay(std::make_unique<QueryTests>(*p.ctx), false, counts_into(q));
+  const auto pyramid = replay(std::make_unique<GpuPyramidTests>(*p.ctx), false, gpu_into(py));
+  const auto cpu = replay(std::make_unique<CpuPyramidTests>(*p.ctx, false), false, cpu_into(cp));
   for (int f = 0; f < frames; ++f) {
     ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--backend gpu-pyramid, frame " << f;
     ASSERT_EQ(cpu[size_t(f)], reference[size_t(f)]) << "--backend cpu-pyramid, frame " << f;
   }
-  EXPECT_EQ(cp.tests, q.tests);
-  EXPECT_EQ(cp.occluded, q.occluded);
+  EXPECT_EQ(cp.tests, q.boxes_tested);
+  EXPECT_EQ(cp.occluded, q.boxes_occluded);
   EXPECT_GT(cp.pyramid_occluded, 0u);
   EXPECT_GT(cp.shown, 0u);
   EXPECT_GT(cp.refreshes, 0u) << "occluder fusion's rectangles were read back again";
@@ -311,25 +328,26 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       << "cpu-pyramid: every box proven on the CPU, batched or a query";
   EXPECT_LT(cp.batched + cp.queries, cp.tests) << "the CPU decided some boxes";
   EXPECT_GT(cp.batched, 0u) << "boxes counted by batch draws";
-  EXPECT_EQ(q.queries, q.tests);
-  EXPECT_EQ(q.pyramid_tested, 0u);
-  EXPECT_EQ(py.tests, q.tests) << "the same boxes were tested";
+  EXPECT_EQ(py.tests, q.boxes_tested) << "the same boxes were tested";
+  EXPECT_EQ(py.occluded, q.boxes_occluded);
   EXPECT_GT(py.pyramid_occluded, 0u);
   EXPECT_EQ(py.queries + py.pyramid_occluded, py.tests) << "every box is a query or proven occluded (none empty)";
   EXPECT_GT(py.builds, uint64_t(frames) - 1) << "at least one build per frame with tests";
   std::printf("%d frames: %llu boxes tested; pyramid: %llu queries, %llu proven occluded, %llu builds; "
               "cpu-pyramid: %llu batched, %llu queries, %llu proven occluded, %llu shown, %llu builds, %llu refreshes\n",
-              frames, (unsigned long long)q.tests, (unsigned long long)py.queries,
+              frames, (unsigned long long)q.boxes_tested, (unsigned long long)py.queries,
               (unsigned long long)py.pyramid_occluded, (unsigned long long)py.builds, (unsigned long long)cp.batched,
               (unsigned long long)cp.queries, (unsigned long long)cp.pyramid_occluded, (unsigned long long)cp.shown,
               (unsigned long long)cp.builds, (unsigned long long)cp.refreshes);
 
-  HcQuerier::Stats qa{}, pya{}, cpa{};
-  const auto trusting = replay(HcStrategy::queries, &qa, true);
+  OcclusionCounts qa;
+  GpuPyramidTests::Stats pya;
+  CpuPyramidTests::Stats cpa;
+  const auto trusting = replay(std::make_unique<QueryTests>(*p.ctx), true, counts_into(qa));
   size_t kept_by_queries = 0, kept[2] = {0, 0};
   for (int f = 0; f < frames; ++f) kept_by_queries += trusting[size_t(f)].size();
-  const auto cheap_pyramid = replay(HcStrategy::pyramid, &pya, true);
-  const auto cheap_cpu = replay(HcStrategy::cpu_pyramid, &cpa, true);
+  const auto cheap_pyramid = replay(std::make_unique<GpuPyramidTests>(*p.ctx), true, gpu_into(pya));
+  const auto cheap_cpu = replay(std::make_unique<CpuPyramidTests>(*p.ctx, false), true, cpu_into(cpa));
   std::vector<uint32_t> leaves;
   for (uint32_t id = 0; id < p.h.size(); ++id)
     if (p.h.node(id).leaf() && p.h.node(id).item_count > 0) leaves.push_back(id);
@@ -346,10 +364,10 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       kept[k] += v.size();
     }
   }
-  EXPECT_EQ(qa.cheap, 0u) << "queries: skipped leaves are not tested";
-  for (const HcQuerier::Stats* s : {&pya, &cpa}) {
-    EXPECT_GT(s->assumed, 0u) << "the pyramid could not prove some skipped leaves occluded";
-    EXPECT_LT(s->assumed, s->cheap) << "and proved others occluded";
+  EXPECT_LT(qa.boxes_tested, q.boxes_tested) << "queries: skipped leaves are not tested";
+  for (auto [assumed, cheap] : {std::pair{pya.assumed, pya.cheap}, std::pair{cpa.assumed, cpa.cheap}}) {
+    EXPECT_GT(assumed, 0u) << "the pyramid could not prove some skipped leaves occluded";
+    EXPECT_LT(assumed, cheap) << "and proved others occluded";
   }
   EXPECT_EQ(cpa.batched + cpa.queries + cpa.pyramid_occluded + cpa.shown + cpa.assumed, cpa.tests);
   std::printf("adaptive queries: leaves kept over the walk: queries %zu, pyramid %zu, cpu-pyramid %zu (%llu of %llu "
@@ -362,24 +380,24 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
 // cpu-pyramid where its pyramid decides nothing (nothing drawn, sample counts wanted: no box is
 // occluded, none may be answered "shows"): after its first frame it is read back only every
 // kRetryFrames frames; the answers stay the queries' counts.
-TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
+TEST(GlDepthTests, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
   Plant p(128, 128, "plant:0.05", 1);
-  HcQuerier q(*p.ctx, HcStrategy::cpu_pyramid, true);
+  CpuPyramidTests q(*p.ctx, true);
   const Camera& cam = p.path[0];
   const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
   p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
   const std::vector<uint64_t> expected = query_counts(p, cam, boxes);
-  expect_answers_on_cleared_depth(p, q, cam, boxes, expected, 2 * int(HcQuerier::kRetryFrames) + 1);
+  expect_answers_on_cleared_depth(p, q, cam, boxes, expected, 2 * int(CpuPyramidTests::kRetryFrames) + 1);
   if (HasFatalFailure()) return;
   EXPECT_EQ(q.stats().pyramid_occluded + q.stats().shown, 0u);
-  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
+  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << CpuPyramidTests::kRetryFrames << " frames";
 }
 
 // cpu-pyramid where sample counts matter (visible-pixel LOD): every answer is the query's count
 // (boxes proven occluded answer 0, none is answered "shows" without its count).
-TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
+TEST(GlDepthTests, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
   Plant p(192, 160, "plant:0.05", 3);
-  HcQuerier q(*p.ctx, HcStrategy::cpu_pyramid, true);
+  CpuPyramidTests q(*p.ctx, true);
   for (const Camera& cam : p.path) {
     const std::vector<Aabb> boxes = test_boxes(p, cam, 400);
     p.draw_occluders(cam);
@@ -416,7 +434,7 @@ TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   const std::vector<Aabb> boxes = test_boxes(p, p.path[1], 4000);
   std::vector<PyramidProbe> batch;
   for (const Aabb& b : boxes)
-    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, HcQuerier::policy(HcStrategy::pyramid).span); pr.kind == PyramidProbe::Kind::probe)
+    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, GpuPyramidTests::Policy{}.span); pr.kind == PyramidProbe::Kind::probe)
       batch.push_back(pr);
   std::vector<uint32_t> occluded;
   double test_ms = 1e9;
