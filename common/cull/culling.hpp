@@ -12,6 +12,7 @@
 #include "common/camera.hpp"
 #include "common/cull/backend_choice.hpp"
 #include "common/cull/enclosure.hpp"
+#include "common/cull/query_skipper.hpp"
 #include "common/scene/hierarchy.hpp"
 #include "common/lod/lod_select.hpp"
 
@@ -75,78 +76,6 @@ struct CullStats {
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
   uint32_t skipped_occluded = 0;   // of the queries it skipped, proven occluded by a cheap test (in occluded)
   uint32_t sealed = 0;             // nodes hidden inside solids (Enclosures::hides), no query
-};
-
-// Pays for occlusion queries only where they cull (the cost/benefit idea of the hardware-assisted
-// culling paper): a node whose query came back visible kTrust times in a row is assumed visible,
-// without a query, for its next `wait` visits; every confirmation doubles the wait (up to
-// kMaxWait), an occluded result resets it. Assuming visible is conservative: the node is accepted
-// or descended exactly as if its query had passed, so no frame changes; only the visible set may
-// keep a node for up to kMaxWait visits after it became occluded (where the querier has
-// cheap_tests(), only while its cheap test cannot prove that). A scene with little occlusion
-// (an open field, the outside of one object) thus stops paying for queries that never cull.
-class QuerySkipper {
- public:
-  // 2 and 32 (were 3 and 16): duplex orbit at 1024^2, HC CPU -15 to -20 %; c45walk at 512^2 tau 0,
-  // p99 frame interval 11.1-12.7 against 12.9-18.6 ms; PVS/exact +0.01-0.04 (docs/spikes.md).
-  static constexpr uint8_t kTrust = 2;
-  static constexpr uint8_t kMaxWait = 32;
-  // A leaf with more triangles than this is queried every time: skipping its query saves one
-  // box test, but if it has become occluded it is drawn for nothing, twice (the other node's
-  // OR and the render client), for up to kMaxWait frames. Duplex orbit at 512^2 (the cluster,
-  // paired runs): triangles sent 13.5 k -> 7.2 k per frame for +1 % queries, frame interval
-  // -7 %; 50 and 100 query more for less; the city and the saw unchanged (docs/results.md).
-  static constexpr uint64_t kMaxSkippedLeafTriangles = 150;
-  // Whether `n`'s query may be skipped at all (interior nodes: their children are tested).
-  static bool may_skip(const HNode& n) { return !n.leaf() || n.triangles <= kMaxSkippedLeafTriangles; }
-  explicit QuerySkipper(size_t nodes) : state_(nodes) {}
-  // True when `node` is assumed visible this time (consumes one visit of its wait).
-  bool skip(uint32_t node);
-  void record(uint32_t node, bool visible);
-
- private:
-  struct State {
-    uint8_t streak = 0, wait = 0, remaining = 0;
-  };
-  std::vector<State> state_;
-};
-
-// Hysteresis for the visible set (issue 15): a node HC found visible (in two frames, see recent())
-// stays in V for up to `frames` frames after the last frame it was seen, while it stays in the
-// frustum. Leaves that
-// flicker in and out of V between frames (a query that passes in one node's depth buffer and not
-// in the other's, a leaf seen through a gap every other frame) then cost no ids on the wire and
-// no re-draws at the edges of their visibility. Keeping more than is visible is conservative:
-// frames never change. Node-local state: each switch node records what its own HC found and the
-// additions it receives from the other node (an added id was found visible); what it cannot
-// know (the other node's kept ids) only shortens the hold.
-class VisibilityHold {
- public:
-  VisibilityHold(size_t nodes, uint32_t frames) : frames_(frames), last_(nodes, 0), prev_(nodes, 0) {}
-  uint32_t frames() const { return frames_; }
-  // `node` was found visible in `frame`.
-  void seen(uint32_t node, uint32_t frame) {
-    if (frame + 1 <= last_.at(node)) return;
-    prev_[node] = last_[node];
-    last_[node] = frame + 1;
-  }
-  // Seen in one of the `frames` frames before `frame` (or in it), and once more before that within
-  // 4 x `frames` frames. A node seen in one frame only is not held: a set that exploded for one
-  // frame (start-up, the eye leaving a closed room) is not carried into the next frames.
-  bool recent(uint32_t node, uint32_t frame) const {
-    const uint32_t l = last_.at(node), p = prev_[node];
-    return l != 0 && l - 1 + frames_ >= frame && p != 0 && p - 1 + 4 * frames_ >= frame;
-  }
-  // The renderables of `prev` (V_{f-1}, front-tracking coarsened) to keep in V_f beside `found`
-  // (HC's result, ascending): recently seen, box not outside the frustum, and neither the same
-  // node as, an ancestor of, nor a descendant of a node in `found` (V_f stays an antichain: one
-  // representation per part of the scene). Ascending.
-  std::vector<uint32_t> held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
-                             std::span<const uint32_t> found, uint32_t frame) const;
-
- private:
-  uint32_t frames_;
-  std::vector<uint32_t> last_, prev_;  // per node: last / previous frame seen + 1 (0: never)
 };
 
 // Leaves whose boxes are not outside the frustum, in ascending id order.
