@@ -414,7 +414,7 @@ while [ ${#running[@]} -gt 0 ]; do
 done
 cleanup
 grep -h "^summary:" "$out/render_client.log" || true
-grep -hE "HC frames|HC test" "$out/node0.log" "$out/node1.log" || true
+grep -hE "HC frames|occlusion back end" "$out/node0.log" "$out/node1.log" || true
 # What supervision did, per node that died: its deaths (status, time), restarts, and the frames
 # at which the render client dropped it and took it back (its own log lines).
 for n in node0 node1; do
