@@ -377,7 +377,7 @@ class Session {
   void print_summary() const {
     const CullTotals& t = cull_.totals();
     std::cerr << who_ << ": " << t.frames << " HC frames, " << t.assumed_visible
-              << " box tests skipped by adaptive queries (" << t.skipped_occluded
+              << " nodes assumed visible by adaptive queries (" << t.skipped_occluded
               << " others they skipped proven occluded by the depth pyramid; " << t.held
               << " renderables kept by the visibility hold); "
               << t.frustum_frames << " frames without occlusion (the render client's gate; " << t.ors_after_frustum_sets

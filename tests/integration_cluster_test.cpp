@@ -253,8 +253,8 @@ TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
   EXPECT_NE(r->node1_log.find(", tau 0; adaptive queries off, visibility hold 0)"), std::string::npos) << r->node1_log;
   EXPECT_GT(number_before(r->node1_log, " boxes tested ("), 0) << r->node1_log;
   EXPECT_GT(hidden(r->node1_log), 0) << r->node1_log;
-  // "N box tests skipped by adaptive queries (...; M renderables kept by the visibility hold)"
-  auto skipped = [](const std::string& log) { return number_before(log, " box tests skipped by adaptive queries"); };
+  // "N nodes assumed visible by adaptive queries (...; M renderables kept by the visibility hold)"
+  auto skipped = [](const std::string& log) { return number_before(log, " nodes assumed visible by adaptive queries"); };
   auto held = [](const std::string& log) { return number_before(log, " renderables kept by the visibility hold"); };
   EXPECT_EQ(skipped(r->node1_log), 0) << r->node1_log;
   EXPECT_EQ(held(r->node1_log), 0) << r->node1_log;
