@@ -23,17 +23,17 @@
 # --keep-frames. Prints figures; asserts nothing about speed.
 #
 #   scripts/bench.sh --scene S [--path P] [--frames N] [--width W --height H] [--out DIR]
-#                    [--model-delay-ms D] [--keep-frames] [--hc-test queries|pyramid|cpu-pyramid]
+#                    [--model-delay-ms D] [--keep-frames] [--backend cpu|queries|gpu-pyramid|cpu-pyramid]
 #
 # --path walk|orbit|fly gets --frames frames (default walk, 200); the viewport defaults to 512x512 as
-# everywhere. --hc-test goes to the switch nodes (how HC tests boxes; switch_node --help); without
-# it they use their default (cpu-pyramid).
+# everywhere. --backend goes to the switch nodes (how the OR draws depth and HC tests boxes;
+# switch_node --help); without it they choose by the renderer (auto).
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
-scene="" path="walk" frames=200 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/bench" model_delay_ms=0 keep_frames=0 hc_test=""
+scene="" path="walk" frames=200 width=$OCC_WIDTH height=$OCC_HEIGHT out="out/bench" model_delay_ms=0 keep_frames=0 backend=""
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene|--path|--frames|--width|--height|--out|--model-delay-ms|--hc-test) occ_set "$@"; shift 2 ;;
+    --scene|--path|--frames|--width|--height|--out|--model-delay-ms|--backend) occ_set "$@"; shift 2 ;;
     --keep-frames) keep_frames=1; shift ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_unexpected "$1" ;;
@@ -46,7 +46,7 @@ mkdir -p "$out"
 export LP_NUM_THREADS=${LP_NUM_THREADS:-1}
 view=(--width "$width" --height "$height")
 switch_flags=()
-[ -z "$hc_test" ] || switch_flags=(--hc-test "$hc_test")
+[ -z "$backend" ] || switch_flags=(--backend "$backend")
 log() { echo "bench: $*" >&2; }
 # wrong DIR BRUTE_FORCE_FRAMES [FRAMES]: frame_diff (per frame, then its summary line) into DIR/wrong.txt
 wrong() { "$BIN/frame_diff" "$2" "${3:-$1}" >"$1/wrong.txt"; }

@@ -24,8 +24,7 @@
 # Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
 # --arity ...), except render-client-only ones (--no-images --item-buffer --lookahead N --on-node-failure P
 # --occlusion-gate G --two-pass T) and node-only ones
-# (--diff-chunk B, --adaptive-queries, --hc-order, --occluder-fusion, --sealed, --visibility-hold, --hc-test,
-# --or-raster),
+# (--diff-chunk B, --adaptive-queries, --occluder-fusion, --sealed, --visibility-hold, --backend),
 # which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
@@ -413,7 +412,7 @@ done
 cleanup
 # The render client's table (from its "run (" title) and the key=value summary line after it.
 sed -n '/^run (/,/^summary:/p' "$out/render_client.log"
-grep -hE "HC frames|HC test" "$out/node0.log" "$out/node1.log" || true
+grep -hE "HC frames|occlusion back end" "$out/node0.log" "$out/node1.log" || true
 # What supervision did, per node that died: its deaths (status, time), restarts, and the frames
 # at which the render client dropped it and took it back (its own log lines).
 for n in node0 node1; do

@@ -14,7 +14,7 @@
 # RSS, summed over the cluster's three).
 #
 #   run_gpu.sh [--allow-software] [--quick] [--scenes S,S] [--viewports WxH,WxH] [--frames N]
-#              [--image-frames K] [--out DIR] [--cache DIR] [--libs auto|bundled] [--hc-test T]
+#              [--image-frames K] [--out DIR] [--cache DIR] [--libs auto|bundled] [--backend B]
 #
 # --scenes: any --scene specs (default plant:13,plant:80), or a shared scene by its folder
 # (ReciprocatingSaw, bim/schependomlaan: the bundle's scenes/, or ../shared/scenes in a checkout).
@@ -22,7 +22,7 @@
 # 10): K of them, evenly spaced, drawn with images. --quick (flags after it override it): plant:1
 # at 256x256, 12 frames, 3 with images (a test on a software renderer). --out DIR (default
 # ./gpu_run): every run's stats.csv and logs, and table.txt. --cache DIR (default OUT/cache): the
-# scene cache (plant:80: about 3 GB). --hc-test T goes to the switch nodes (switch_node --help).
+# scene cache (plant:80: about 3 GB). --backend B goes to the switch nodes (switch_node --help).
 # --libs bundled: the bundle's libglvnd and glibc as well (default auto: only where the machine has
 # no libEGL.so.1, or an older glibc).
 # When NVIDIA's libEGL_nvidia.so.0 is installed but no EGL vendor file names it, one is written
@@ -44,12 +44,12 @@ fail() { echo "error: $*" >&2; exit 1; }
 log() { echo "run_gpu: $*" >&2; }
 
 allow_software=0 scenes="plant:13,plant:80" viewports="1920x1080,3840x2160" frames=200 image_frames=10
-out=gpu_run cache="" libs=auto hc_test=""
+out=gpu_run cache="" libs=auto backend=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --allow-software) allow_software=1; shift ;;
     --quick) scenes=plant:1 viewports=256x256 frames=12 image_frames=3; shift ;;
-    --scenes|--viewports|--frames|--image-frames|--out|--cache|--libs|--hc-test)
+    --scenes|--viewports|--frames|--image-frames|--out|--cache|--libs|--backend)
       [ $# -ge 2 ] || usage_error "$1 needs a value"
       v=${1#--}; printf -v "${v//-/_}" '%s' "$2"; shift 2 ;;
     *) usage_error "unexpected argument '$1'" ;;
@@ -148,7 +148,7 @@ run_one() {
   local img=(); [ "$images" = 1 ] || img=(--no-images)
   mkdir -p "$d"
   if [ "$kind" = cluster ]; then
-    local node=(); [ -z "$hc_test" ] || node=(--hc-test "$hc_test")
+    local node=(); [ -z "$backend" ] || node=(--backend "$backend")
     OCC_BIN=$BIN OCC_MAX_SECONDS=900 OCC_PORT_WAIT_S=300 "$cluster" --scene "$scene" --path "$p" --width "$w" --height "$h" \
       --lod-cache "$cache" --on-node-failure exit --out "$d" "${img[@]}" "${node[@]}" >"$d/cluster.txt" 2>&1 || rc=$?
     [ $rc = 0 ] || fail "cluster on $scene ${w}x$h failed (logs: $d): $(first_error "$d/cluster.txt")"

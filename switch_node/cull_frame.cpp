@@ -1,107 +1,99 @@
 #include "switch_node/cull_frame.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
+#include "common/cull/cpu_backend.hpp"
+#include "common/gl/gl_cpu_pyramid_tests.hpp"
+#include "common/gl/gl_depth_backend.hpp"
+#include "common/gl/gl_pyramid_tests.hpp"
+#include "common/gl/gl_query_tests.hpp"
 #include "common/hash.hpp"
 
 namespace occ {
 
-CullFrame::CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
-                     const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other,
-                     CpuOccluders* cpu)
-    : ctx_(ctx),
-      renderer_(renderer),
+BackendChoice choose_backend_for(const GlContext& ctx, const ClusterConfig& config, const HcChoices& hc,
+                                 bool triangles_in_memory) {
+  return choose_backend({.flag = hc.backend,
+                         .software_renderer = ctx.renderer_class() == RendererClass::software,
+                         .renderer = ctx.renderer(),
+                         .tau = config.pixel_error,
+                         .visible_pixel_lod = config.visible_pixel_lod,
+                         .triangles_in_memory = triangles_in_memory},
+                        hc.adaptive_queries, hc.visibility_hold);
+}
+
+HcChoices with_backend_defaults(HcChoices hc, const BackendChoice& c) {
+  hc.backend = c.kind;
+  hc.adaptive_queries = c.adaptive_queries;
+  hc.visibility_hold = c.visibility_hold;
+  return hc;
+}
+
+std::unique_ptr<OcclusionBackend> make_backend(const BackendChoice& c, GlContext& ctx, SceneRenderer& renderer,
+                                               const Renderables& r, CpuOccluders* cpu, const ClusterConfig& config) {
+  // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
+  const bool counts = config.visible_pixel_lod && config.lod();
+  switch (c.kind) {
+    case BackendKind::cpu:
+      if (!cpu) throw std::logic_error("make_backend: the CPU back end without the scene's triangles on the CPU");
+      return std::make_unique<CpuBackend>(*cpu, r, !config.lod());
+    case BackendKind::queries:
+      return std::make_unique<GlDepthBackend>(ctx, renderer, r, std::make_unique<QueryTests>(ctx));
+    case BackendKind::gpu_pyramid:
+      return std::make_unique<GlDepthBackend>(ctx, renderer, r, std::make_unique<GpuPyramidTests>(ctx));
+    case BackendKind::cpu_pyramid:
+      return std::make_unique<GlDepthBackend>(ctx, renderer, r, std::make_unique<CpuPyramidTests>(ctx, counts));
+  }
+  throw std::logic_error("make_backend: unknown back end");
+}
+
+CullFrame::CullFrame(std::unique_ptr<OcclusionBackend> backend, const Renderables& r, const Enclosures& sealed,
+                     const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other)
+    : backend_(std::move(backend)),
       r_(r),
       sealed_(sealed),
       config_(config),
-      choices_(choices.resolved(hc_tests_on_cpu(cpu != nullptr, config, choices))),
+      choices_(choices),
       vp_(vp),
       other_(std::move(other)),
       step_(r, config, vp.height),
-      // Sample counts only matter to visible-pixel LOD (a node with fewer than tau samples stops).
-      querier_(ctx, choices.test, config.visible_pixel_lod && config.lod()),
-      visible_(r.count()),
-      cpu_(cpu) {
-  if (*choices_.adaptive_queries) skipper_.emplace(r_.hierarchy().size());
-  if (cpu_) geometry_seen_.assign(r_.hierarchy().size(), 0);
-  if (hc_on_cpu()) raster_queries_.emplace(*cpu_);
-  // The OR's occluders must not hide their own query boxes (SceneRenderer::set_occluder_offset):
-  // every depth-only draw on this renderer is the OR's or occluder fusion's.
-  renderer_.set_occluder_offset(true);
+      visible_(r.count()) {
+  if (choices_.adaptive_queries.value_or(false)) skipper_.emplace(r_.hierarchy().size());
   restart();
 }
 
 void CullFrame::restart() {
   visible_.clear();
-  std::fill(geometry_seen_.begin(), geometry_seen_.end(), 0);
-  v_frustum_set_ = or_deferred_ = false;
+  backend_->restart();
+  or_ = OrState::off;
+  v_ = VSource::culled;
   stream_ = DiffReceiver{};
   // The hold starts over too: on both nodes (a restarted one has no history) as at frame 0.
   hold_.reset();
-  if (*choices_.visibility_hold > 0) hold_.emplace(r_.hierarchy().size(), uint32_t(*choices_.visibility_hold));
+  if (choices_.visibility_hold.value_or(0) > 0)
+    hold_.emplace(r_.hierarchy().size(), uint32_t(*choices_.visibility_hold));
 }
-
-bool hc_tests_on_cpu(bool or_on_cpu, const ClusterConfig& config, const HcChoices& choices) {
-  return or_on_cpu && !config.lod() && choices.test == HcTest::by_renderer;
-}
-
-bool CullFrame::hc_on_cpu() const { return hc_tests_on_cpu(cpu_ != nullptr, config_, choices_); }
 
 void CullFrame::begin_or(const Camera& cam, bool occlusion) {
-  occlusion_ = occlusion;
-  drawn_.assign(r_.count(), 0);
-  or_on_cpu_ = cpu_drawn_ = false;
-  if (!occlusion_) return;
-  // The OR on the CPU: at tau 0 HC tests there too, and this frame leaves GL alone.
-  if (!hc_on_cpu()) renderer_.begin_frame(cam, false);
-  if (cpu_) {
-    cpu_->begin(cam);
-    or_on_cpu_ = true;
+  if (!occlusion) {
+    or_ = OrState::off;
+    return;
   }
+  backend_->begin(cam);
   // V a frustum set (the frame before was culled without occlusion): not drawn; HC draws what
   // it finds visible, nearest first (occluder fusion), unless the stream brings a culled V.
-  or_deferred_ = v_frustum_set_ && choices_.occluder_fusion;
-  totals_.ors_after_frustum_sets += or_deferred_;
-  if (!or_deferred_) draw_v();
+  or_ = v_ == VSource::frustum_set && choices_.occluder_fusion ? OrState::deferred : OrState::drawn;
+  totals_.ors_after_frustum_sets += or_ == OrState::deferred;
+  if (or_ == OrState::drawn) draw_v();
 }
 
 void CullFrame::draw_v() {
-  std::vector<uint32_t> ids;
-  ids.reserve(visible_.size());
-  for (uint32_t id : visible_.ids())
-    if (!drawn_[id]) {
-      drawn_[id] = 1;
-      ids.push_back(id);
-    }
+  std::vector<uint32_t> ids(visible_.ids().begin(), visible_.ids().end());
   std::sort(ids.begin(), ids.end());
-  draw_depth(ids);
-  // Rasterise now, while the other node's stream is awaited: llvmpipe rasterises at a flush
-  // (SceneRenderer flushes only every ~20k triangles), so without it the rest of V waited for the
-  // end of the OR and lengthened its tail, which HC waits for.
-  ctx_.gl().Flush();
-}
-
-// Draws, depth only, those of `ids` that are not in this frame's depth buffer yet (the OR's
-// streamed additions, occluder fusion); all of `ids` count as drawn from now on. Returns the
-// renderables drawn.
-std::vector<uint32_t> CullFrame::draw_new_occluders(std::span<const uint32_t> ids) {
-  std::vector<uint32_t> fresh;
-  for (uint32_t id : ids)
-    if (!drawn_[id]) {
-      drawn_[id] = 1;
-      fresh.push_back(id);
-    }
-  if (!fresh.empty()) draw_depth(fresh);
-  return fresh;
-}
-
-void CullFrame::draw_depth(std::span<const uint32_t> ids) {
-  if (!or_on_cpu_) renderer_.draw_renderables(r_, ids, SceneRenderer::Mode::DepthOnly);
-  // On the CPU: the OR's draws, and then HC's occluder fusion too (its leaves' own triangles are
-  // tested against that depth, hc()).
-  if (!or_on_cpu_ && !cpu_drawn_) return;
-  for (uint32_t id : ids) cpu_->draw_leaf(r_.node_of(id), r_.level_of(id));
-  cpu_drawn_ = cpu_drawn_ || !ids.empty();
+  backend_->draw(ids);
+  // Drawn now, while the other node's stream is awaited, not at the end of the OR.
+  backend_->flush();
 }
 
 void CullFrame::begin_stream(uint32_t frame) {
@@ -129,7 +121,7 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
     in_.have_camera = true;
     if (auto err = viewport_mismatch(*c, vp_)) return lost(f + "sent " + *err);
     in_.expected_front = step_.coarsen(visible_, from_wire(*c));
-    v_frustum_set_ = c->occlusion == 0;  // what V is once the stream is in
+    v_ = c->occlusion == 0 ? VSource::frustum_set : VSource::culled;  // what V is once the stream is in
     return Stream::more;
   }
   if (const auto* d = std::get_if<wire::NodeDiff>(&m)) {
@@ -140,7 +132,7 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
       for (uint32_t id : d->added)
         if (!config_.full_sets || !std::binary_search(in_.before.begin(), in_.before.end(), id))
           hold_->seen(r_.node_of(id), in_.frame);
-    if (occlusion_ && !or_deferred_ && !draw_new_occluders(d->added).empty()) ctx_.gl().Flush();  // as in draw_v
+    if (or_ == OrState::drawn && backend_->draw(d->added) > 0) backend_->flush();  // as in draw_v
     return Stream::more;
   }
   if (const auto* e = std::get_if<wire::EndOfFrame>(&m)) {
@@ -153,8 +145,8 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
       return lost("desync: " + f + "front hash " + hex(e->front_hash) + " from " + other_ + ", " +
                   hex(in_.expected_front) + " here");
     // The OR left out a frustum set V; the other node's HC culled this one: the OR draws it now.
-    if (occlusion_ && or_deferred_ && !v_frustum_set_) {
-      or_deferred_ = false;
+    if (or_ == OrState::deferred && v_ == VSource::culled) {
+      or_ = OrState::drawn;
       draw_v();
     }
     return Stream::done;
@@ -164,68 +156,27 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
 
 HcFrame CullFrame::hc(uint32_t frame, const Camera& cam, DiffSender& out) {
   HcFrame hc;
-  if (!occlusion_) {  // the frustum set: every box passes, nothing is learnt from it
+  if (or_ == OrState::off) {  // the frustum set: every box passes, nothing is learnt from it
     FrustumOnlyQueries all;
     hc = step_.hc(frame, visible_, cam, all, {.choices = choices_, .enclosures = &sealed_}, out);
     hc.stats.queries = hc.eof.queries = 0;
     ++totals_.frustum_frames;
   } else {
+    const uint64_t tested = backend_->counts().boxes_tested;
     HcOptions o{.choices = choices_, .skipper = skipper_ ? &*skipper_ : nullptr, .enclosures = &sealed_};
-    // At tau 0 with the OR on the CPU, HC tests there too (RasterQueries): boxes against the
-    // CPU's depth, and each leaf whose box shows by its own triangles (what the boxes of long,
-    // thin or hollow objects cannot prove hidden); occluder fusion draws there. No GL this frame.
-    const bool on_cpu = or_on_cpu_ && hc_on_cpu();
-    if (choices_.occluder_fusion)
-      o.occluders = [&](std::span<const uint32_t> found) {
-        // Restores the GL state the queries need; the pyramid is stale where they were drawn.
-        const std::vector<uint32_t> drawn = draw_new_occluders(found);
-        if (drawn.empty()) return;
-        std::vector<Aabb> boxes;
-        boxes.reserve(drawn.size());
-        for (uint32_t id : drawn) boxes.push_back(r_.hierarchy().node(r_.node_of(id)).box);
-        if (on_cpu)
-          raster_queries_->depth_added(boxes);
-        else
-          querier_.depth_added(boxes);
-      };
-    if (or_on_cpu_ && !config_.lod())
-      o.geometry_shows = [this, frame](uint32_t leaf) {
-        // A leaf whose triangles showed within the last kGeometryRecheck frames is taken to
-        // show still (extra leaves only cost drawing them): tests go to the rest.
-        uint32_t& seen = geometry_seen_[leaf];
-        if (seen != 0 && frame < seen + kGeometryRecheck) return true;
-        if (!cpu_->leaf_shows(leaf)) return false;
-        seen = frame;
-        return true;
-      };
-    if (on_cpu) {
-      raster_queries_->begin(cam);
-      hc = step_.hc(frame, visible_, cam, *raster_queries_, o, out, hold_ ? &*hold_ : nullptr);
-    } else {
-      // The OR's depth from the CPU (with levels of detail, or a --hc-test given), conservative,
-      // into the buffer HC tests in GL, and HC's pyramid starts from it, not from GL's read back.
-      const float* uploaded = nullptr;
-      if (or_on_cpu_ && cpu_drawn_) {
-        ctx_.write_depth(cpu_->raster().depth().data());
-        uploaded = cpu_->raster().depth().data();
-      }
-      or_on_cpu_ = false;  // occluder fusion draws in GL, over it
-      querier_.begin(cam, uploaded);
-      hc = step_.hc(frame, visible_, cam, querier_, o, out, hold_ ? &*hold_ : nullptr);
-      querier_.end();
-    }
-    or_on_cpu_ = false;
+    backend_->begin_tests(frame, cam);
+    hc = step_.hc(frame, visible_, cam, *backend_, o, out, hold_ ? &*hold_ : nullptr);
+    backend_->end_tests();
+    hc.eof.queries = uint32_t(backend_->counts().boxes_tested - tested);
   }
-  v_frustum_set_ = !occlusion_;
-  or_deferred_ = false;
+  v_ = or_ == OrState::off ? VSource::frustum_set : VSource::culled;
+  or_ = OrState::off;
   count(hc);
   return hc;
 }
 
 void CullFrame::count(const HcFrame& hc) {
   ++totals_.frames;
-  totals_.queries += hc.stats.queries;
-  totals_.geometry_hidden += hc.stats.geometry_hidden;
   totals_.assumed_visible += hc.stats.skipped;
   totals_.skipped_occluded += hc.stats.skipped_occluded;
   totals_.pixel_stops += hc.stats.pixel_stops;

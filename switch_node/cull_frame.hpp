@@ -1,25 +1,26 @@
 // One switch node's OR and HC for one render client (paper 3.2, 4.2-4.4): the node's visible set
-// V, the occlusion representation (V and the other node's streamed additions, drawn depth only)
-// and hardware culling against it (SwitchStep::hc with the node's HcChoices: the HcQuerier,
-// adaptive queries, occluder fusion, the visibility hold), with what HC counted.
+// V, its occlusion back end (the OR's depth and HC's tests against it, occlusion_backend.hpp),
+// and hardware culling (SwitchStep::hc with the node's HcChoices: adaptive queries, occluder
+// fusion, the visibility hold), with what HC counted.
 //
 // The switch node's schedule (node.cpp) calls it frame by frame: begin_or(), take() for each
 // message of the other node's stream of the previous frame, hc(). cull_overview replays two of
 // them (one per node) in one process, so its picture is the cluster's by construction.
-// Contracts: the GL context is current on the calling thread; the context, renderer and
-// renderables outlive this; the renderer draws depth only for this (its occluder offset is set). Create a fresh one per render client (nothing carries over).
+// Contracts: the back end's context (if any) is current on the calling thread; the back end and
+// renderables outlive nothing they need. Create a fresh one per render client (nothing carries
+// over).
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <optional>
-#include <span>
 #include <string>
 #include <vector>
 
+#include "common/cull/backend_choice.hpp"
 #include "common/cull/culling.hpp"
 #include "common/cull/depth_raster.hpp"
-#include "common/cull/raster_queries.hpp"
+#include "common/cull/occlusion_backend.hpp"
 #include "common/gl/context.hpp"
-#include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "protocol/cluster/cluster.hpp"
 #include "protocol/cluster/switch_step.hpp"
@@ -28,45 +29,50 @@
 
 namespace occ {
 
-// Whether HC tests on the CPU (RasterQueries, no GL in the frame): the OR there (or_on_cpu), tau 0
-// and --hc-test auto (a --hc-test given tests in GL against the OR's depth uploaded).
-bool hc_tests_on_cpu(bool or_on_cpu, const ClusterConfig& config, const HcChoices& choices);
+// The process's back end, chosen once at start (choose_backend) from the context's renderer,
+// `config`'s tau and visible-pixel LOD, whether the scene's triangles are in memory and hc's
+// --backend; the choice's adaptive queries and visibility hold fill those left at auto.
+BackendChoice choose_backend_for(const GlContext& ctx, const ClusterConfig& config, const HcChoices& hc,
+                                 bool triangles_in_memory);
+HcChoices with_backend_defaults(HcChoices hc, const BackendChoice& c);
+// The back end of `c`. `cpu`: the scene's triangles on the CPU (required for BackendKind::cpu,
+// outlives the back end); ctx, renderer, r outlive it too.
+std::unique_ptr<OcclusionBackend> make_backend(const BackendChoice& c, GlContext& ctx, SceneRenderer& renderer,
+                                               const Renderables& r, CpuOccluders* cpu, const ClusterConfig& config);
 
 // Summed over the HC frames of one render client.
 struct CullTotals {
   uint64_t frames = 0;              // HC frames
   uint64_t frustum_frames = 0;      // of those, sent as frustum sets (the render client's gate)
-  uint64_t queries = 0;             // occlusion queries (CullStats::queries)
-  uint64_t assumed_visible = 0;     // queries skipped by adaptive queries (CullStats::skipped)
+  uint64_t assumed_visible = 0;     // tests skipped by adaptive queries (CullStats::skipped)
   uint64_t skipped_occluded = 0;    // skipped ones the depth pyramid proved occluded (CullStats::skipped_occluded)
   uint64_t tests_above_fronts = 0;  // node tests front tracking saved (HcFrame::tests_above_fronts)
   uint64_t pixel_stops = 0, hlods = 0;
   uint64_t held = 0;                // renderables kept in V by the visibility hold
   uint64_t ors_after_frustum_sets = 0;  // ORs that left out V, a frustum set (begin_or)
-  uint64_t geometry_hidden = 0;     // leaves whose box showed and whose triangles did not (the OR on the CPU)
 };
 
 class CullFrame {
  public:
-  // `vp`: the cluster's viewport; `other`: the other node's name, for the stream's errors;
-  // `sealed`: the scene's items sealed inside solids (SceneGl::sealed). `cpu`: the OR draws V on
-  // the CPU into it (SceneGl::cpu_occluders; null: in GL), and HC starts from that depth.
-  CullFrame(GlContext& ctx, SceneRenderer& renderer, const Renderables& r, const Enclosures& sealed,
-            const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other,
-            CpuOccluders* cpu = nullptr);
+  // `backend`: make_backend()'s; `choices`: with_backend_defaults()'s; `vp`: the cluster's
+  // viewport; `other`: the other node's name, for the stream's errors; `sealed`: the scene's
+  // items sealed inside solids (SceneGl::sealed).
+  CullFrame(std::unique_ptr<OcclusionBackend> backend, const Renderables& r, const Enclosures& sealed,
+            const ClusterConfig& config, const HcChoices& choices, Viewport vp, std::string other);
   CullFrame(const CullFrame&) = delete;
   CullFrame& operator=(const CullFrame&) = delete;
 
   const VisibleSet& visible() const { return visible_; }
-  // A resync: V, the other node's stream and the visibility hold start from scratch.
+  // A resync: V, the other node's stream, the visibility hold and the back end's memory start
+  // from scratch.
   void restart();
 
   // OR(frame) for `cam`: clears depth and draws V depth only (V_{frame-2} in the switch,
   // V_{frame-1} alone). With occlusion false (a frustum-set frame) it draws nothing, and hc()
   // sends the frustum set. Where V is a frustum set (the first frames with occlusion after
-  // frames without: drawing it cost the OR a whole frustum render, depth only) and occluder
-  // fusion is on, V is not drawn: HC builds the depth nearest first from what it finds visible,
-  // and a culled V from the other node's stream is drawn once that stream is in.
+  // frames without) and occluder fusion is on, V is not drawn: HC builds the depth nearest first
+  // from what it finds visible, and a culled V from the other node's stream is drawn once that
+  // stream is in.
   void begin_or(const Camera& cam, bool occlusion);
 
   // The other node's stream of frame `frame` (its HC), one message at a time: its camera (V is
@@ -78,23 +84,29 @@ class CullFrame {
   Result<Stream> take(const wire::Message& m);
 
   // HC(frame) for `cam` on V_{frame-1} (the OR's depth): streams the diff to V_frame through
-  // `out` and returns its EndOfFrame, not sent, without times.
+  // `out` and returns its EndOfFrame, not sent, without times. Its `queries` are the boxes the
+  // back end tested in the frame (the summary's counts are the back end's, summed).
   HcFrame hc(uint32_t frame, const Camera& cam, DiffSender& out);
 
   const CullTotals& totals() const { return totals_; }
-  const HcQuerier& querier() const { return querier_; }
-  bool hc_on_cpu() const;  // hc_tests_on_cpu() for this frame's OR
-  // HC's tests on the CPU (hc_on_cpu()); null otherwise.
-  const RasterQueries* raster_queries() const { return raster_queries_ ? &*raster_queries_ : nullptr; }
+  const OcclusionBackend& backend() const { return *backend_; }
 
  private:
   void draw_v();  // what of V is not in the depth buffer yet, depth only
-  std::vector<uint32_t> draw_new_occluders(std::span<const uint32_t> ids);
-  void draw_depth(std::span<const uint32_t> ids);  // the OR's draw: on the CPU while or_on_cpu_, else GL
   void count(const HcFrame& hc);
 
-  GlContext& ctx_;
-  SceneRenderer& renderer_;
+  // The OR of this frame, from begin_or() to hc():
+  //   off       the camera asks for no occlusion: nothing is drawn, hc() sends the frustum set;
+  //   drawn     V was drawn, and the stream's additions are drawn as they come;
+  //   deferred  V is a frustum set and occluder fusion is on: V is left out, and drawn at the
+  //             stream's EndOfFrame where the other node's HC culled it (then: drawn).
+  // begin_or() sets it; take() moves deferred to drawn; hc() ends the frame (off until the next
+  // begin_or()).
+  enum class OrState { off, drawn, deferred };
+  // What V holds, once the stream's camera says how its frame was found (and after hc()).
+  enum class VSource { culled, frustum_set };
+
+  const std::unique_ptr<OcclusionBackend> backend_;
   const Renderables& r_;
   const Enclosures& sealed_;
   const ClusterConfig config_;
@@ -102,21 +114,12 @@ class CullFrame {
   const Viewport vp_;
   const std::string other_;
   const SwitchStep step_;
-  HcQuerier querier_;
   std::optional<QuerySkipper> skipper_;
   std::optional<VisibilityHold> hold_;
   VisibleSet visible_;
-  DiffReceiver stream_;          // the other node's HC frames
-  std::vector<uint8_t> drawn_;   // renderables in this frame's depth buffer
-  bool occlusion_ = true;        // this frame's camera asks for occlusion
-  bool v_frustum_set_ = false;   // V is a frustum set (its frame was culled without occlusion)
-  bool or_deferred_ = false;     // this OR left V out (a frustum set) until the stream is in
-  CpuOccluders* cpu_ = nullptr;  // the OR on the CPU (null: GL)
-  std::optional<RasterQueries> raster_queries_;  // with cpu_: HC's box tests at tau 0
-  bool or_on_cpu_ = false;       // between begin_or() and hc(): the OR's draws go to cpu_
-  bool cpu_drawn_ = false;       // cpu_ holds something this frame (uploaded at hc())
-  static constexpr uint32_t kGeometryRecheck = 16;
-  std::vector<uint32_t> geometry_seen_;  // per node: the last frame its triangles showed (0: none)
+  DiffReceiver stream_;  // the other node's HC frames
+  OrState or_ = OrState::off;
+  VSource v_ = VSource::culled;
   // The stream of one frame (begin_stream).
   struct Incoming {
     uint32_t frame = 0;

@@ -55,14 +55,15 @@ struct SessionStats {
 // nothing of the last one carries over.
 class Session {
  public:
-  Session(const NodeOptions& o, SceneGl& g, const wire::Hello& mine, net::Listener& listener)
+  Session(const NodeOptions& o, SceneGl& g, const BackendChoice& backend, const wire::Hello& mine,
+          net::Listener& listener)
       : o_(o),
         who_("switch_node " + std::to_string(o.id)),
         other_("switch node " + std::to_string(1 - o.id)),
         g_(g),
         links_(o, mine, listener),
-        cull_(*g.ctx, *g.renderer, *g.renderables, g.sealed, o.config, o.hc, {o.width, o.height}, other_,
-              g.cpu_occluders.get()) {}
+        cull_(make_backend(backend, *g.ctx, *g.renderer, *g.renderables, g.cpu_occluders.get(), o.config),
+              *g.renderables, g.sealed, o.config, with_backend_defaults(o.hc, backend), {o.width, o.height}, other_) {}
 
   // Returns 0 after the client's Bye.
   int run() {
@@ -375,11 +376,10 @@ class Session {
 
   void print_summary() const {
     const CullTotals& t = cull_.totals();
-    std::cerr << who_ << ": " << t.frames << " HC frames, " << t.queries << " queries (" << t.assumed_visible
-              << " more skipped by adaptive queries, " << t.skipped_occluded
+    std::cerr << who_ << ": " << t.frames << " HC frames, " << t.assumed_visible
+              << " nodes assumed visible by adaptive queries (" << t.skipped_occluded
               << " others they skipped proven occluded by the depth pyramid; " << t.held
-              << " renderables kept by the visibility hold; " << t.geometry_hidden
-              << " leaves whose box showed found hidden by their own triangles); "
+              << " renderables kept by the visibility hold); "
               << t.frustum_frames << " frames without occlusion (the render client's gate; " << t.ors_after_frustum_sets
               << " ORs after them drew no frustum set), sent "
               << links_.rvg().stats().sent.bytes << " B to the render client and " << links_.peer_sent_bytes()
@@ -391,19 +391,12 @@ class Session {
     if (stats_.resyncs)
       std::cerr << who_ << ": " << stats_.resyncs << " resyncs from the render client, " << stats_.single_frames
                 << " HC frames served alone\n";
-    // Each figure beside its name (tests and scripts read these lines).
-    const HcQuerier::Stats& q = cull_.querier().stats();
-    std::cerr << who_ << ": HC test " << hc_test_name(cull_.querier().mode()) << ": " << q.tests << " boxes tested ("
-              << q.occluded << " occluded): " << q.queries << " occlusion queries issued, " << q.batched << " boxes in "
-              << q.draws << " batch draws, " << q.pyramid_occluded << " proven occluded by the depth pyramid ("
-              << fixed(double(q.pyramid_pixels) / 1e6, 2) << " M pixels of their rectangles) and " << q.shown
-              << " shown, " << q.assumed << " of " << q.cheap << " skipped by adaptive queries assumed visible; of "
-              << q.pyramid_tested << " tested against it in " << q.dispatches << " dispatches; "
-              << q.builds << " pyramid builds, " << q.refreshes << " refreshes after occluder fusion)\n";
-    if (const RasterQueries* rq = cull_.raster_queries())
-      std::cerr << who_ << ": HC on the CPU: " << rq->stats().tests << " boxes tested, "
-                << rq->stats().pyramid_occluded << " proven occluded by the depth pyramid, "
-                << rq->stats().raster_occluded << " by their faces\n";
+    // What the back end did, from its own counts (tests and scripts read this line).
+    const OcclusionCounts c = cull_.backend().counts();
+    std::cerr << who_ << ": occlusion back end " << cull_.backend().name() << ": " << c.boxes_tested
+              << " boxes tested (" << c.boxes_occluded << " occluded)";
+    for (const std::string& more : c.more) std::cerr << ", " << more;
+    std::cerr << "\n";
     std::cerr.flush();
     print_geometry_line(stderr, who_, g_.renderer->geometry_pool());
     std::cerr << who_ << ": LOD: tau " << o_.config.pixel_error << " px, visible-pixel LOD "
@@ -442,43 +435,25 @@ class SwitchNode {
     // Found, or copied, while the geometry is still on the CPU (the upload releases it).
     Enclosures sealed;
     std::optional<CpuOccluders> cpu;
-    std::string no_cpu;
-    OrRaster raster = OrRaster::gl;
     g_ = start_scene_gl(who_, o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, nullptr,
                         [&](const LoadedScene& ls, const GlContext& ctx) {
                           if (o_.hc.sealed) sealed = find_enclosures(who_, ls.scene, ls.hierarchy);
-                          // auto: by the renderer (no copy for a hardware GPU).
-                          raster = or_raster_for(o_.hc.or_raster, ctx.renderer_class());
-                          if (raster == OrRaster::cpu)
-                            cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &no_cpu);
+                          const bool in_memory = !ls.scene.mapped && !ls.scene.geometry_released();
+                          backend_ = choose_backend_for(ctx, o_.config, o_.hc, in_memory);
+                          if (backend_.kind == BackendKind::cpu) {
+                            std::string why;
+                            cpu = CpuOccluders::copy(ls.scene, ls.hierarchy, o_.width, o_.height, &why);
+                            if (!cpu) throw InputError("--backend cpu: " + why);
+                          }
                         });
     g_.sealed = std::move(sealed);
-    const std::string chosen = o_.hc.or_raster == OrRaster::by_renderer
-                                   ? "--or-raster auto on a " + std::string(renderer_class_name(g_.ctx->renderer_class())) + " renderer"
-                                   : "--or-raster " + std::string(raster == OrRaster::cpu ? "cpu" : "gl");
-    if (raster == OrRaster::cpu && cpu) {
-      g_.cpu_occluders = std::make_unique<CpuOccluders>(std::move(*cpu));
-      std::cerr << who_ << ": OR on the CPU (" << chosen << "; " << fixed(double(g_.cpu_occluders->bytes()) / 1048576.0, 1)
-                << " MB of triangles)\n";
-    } else if (raster == OrRaster::cpu) {
-      std::cerr << who_ << ": OR in GL (" << chosen << "): " << no_cpu << "\n";
-    } else {
-      std::cerr << who_ << ": OR in GL (" << chosen << ")\n";
-    }
-    if (hc_tests_on_cpu(g_.cpu_occluders != nullptr, o_.config, o_.hc)) {
-      std::cerr << who_ << ": HC on the CPU (--hc-test auto with the OR on the CPU at tau 0)";
-      const HcChoices resolved = o_.hc.resolved(true);
-      if (!o_.hc.adaptive_queries || !o_.hc.visibility_hold)
-        std::cerr << "; adaptive queries " << (*resolved.adaptive_queries ? "on" : "off") << ", visibility hold "
-                  << *resolved.visibility_hold << " (auto: a test here costs less than drawing what they keep)";
-      std::cerr << "\n";
-    } else if (o_.hc.test == HcTest::by_renderer)
-      std::cerr << who_ << ": HC test " << hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()))
-                << " (--hc-test auto on a " << renderer_class_name(g_.ctx->renderer_class()) << " renderer)\n";
-    const std::string backend = occlusion_backend_name();
-    std::cerr << who_ << ": occlusion back end " << backend << "\n";
+    if (cpu) g_.cpu_occluders = std::make_unique<CpuOccluders>(std::move(*cpu));
+    std::cerr << who_ << ": " << backend_line(backend_);
+    if (g_.cpu_occluders)
+      std::cerr << " (" << fixed(double(g_.cpu_occluders->bytes()) / 1048576.0, 1) << " MB of triangles on the CPU)";
+    std::cerr << "\n";
     mine_ = make_hello(wire::Role::switch_node, uint8_t(o_.id), {o_.width, o_.height}, g_.fingerprint(),
-                       g_.hierarchy().params(), o_.config, who_, backend);
+                       g_.hierarchy().params(), o_.config, who_, backend_name(backend_.kind));
     // Both nodes keep their listener for the whole run: node 0 takes a restarted node 1 through it
     // (the door hands it over), and it tells a second render client the cluster is busy.
     listener_.emplace(open_listener(who_, o_.listen));
@@ -500,19 +475,12 @@ class SwitchNode {
   }
 
  private:
-  int serve_one() { return Session(o_, g_, mine_, *listener_).run(); }
-
-  // The back end HC tests boxes with, as the start-up line, the Hello and the render client's
-  // summary name it: "cpu" where HC tests on the CPU (the OR's depth raster), else the --hc-test
-  // it stands for on this renderer. Valid once the scene and GL are up (run()).
-  std::string occlusion_backend_name() const {
-    if (hc_tests_on_cpu(g_.cpu_occluders != nullptr, o_.config, o_.hc)) return "cpu";
-    return hc_test_name(hc_test_for(o_.hc.test, g_.ctx->renderer_class()));
-  }
+  int serve_one() { return Session(o_, g_, backend_, mine_, *listener_).run(); }
 
   const NodeOptions& o_;
   std::string who_;
   SceneGl g_;
+  BackendChoice backend_;  // chosen once at start
   wire::Hello mine_;
   std::optional<net::Listener> listener_;
 };

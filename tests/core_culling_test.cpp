@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "common/error.hpp"
+
 #include <cmath>
 #include <functional>
 
@@ -193,7 +195,7 @@ void occluded_half_walk(FakeQueries& fast, CullStats& plain, CullStats& skip,
   }
 }
 
-// A querier with a cheap test (HcQuerier's depth pyramid) that proves every occluded box.
+// A querier with a cheap test (a depth pyramid's) that proves every occluded box.
 struct CheapFakeQueries : FakeQueries {
   uint32_t cheap = 0;
   bool cheap_tests() const override { return true; }
@@ -281,20 +283,37 @@ TEST(QuerySkipper, HeavyLeavesAreQueriedEveryTime) {
 }
 
 
-// --adaptive-queries and --visibility-hold at auto: off where HC tests on the CPU, on (a hold of
-// kAutoHoldFrames) where it tests in GL; a setting given stays.
-TEST(HcChoices, AutoSettingsDependOnWhereHcTestsAndGivenOnesStay) {
-  const HcChoices automatic;
-  EXPECT_EQ(automatic.resolved(true).adaptive_queries, false);
-  EXPECT_EQ(automatic.resolved(true).visibility_hold, 0);
-  EXPECT_EQ(automatic.resolved(false).adaptive_queries, true);
-  EXPECT_EQ(automatic.resolved(false).visibility_hold, HcChoices::kAutoHoldFrames);
-  const HcChoices given{.adaptive_queries = true, .visibility_hold = 5};
-  for (bool on_cpu : {false, true}) {
-    EXPECT_EQ(given.resolved(on_cpu).adaptive_queries, true);
-    EXPECT_EQ(given.resolved(on_cpu).visibility_hold, 5);
+// The one choice of occlusion back end: auto by the renderer, tau and where the triangles are;
+// a forced cpu that cannot work is one error; --adaptive-queries and --visibility-hold at auto
+// come with the back end (off with cpu, on and kAutoVisibilityHold elsewhere), a setting given
+// stays.
+TEST(BackendChoice, AutoByRendererTauAndTrianglesForcedChoicesStayOrFailClearly) {
+  auto kind = [](BackendInputs in) { return choose_backend(in, std::nullopt, std::nullopt).kind; };
+  EXPECT_EQ(kind({.software_renderer = true, .renderer = "llvmpipe"}), BackendKind::cpu);
+  EXPECT_EQ(kind({.software_renderer = true, .tau = 1}), BackendKind::cpu_pyramid);
+  EXPECT_EQ(kind({.software_renderer = true, .triangles_in_memory = false}), BackendKind::cpu_pyramid);
+  EXPECT_EQ(kind({.software_renderer = false}), BackendKind::queries);
+  EXPECT_EQ(kind({.software_renderer = false, .tau = 2, .visible_pixel_lod = true}), BackendKind::queries);
+  for (BackendKind k : {BackendKind::cpu, BackendKind::queries, BackendKind::gpu_pyramid, BackendKind::cpu_pyramid})
+    EXPECT_EQ(kind({.flag = k, .software_renderer = k != BackendKind::cpu}), k);
+  EXPECT_EQ(kind({.flag = BackendKind::cpu, .tau = 3}), BackendKind::cpu) << "tau > 0 without visible-pixel LOD";
+  EXPECT_THROW(kind({.flag = BackendKind::cpu, .tau = 3, .visible_pixel_lod = true}), InputError);
+  EXPECT_THROW(kind({.flag = BackendKind::cpu, .triangles_in_memory = false}), InputError);
+
+  const BackendChoice cpu = choose_backend({.software_renderer = true, .renderer = "llvmpipe"}, std::nullopt, std::nullopt);
+  EXPECT_FALSE(cpu.adaptive_queries);
+  EXPECT_EQ(cpu.visibility_hold, 0);
+  EXPECT_EQ(backend_line(cpu),
+            "occlusion back end: cpu (auto: software renderer llvmpipe, tau 0; adaptive queries off, visibility hold 0)");
+  const BackendChoice gpu = choose_backend({.software_renderer = false}, std::nullopt, std::nullopt);
+  EXPECT_TRUE(gpu.adaptive_queries);
+  EXPECT_EQ(gpu.visibility_hold, kAutoVisibilityHold);
+  for (bool software : {false, true}) {
+    const BackendChoice given = choose_backend({.software_renderer = software}, true, 5);
+    EXPECT_TRUE(given.adaptive_queries);
+    EXPECT_EQ(given.visibility_hold, 5);
+    const BackendChoice off = choose_backend({.software_renderer = software}, false, 0);
+    EXPECT_FALSE(off.adaptive_queries);
+    EXPECT_EQ(off.visibility_hold, 0);
   }
-  const HcChoices off{.adaptive_queries = false, .visibility_hold = 0};
-  EXPECT_EQ(off.resolved(false).adaptive_queries, false);
-  EXPECT_EQ(off.resolved(false).visibility_hold, 0);
 }

@@ -1,15 +1,21 @@
 // HC's GPU depth pyramid (common/gl/hzb_query.hpp) on a real GL context: its levels equal
 // the CPU pyramid's, it never proves a box occluded whose occlusion query passes, and the switch
-// step finds the same visible sets with --hc-test pyramid and cpu-pyramid as with queries.
+// step finds the same visible sets with --backend gpu-pyramid and cpu-pyramid as with queries.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <memory>
 
 #include "common/camera_path.hpp"
 #include "common/gl/context.hpp"
+#include "common/gl/gl_depth_backend.hpp"
+#include "common/gl/gl_cpu_pyramid_tests.hpp"
+#include "common/gl/gl_pyramid_tests.hpp"
+#include "common/gl/gl_query_tests.hpp"
 #include "common/gl/hzb_query.hpp"
 #include "common/gl/scene_renderer.hpp"
 #include "common/gl/two_pass.hpp"
@@ -81,7 +87,7 @@ std::vector<uint64_t> query_counts(Plant& p, const Camera& cam, const std::vecto
 
 // `frames` frames of `q` testing `boxes` from `cam` against a cleared depth buffer: every answer
 // must be the expected count.
-void expect_answers_on_cleared_depth(Plant& p, HcQuerier& q, const Camera& cam, const std::vector<Aabb>& boxes,
+void expect_answers_on_cleared_depth(Plant& p, GlDepthTests& q, const Camera& cam, const std::vector<Aabb>& boxes,
                                      const std::vector<uint64_t>& expected, int frames) {
   for (int f = 0; f < frames; ++f) {
     p.renderer->begin_frame(cam, false);
@@ -179,7 +185,7 @@ TEST(GpuDepthPyramid, NeverProvesOccludedABoxWhoseQueryPassesAndMatchesItsCpuTwi
   }
 }
 
-// The converse proof (DepthPyramid::shows, HcTest::cpu_pyramid) against the occlusion query, box
+// The converse proof (DepthPyramid::shows, --backend cpu-pyramid) against the occlusion query, box
 // by box on the read-back depth: "shows" only where the query counts a sample, and for a good
 // share of the boxes whose queries pass (one that proves nothing would pass the first check).
 TEST(DepthPyramid, ShowsOnlyBoxesWhoseQueryCountsASample) {
@@ -257,64 +263,64 @@ TEST(BoxBatchCounter, CountsEqualTheOcclusionQueriesSampleCounts) {
 }
 
 // The switch step over a walk, as a switch node runs it (near-first batches, occluder fusion
-// between batches, visibility hold; adaptive queries where asked), once per --hc-test.
+// between batches, visibility hold; adaptive queries where asked), once per GL back end (--backend queries, gpu-pyramid, cpu-pyramid).
 // Without adaptive queries the visible sets of every frame are those of queries only (tau = 0),
 // and the pyramid did prove boxes occluded. With them the pyramid tests what they skip
 // (cheap_tests()): every set holds the leaves that show (the item buffer), and fewer leaves are
 // kept than by queries,
 // which take what they skip on trust.
-TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
+TEST(GlDepthTests, EveryStrategyFindsTheVisibleSetsOfQueriesOnAWalk) {
   const int w = 256, hgt = 192, frames = 24;
   Plant p(w, hgt, "plant:0.3", frames);
   const Renderables renderables(p.h, nullptr);
   ClusterConfig config;
-  auto replay = [&](HcTest test, HcQuerier::Stats* stats, bool adaptive = false) {
-    HcQuerier querier(*p.ctx, test, false);  // tau = 0: no sample counts needed
+  // `tests` answer the replay; `keep` reads their counts when it ends.
+  auto replay = [&](std::unique_ptr<GlDepthTests> tests, bool adaptive,
+                    const std::function<void(const GlDepthTests&)>& keep) {
+    GlDepthBackend backend(*p.ctx, *p.renderer, renderables, std::move(tests));
     const SwitchStep step(renderables, config, hgt);
     QuerySkipper skipper(p.h.size());
     VisibilityHold hold(p.h.size(), 2);
     DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
     VisibleSet visible(renderables.count());
     std::vector<std::vector<uint32_t>> sets;
-    std::vector<uint8_t> drawn;
     for (int f = 0; f < frames; ++f) {
       const Camera& cam = p.path[size_t(f)];
       std::vector<uint32_t> occluders(visible.ids().begin(), visible.ids().end());
       std::sort(occluders.begin(), occluders.end());
-      drawn.assign(renderables.count(), 0);
-      for (uint32_t id : occluders) drawn[id] = 1;
-      p.renderer->begin_frame(cam, false);
-      p.renderer->draw_renderables(renderables, occluders, SceneRenderer::Mode::DepthOnly);
-      HcOptions o{.choices = {.order = HcOrder::near_first, .adaptive_queries = adaptive}, .skipper = &skipper};
-      o.occluders = [&](std::span<const uint32_t> found) {
-        std::vector<uint32_t> fresh;
-        for (uint32_t id : found)
-          if (!drawn[id]) fresh.push_back(id), drawn[id] = 1;
-        p.renderer->draw_renderables(renderables, fresh, SceneRenderer::Mode::DepthOnly);
-        std::vector<Aabb> boxes;
-        for (uint32_t id : fresh) boxes.push_back(p.h.node(renderables.node_of(id)).box);
-        querier.depth_added(boxes);
-      };
-      querier.begin(cam);
-      step.hc(uint32_t(f), visible, cam, querier, o, nowhere, &hold);
-      querier.end();
+      backend.begin(cam);
+      backend.draw(occluders);
+      HcOptions o{.choices = {.adaptive_queries = adaptive}, .skipper = &skipper};
+      backend.begin_tests(uint32_t(f), cam);
+      step.hc(uint32_t(f), visible, cam, backend, o, nowhere, &hold);
+      backend.end_tests();
       std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
       std::sort(v.begin(), v.end());
       sets.push_back(std::move(v));
     }
-    *stats = querier.stats();
+    keep(backend.tests());
     return sets;
   };
-  HcQuerier::Stats q{}, py{}, cp{};
-  const auto reference = replay(HcTest::queries, &q);
-  const auto pyramid = replay(HcTest::pyramid, &py);
-  const auto cpu = replay(HcTest::cpu_pyramid, &cp);
+  OcclusionCounts q;
+  GpuPyramidTests::Stats py;
+  CpuPyramidTests::Stats cp;
+  auto counts_into = [](OcclusionCounts& c) { return [&c](const GlDepthTests& t) { c = t.counts(); }; };
+  auto gpu_into = [](GpuPyramidTests::Stats& s) {
+    return [&s](const GlDepthTests& t) { s = dynamic_cast<const GpuPyramidTests&>(t).stats(); };
+  };
+  auto cpu_into = [](CpuPyramidTests::Stats& s) {
+    return [&s](const GlDepthTests& t) { s = dynamic_cast<const CpuPyramidTests&>(t).stats(); };
+  };
+  // tau = 0: no sample counts needed.
+  const auto reference = replay(std::make_unique<QueryTests>(*p.ctx), false, counts_into(q));
+  const auto pyramid = replay(std::make_unique<GpuPyramidTests>(*p.ctx), false, gpu_into(py));
+  const auto cpu = replay(std::make_unique<CpuPyramidTests>(*p.ctx, false), false, cpu_into(cp));
   for (int f = 0; f < frames; ++f) {
-    ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--hc-test pyramid, frame " << f;
-    ASSERT_EQ(cpu[size_t(f)], reference[size_t(f)]) << "--hc-test cpu-pyramid, frame " << f;
+    ASSERT_EQ(pyramid[size_t(f)], reference[size_t(f)]) << "--backend gpu-pyramid, frame " << f;
+    ASSERT_EQ(cpu[size_t(f)], reference[size_t(f)]) << "--backend cpu-pyramid, frame " << f;
   }
-  EXPECT_EQ(cp.tests, q.tests);
-  EXPECT_EQ(cp.occluded, q.occluded);
+  EXPECT_EQ(cp.tests, q.boxes_tested);
+  EXPECT_EQ(cp.occluded, q.boxes_occluded);
   EXPECT_GT(cp.pyramid_occluded, 0u);
   EXPECT_GT(cp.shown, 0u);
   EXPECT_GT(cp.refreshes, 0u) << "occluder fusion's rectangles were read back again";
@@ -322,25 +328,26 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       << "cpu-pyramid: every box proven on the CPU, batched or a query";
   EXPECT_LT(cp.batched + cp.queries, cp.tests) << "the CPU decided some boxes";
   EXPECT_GT(cp.batched, 0u) << "boxes counted by batch draws";
-  EXPECT_EQ(q.queries, q.tests);
-  EXPECT_EQ(q.pyramid_tested, 0u);
-  EXPECT_EQ(py.tests, q.tests) << "the same boxes were tested";
+  EXPECT_EQ(py.tests, q.boxes_tested) << "the same boxes were tested";
+  EXPECT_EQ(py.occluded, q.boxes_occluded);
   EXPECT_GT(py.pyramid_occluded, 0u);
   EXPECT_EQ(py.queries + py.pyramid_occluded, py.tests) << "every box is a query or proven occluded (none empty)";
   EXPECT_GT(py.builds, uint64_t(frames) - 1) << "at least one build per frame with tests";
   std::printf("%d frames: %llu boxes tested; pyramid: %llu queries, %llu proven occluded, %llu builds; "
               "cpu-pyramid: %llu batched, %llu queries, %llu proven occluded, %llu shown, %llu builds, %llu refreshes\n",
-              frames, (unsigned long long)q.tests, (unsigned long long)py.queries,
+              frames, (unsigned long long)q.boxes_tested, (unsigned long long)py.queries,
               (unsigned long long)py.pyramid_occluded, (unsigned long long)py.builds, (unsigned long long)cp.batched,
               (unsigned long long)cp.queries, (unsigned long long)cp.pyramid_occluded, (unsigned long long)cp.shown,
               (unsigned long long)cp.builds, (unsigned long long)cp.refreshes);
 
-  HcQuerier::Stats qa{}, pya{}, cpa{};
-  const auto trusting = replay(HcTest::queries, &qa, true);
+  OcclusionCounts qa;
+  GpuPyramidTests::Stats pya;
+  CpuPyramidTests::Stats cpa;
+  const auto trusting = replay(std::make_unique<QueryTests>(*p.ctx), true, counts_into(qa));
   size_t kept_by_queries = 0, kept[2] = {0, 0};
   for (int f = 0; f < frames; ++f) kept_by_queries += trusting[size_t(f)].size();
-  const auto cheap_pyramid = replay(HcTest::pyramid, &pya, true);
-  const auto cheap_cpu = replay(HcTest::cpu_pyramid, &cpa, true);
+  const auto cheap_pyramid = replay(std::make_unique<GpuPyramidTests>(*p.ctx), true, gpu_into(pya));
+  const auto cheap_cpu = replay(std::make_unique<CpuPyramidTests>(*p.ctx, false), true, cpu_into(cpa));
   std::vector<uint32_t> leaves;
   for (uint32_t id = 0; id < p.h.size(); ++id)
     if (p.h.node(id).leaf() && p.h.node(id).item_count > 0) leaves.push_back(id);
@@ -357,10 +364,10 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
       kept[k] += v.size();
     }
   }
-  EXPECT_EQ(qa.cheap, 0u) << "queries: skipped leaves are not tested";
-  for (const HcQuerier::Stats* s : {&pya, &cpa}) {
-    EXPECT_GT(s->assumed, 0u) << "the pyramid could not prove some skipped leaves occluded";
-    EXPECT_LT(s->assumed, s->cheap) << "and proved others occluded";
+  EXPECT_LT(qa.boxes_tested, q.boxes_tested) << "queries: skipped leaves are not tested";
+  for (auto [assumed, cheap] : {std::pair{pya.assumed, pya.cheap}, std::pair{cpa.assumed, cpa.cheap}}) {
+    EXPECT_GT(assumed, 0u) << "the pyramid could not prove some skipped leaves occluded";
+    EXPECT_LT(assumed, cheap) << "and proved others occluded";
   }
   EXPECT_EQ(cpa.batched + cpa.queries + cpa.pyramid_occluded + cpa.shown + cpa.assumed, cpa.tests);
   std::printf("adaptive queries: leaves kept over the walk: queries %zu, pyramid %zu, cpu-pyramid %zu (%llu of %llu "
@@ -373,24 +380,24 @@ TEST(HcQuerier, EveryHcTestFindsTheVisibleSetsOfQueriesOnAWalk) {
 // cpu-pyramid where its pyramid decides nothing (nothing drawn, sample counts wanted: no box is
 // occluded, none may be answered "shows"): after its first frame it is read back only every
 // kRetryFrames frames; the answers stay the queries' counts.
-TEST(HcQuerier, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
+TEST(GlDepthTests, CpuPyramidStopsReadingBackWhereItDecidesNothing) {
   Plant p(128, 128, "plant:0.05", 1);
-  HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
+  CpuPyramidTests q(*p.ctx, true);
   const Camera& cam = p.path[0];
   const std::vector<Aabb> boxes = test_boxes(p, cam, 200);
   p.renderer->begin_frame(cam, false);  // depth cleared to far, nothing drawn
   const std::vector<uint64_t> expected = query_counts(p, cam, boxes);
-  expect_answers_on_cleared_depth(p, q, cam, boxes, expected, 2 * int(HcQuerier::kRetryFrames) + 1);
+  expect_answers_on_cleared_depth(p, q, cam, boxes, expected, 2 * int(CpuPyramidTests::kRetryFrames) + 1);
   if (HasFatalFailure()) return;
   EXPECT_EQ(q.stats().pyramid_occluded + q.stats().shown, 0u);
-  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << HcQuerier::kRetryFrames << " frames";
+  EXPECT_EQ(q.stats().builds, 3u) << "frame 0, then every " << CpuPyramidTests::kRetryFrames << " frames";
 }
 
 // cpu-pyramid where sample counts matter (visible-pixel LOD): every answer is the query's count
 // (boxes proven occluded answer 0, none is answered "shows" without its count).
-TEST(HcQuerier, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
+TEST(GlDepthTests, CpuPyramidWithSampleCountsAnswersTheQueriesCounts) {
   Plant p(192, 160, "plant:0.05", 3);
-  HcQuerier q(*p.ctx, HcTest::cpu_pyramid, true);
+  CpuPyramidTests q(*p.ctx, true);
   for (const Camera& cam : p.path) {
     const std::vector<Aabb> boxes = test_boxes(p, cam, 400);
     p.draw_occluders(cam);
@@ -427,7 +434,7 @@ TEST(GpuDepthPyramid, PrintsItsCostAt1024) {
   const std::vector<Aabb> boxes = test_boxes(p, p.path[1], 4000);
   std::vector<PyramidProbe> batch;
   for (const Aabb& b : boxes)
-    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, HcQuerier::policy(HcTest::pyramid).span); pr.kind == PyramidProbe::Kind::probe)
+    if (auto pr = pyramid_probe(b, p.path[1], {1024, 1024}, BoxQuerier::kRelativePad, GpuPyramidTests::Policy{}.span); pr.kind == PyramidProbe::Kind::probe)
       batch.push_back(pr);
   std::vector<uint32_t> occluded;
   double test_ms = 1e9;

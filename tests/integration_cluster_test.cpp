@@ -34,6 +34,23 @@ long number_before(const std::string& log, const std::string& phrase, size_t fro
   return begin == at ? -1 : std::stol(log.substr(begin, at - begin));
 }
 
+// The boxes each node's summary says its back end tested ("occlusion back end B: N boxes tested"),
+// summed over both nodes, are the boxes of the HC frames the render client logged (stats.csv
+// queries: each EndOfFrame's): the summary counts what the back end did, and nothing else.
+void expect_summaries_count_the_boxes_tested(const ClusterRun& r, const fs::path& stats_csv) {
+  auto stats = read_csv(stats_csv);
+  long summaries = 0;
+  for (const std::string* log : {&r.node0_log, &r.node1_log}) {
+    const size_t line = log->find(": occlusion back end ");  // the summary's (the start-up's has "end:")
+    ASSERT_NE(line, std::string::npos) << *log;
+    const long n = number_before(*log, " boxes tested (", line);
+    ASSERT_GE(n, 0) << log->substr(line, 300);
+    summaries += n;
+  }
+  EXPECT_GT(summaries, 0);
+  EXPECT_EQ(double(summaries), sum(stats["queries"])) << "boxes tested by the nodes' summaries and the frames' EndOfFrames";
+}
+
 void expect_cluster_equals_reference(const std::string& name, const std::string& scene, const std::string& path,
                                      size_t frames, bool coherent) {
   fs::path dir = fresh_dir(name);
@@ -58,6 +75,7 @@ void expect_cluster_equals_reference(const std::string& name, const std::string&
   // HC queried: in every early frame (adaptive queries then trust nodes that keep passing: a
   // late frame of a walk may need none).
   for (size_t f = 0; f < std::min<size_t>(frames, 10); ++f) EXPECT_GT(stats["queries"][f], 0) << "frame " << f;
+  expect_summaries_count_the_boxes_tested(*r, dir / "cluster" / "stats.csv");
   // The wait for a frame's set is part of the interval since the frame before (stats.csv wait_ms).
   ASSERT_EQ(stats["wait_ms"].size(), frames);
   for (size_t f = 1; f < frames; ++f) {
@@ -111,17 +129,19 @@ TEST(Cluster, PlantWalkEqualsReference) {
   expect_cluster_equals_reference("plant", "plant:0.3", "walk:40", 40, true);
 }
 
-// HC with the GPU depth pyramid in front of the queries (--hc-test pyramid, what a
-// hardware GPU would choose besides plain queries) on both nodes draws the reference's frames, and
-// the pyramid did prove boxes occluded on both nodes.
+// HC with the GPU depth pyramid in front of the queries (--backend gpu-pyramid, what a hardware
+// GPU would choose besides plain queries) on both nodes draws the reference's frames, and the
+// pyramid did prove boxes occluded on both nodes.
 TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
   fs::path dir = fresh_dir("plant_pyramid");
   ClusterOptions o = cluster("plant:0.3", "walk:40");
-  o.node0 = o.node1 = {"--hc-test", "pyramid"};
+  o.node0 = o.node1 = {"--backend", "gpu-pyramid"};
   const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
   if (!r) return;
+  expect_summaries_count_the_boxes_tested(*r, dir / "cluster" / "stats.csv");
   for (const std::string* log : {&r->node0_log, &r->node1_log}) {
-    const size_t at = log->find("HC test pyramid: ");
+    EXPECT_NE(log->find("occlusion back end: gpu-pyramid (--backend gpu-pyramid;"), std::string::npos) << *log;
+    const size_t at = log->find("occlusion back end gpu-pyramid: ");
     ASSERT_NE(at, std::string::npos) << *log;
     EXPECT_GT(number_before(*log, " proven occluded by the depth pyramid", at), 0) << log->substr(at, 300);
   }
@@ -174,30 +194,34 @@ TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
   EXPECT_EQ(ors, 8u);
 }
 
-// Where the OR stays in GL (here: plant:M streams its geometry within --geometry-budget, so its
-// triangles are not on the CPU) the default HC test on llvmpipe is cpu-pyramid (a depth pyramid
+// Where the CPU back end cannot work (here: plant:M streams its geometry within --geometry-budget,
+// so its triangles are not on the CPU) the default on llvmpipe is cpu-pyramid (a depth pyramid
 // read back to the CPU decides what it can, the rest are counted by one draw per batch);
-// occlusion queries stay available. Node 0 with
-// --hc-test queries, node 1 with the default: the reference's frames, node 0 drew no batch and
-// node 1 proved boxes on the CPU and counted others in batch draws.
+// occlusion queries stay available. Node 0 with --backend queries, node 1 with the default: the
+// reference's frames, node 0 drew no batch and node 1 proved boxes on the CPU and counted others
+// in batch draws.
 TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsReference) {
   fs::path dir = fresh_dir("plant_queries_batch");
   ClusterOptions o = cluster("plant:0.3", "walk:40");
-  o.node0 = {"--hc-test", "queries"};
+  o.node0 = {"--backend", "queries"};
   const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
   if (!r) return;
-  // "HC test T: N boxes tested (...): Q occlusion queries issued, B boxes in D batch draws"
+  expect_summaries_count_the_boxes_tested(*r, dir / "cluster" / "stats.csv");
+  EXPECT_NE(r->node1_log.find("occlusion back end: cpu-pyramid (auto: software renderer "), std::string::npos)
+      << r->node1_log;
+  // "occlusion back end B: N boxes tested (M occluded), Q occlusion queries issued, K boxes in D batch draws"
   auto batch_draws = [](const std::string& log, const std::string& test) -> std::pair<unsigned long, unsigned long> {
-    const size_t at = log.find("HC test " + test + ": ");
+    const size_t at = log.find("occlusion back end " + test + ": ");
     if (at == std::string::npos) return {~0ul, ~0ul};
+    const size_t end = log.find('\n', at);
     const size_t in = log.find(" boxes in ", at), draws = log.find(" batch draws", at);
-    if (in == std::string::npos || draws == std::string::npos) return {~0ul, ~0ul};
+    if (in == std::string::npos || draws == std::string::npos || draws > end) return {0, 0};
     const size_t boxes = log.rfind(", ", in);
     return {std::stoul(log.substr(boxes + 2, in - boxes - 2)), std::stoul(log.substr(in + 10, draws - in - 10))};
   };
   const auto q = batch_draws(r->node0_log, "queries"), b = batch_draws(r->node1_log, "cpu-pyramid");
   EXPECT_EQ(q, std::make_pair(0ul, 0ul)) << r->node0_log;
-  ASSERT_NE(b.first, ~0ul) << "node 1 (default) did not report HC test cpu-pyramid:\n" << r->node1_log;
+  ASSERT_NE(b.first, ~0ul) << "node 1 (default) did not report back end cpu-pyramid:\n" << r->node1_log;
   EXPECT_GT(b.first, 0u) << r->node1_log;
   EXPECT_GT(b.second, 0u) << r->node1_log;
   // "..., N proven occluded by the depth pyramid"
@@ -207,35 +231,35 @@ TEST(Cluster, PlantWalkWithQueriesOnNode0AndDefaultCpuPyramidOnNode1EqualsRefere
   EXPECT_GT(std::stoul(r->node1_log.substr(from + 2, at - from - 2)), 0u) << r->node1_log;
 }
 
-// The OR on the CPU (common/cull/depth_raster.hpp; --or-raster auto on llvmpipe): node 0 told to
-// rasterise in GL, node 1 by default on the CPU, where at tau 0 HC tests there too, boxes and the
-// leaves whose boxes show by their own triangles. The frames are the reference's, node 1 says so
-// at start-up, tested boxes on the CPU and found leaves hidden by their triangles (pipes: long thin
+// The CPU back end (common/cull/cpu_backend.hpp; auto on llvmpipe at tau 0): node 0 told to use
+// cpu-pyramid (GL's depth), node 1 by default on the CPU, where boxes and the leaves whose boxes
+// show by their own triangles are tested. The frames are the reference's, node 1 says so at
+// start-up, tested boxes on the CPU and found leaves hidden by their triangles (pipes: long thin
 // objects whose boxes show past what hides them), node 0 none of that. Adaptive queries and the
-// visibility hold at auto: off on node 1 (HC on the CPU), on node 0 (HC in GL), which skips tests.
+// visibility hold at auto: off on node 1 (the CPU back end), on node 0, which skips tests.
 TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
   fs::path dir = fresh_dir("pipes_or_cpu");
   ClusterOptions o = cluster("pipes", "orbit:40");
-  o.node0 = {"--or-raster", "gl"};
+  o.node0 = {"--backend", "cpu-pyramid"};
   const std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
   if (!r) return;
-  // "N leaves whose box showed found hidden by their own triangles", "HC on the CPU: N boxes tested"
+  expect_summaries_count_the_boxes_tested(*r, dir / "cluster" / "stats.csv");
+  // "occlusion back end cpu: N boxes tested (...), ..., L leaves tested by their triangles (H hidden)"
   auto hidden = [](const std::string& log) {
-    return number_before(log, " leaves whose box showed found hidden by their own triangles");
+    const size_t at = log.find(" leaves tested by their triangles (");
+    return at == std::string::npos ? -1 : number_before(log, " hidden)", at);
   };
-  EXPECT_NE(r->node0_log.find("OR in GL (--or-raster gl)"), std::string::npos) << r->node0_log;
-  EXPECT_EQ(r->node0_log.find("HC on the CPU"), std::string::npos) << r->node0_log;
-  EXPECT_EQ(hidden(r->node0_log), 0) << r->node0_log;
-  EXPECT_NE(r->node1_log.find("OR on the CPU (--or-raster auto on a software renderer"), std::string::npos)
-      << r->node1_log;
-  EXPECT_GT(number_before(r->node1_log, " boxes tested, "), 0) << r->node1_log;
-  EXPECT_GT(hidden(r->node1_log), 0) << r->node1_log;
-  EXPECT_NE(r->node1_log.find("HC on the CPU (--hc-test auto with the OR on the CPU at tau 0); adaptive queries off, "
-                              "visibility hold 0 (auto"),
+  EXPECT_NE(r->node0_log.find("occlusion back end: cpu-pyramid (--backend cpu-pyramid; adaptive queries on, "
+                              "visibility hold 2)"),
             std::string::npos)
-      << r->node1_log;
-  // "(N more skipped by adaptive queries, ...; M renderables kept by the visibility hold; ..."
-  auto skipped = [](const std::string& log) { return number_before(log, " more skipped by adaptive queries"); };
+      << r->node0_log;
+  EXPECT_EQ(hidden(r->node0_log), -1) << r->node0_log;
+  EXPECT_NE(r->node1_log.find("occlusion back end: cpu (auto: software renderer "), std::string::npos) << r->node1_log;
+  EXPECT_NE(r->node1_log.find(", tau 0; adaptive queries off, visibility hold 0)"), std::string::npos) << r->node1_log;
+  EXPECT_GT(number_before(r->node1_log, " boxes tested ("), 0) << r->node1_log;
+  EXPECT_GT(hidden(r->node1_log), 0) << r->node1_log;
+  // "N nodes assumed visible by adaptive queries (...; M renderables kept by the visibility hold)"
+  auto skipped = [](const std::string& log) { return number_before(log, " nodes assumed visible by adaptive queries"); };
   auto held = [](const std::string& log) { return number_before(log, " renderables kept by the visibility hold"); };
   EXPECT_EQ(skipped(r->node1_log), 0) << r->node1_log;
   EXPECT_EQ(held(r->node1_log), 0) << r->node1_log;
@@ -243,7 +267,7 @@ TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
 }
 
 // Defaults by renderer class: with every process told it runs on a hardware GPU
-// (OCC_RENDERER_CLASS=hardware, on llvmpipe), --hc-test auto picks occlusion queries (no depth
+// (OCC_RENDERER_CLASS=hardware, on llvmpipe), --backend auto picks occlusion queries (no depth
 // read-back on the frame's path) and --two-pass auto is off; the frames still equal the reference.
 // The software choice (cpu-pyramid, two passes by measurement) is every other test's default.
 TEST(Cluster, HardwareRendererDefaultsQueriesNoTwoPassEqualsReference) {
@@ -255,10 +279,9 @@ TEST(Cluster, HardwareRendererDefaultsQueriesNoTwoPassEqualsReference) {
   if (!r) return;
   for (const std::string* log : {&r->node0_log, &r->node1_log}) {
     EXPECT_NE(log->find("hardware renderer (OCC_RENDERER_CLASS)"), std::string::npos) << *log;
-    EXPECT_NE(log->find("HC test queries (--hc-test auto on a hardware renderer)"), std::string::npos) << *log;
-    EXPECT_NE(log->find("OR in GL (--or-raster auto on a hardware renderer)"), std::string::npos) << *log;
-    EXPECT_NE(log->find("HC test queries: "), std::string::npos) << *log;  // the summary: what it ran
-    EXPECT_EQ(log->find("HC test cpu-pyramid"), std::string::npos) << *log;
+    EXPECT_NE(log->find("occlusion back end: queries (auto: hardware renderer "), std::string::npos) << *log;
+    EXPECT_NE(log->find("occlusion back end queries: "), std::string::npos) << *log;  // the summary: what it ran
+    EXPECT_EQ(log->find("cpu-pyramid"), std::string::npos) << *log;
   }
   EXPECT_NE(r->rvg_log.find("two passes off (--two-pass auto on a hardware renderer"), std::string::npos)
       << r->rvg_log;
@@ -371,9 +394,9 @@ TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   ClusterOptions o = cluster(kCity, path);
   o.all = {"--lod-cache", (dir / "cache").string()};
   o.client = {"--no-images"};
-  // The OR in GL at both: at tau 0 the OR on the CPU (llvmpipe's default) also culls leaves by
-  // their own triangles, which levels of detail do not (the test compares what LODs save).
-  o.node0 = o.node1 = {"--or-raster", "gl"};
+  // GL's depth at both: at tau 0 the CPU back end (llvmpipe's default) also culls leaves by their
+  // own triangles, which levels of detail do not (the test compares what LODs save).
+  o.node0 = o.node1 = {"--backend", "cpu-pyramid"};
   ClusterRun exact = run_cluster(dir / "tau0", o);
   ASSERT_EQ(exact.rvg_code, 0) << exact.rvg_log;
   o.all.insert(o.all.end(), {"--pixel-error", "3"});
@@ -402,6 +425,35 @@ TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   const Outcome diff = frame_diff(dir / "reference", dir / "tau3", {"--threshold", "16", "--max-fraction", "0.05", "--psnr"});
   EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
   EXPECT_NE(diff.log.find("psnr_db="), std::string::npos) << differing_frames(diff.log);
+}
+
+// The CPU back end at tau > 0 (--backend cpu: boxes tested against the CPU's depth, no leaf
+// tests; coarser levels and HLODs are left out of that depth, which only proves less): every
+// process verifies every frame, the image stays as close to full detail as the LOD bound allows,
+// and the summaries count the boxes tested. With visible-pixel LOD the same flag is refused at
+// start, in one line naming it.
+TEST(ClusterLod, CpuBackendAtPixelErrorStaysCloseToReferenceAndRefusesVisiblePixelLod) {
+  fs::path dir = fresh_dir("lod_cpu");
+  const std::string path = "walk:40";
+  ClusterOptions o = cluster(kCity, path);
+  o.all = {"--lod-cache", (dir / "cache").string(), "--pixel-error", "3"};
+  o.node0 = o.node1 = {"--backend", "cpu"};
+  ClusterRun r = run_cluster(dir / "tau3", o);
+  ASSERT_EQ(r.rvg_code, 0) << r.logs();
+  EXPECT_EQ(r.node0_code, 0) << r.node0_log;
+  EXPECT_EQ(r.node1_code, 0) << r.node1_log;
+  for (const std::string* log : {&r.node0_log, &r.node1_log})
+    EXPECT_NE(log->find("occlusion back end: cpu (--backend cpu; "), std::string::npos) << *log;
+  expect_summaries_count_the_boxes_tested(r, dir / "tau3" / "stats.csv");
+  ASSERT_EQ(run_reference(dir / "reference", kCity, path, kView).code, 0);
+  const Outcome diff = frame_diff(dir / "reference", dir / "tau3", {"--threshold", "16", "--max-fraction", "0.05"});
+  EXPECT_EQ(diff.code, 0) << differing_frames(diff.log);
+
+  const Outcome refused = run_to_end({bin("switch_node"), "--id", "0", "--scene", kCity, "--pixel-error", "3",
+                                      "--visible-pixel-lod", "on", "--backend", "cpu", "--width", "64", "--height", "64",
+                                      "--lod-cache", (dir / "cache").string()},
+                                     dir / "refused.log", 120s);
+  expect_one_error(refused, {"--backend cpu: --visible-pixel-lod needs sample counts"}, {.code = 2});
 }
 
 TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
@@ -529,7 +581,7 @@ double summary_value(const std::string& log, const std::string& key) {
 TEST(Cluster, RunTableAgreesWithStatsCsvAndTheNodesStartUp) {
   fs::path dir = fresh_dir("run_table");
   ClusterOptions o = cluster(kCity, "orbit:16");
-  o.node0 = {"--or-raster", "gl"};
+  o.node0 = {"--backend", "cpu-pyramid"};
   const ClusterRun r = run_cluster(dir, o);
   ASSERT_EQ(r.rvg_code, 0) << r.logs();
   ASSERT_EQ(r.node0_code, 0) << r.logs();
@@ -577,14 +629,14 @@ TEST(Cluster, RunTableAgreesWithStatsCsvAndTheNodesStartUp) {
                 summary_value(r.rvg_log, "triangles_culled_pct"));
   EXPECT_EQ(rows.at("culled (not drawn)"), culled);
   EXPECT_EQ(rows.at("wrong pixels").rfind("not checked", 0), 0u) << rows.at("wrong pixels");  // the client compares sets
-  // "switch_node K: occlusion back end NAME", once, at start-up.
+  // "switch_node K: occlusion back end: NAME (why ...)", once, at start-up.
   std::string names;
   for (const auto& [k, log] : {std::pair{0, &r.node0_log}, std::pair{1, &r.node1_log}}) {
-    const std::string line = "switch_node " + std::to_string(k) + ": occlusion back end ";
+    const std::string line = "switch_node " + std::to_string(k) + ": occlusion back end: ";
     const size_t at = log->find(line);
     ASSERT_NE(at, std::string::npos) << *log;
     EXPECT_EQ(log->find(line, at + 1), std::string::npos) << *log;
-    const std::string name = log->substr(at + line.size(), log->find('\n', at) - at - line.size());
+    const std::string name = log->substr(at + line.size(), log->find(' ', at + line.size()) - at - line.size());
     names += (k ? ", node 1 " : "node 0 ") + name;
   }
   EXPECT_EQ(names, "node 0 cpu-pyramid, node 1 cpu");

@@ -259,31 +259,44 @@ TEST(FrontCull, FrontTrackedTraversalEqualsFreshTraversal) {
   }
 }
 
-// Near-first shells find exactly what level-by-level batches find when the occlusion oracle does
-// not change (no fusion), and hand every accepted renderable to the occluder hook once, shell
-// after shell, before the next shell's queries.
+// The occluder hook as the traversal calls it down (OcclusionQueries::occluders_found): the
+// renderables offered, and how many times.
+struct OfferedQueries final : OcclusionQueries {
+  explicit OfferedQueries(OcclusionQueries& q) : q(q) {}
+  uint32_t issue(const Aabb& box) override { return q.issue(box); }
+  uint64_t result(uint32_t handle) override { return q.result(handle); }
+  void end_batch() override { q.end_batch(); }
+  void occluders_found(std::span<const uint32_t> ids) override {
+    ++calls;
+    offered.insert(offered.end(), ids.begin(), ids.end());
+  }
+  OcclusionQueries& q;
+  std::vector<uint32_t> offered;
+  size_t calls = 0;
+};
+
+// Near-first shells find exactly what whole-frontier batches (a level at a time) find when the
+// occlusion oracle does not change (no fusion), and hand every accepted renderable to the
+// occluder hook once, shell after shell, before the next shell's queries.
 TEST(FrontCull, NearFirstShellsFindTheSameSetAndOfferEachOccluderOnce) {
   const World& w = world();
   Renderables r(w.h, &w.lod);
   for_random_views(12, 30, 25, [&](int k, const Camera& cam, PointQueries& q) {
     const LodSelector sel(r, cam, 480, k % 3 == 0 ? 2.0 : 0.0);
     CullStats lv, nf;
-    const auto by_level = hardware_cull_lod(w.h, cam, q, sel, {.choices = {.order = HcOrder::levels}, .stats = &lv});
-    std::vector<uint32_t> offered;
-    size_t hook_calls = 0;
-    const auto near_first =
-        hardware_cull_lod(w.h, cam, q, sel,
-                          {.choices = {.order = HcOrder::near_first},
-                           .stats = &nf,
-                           .occluders = [&](std::span<const uint32_t> ids) {
-                             ++hook_calls;
-                             offered.insert(offered.end(), ids.begin(), ids.end());
-                           }});
+    const auto by_level = hardware_cull_lod(w.h, cam, q, sel,
+                                            {.choices = {.occluder_fusion = false},
+                                             .stats = &lv,
+                                             .first_batch = HcOptions::kWholeFrontier,
+                                             .max_batch = HcOptions::kWholeFrontier});
+    OfferedQueries hook(q);
+    const auto near_first = hardware_cull_lod(w.h, cam, hook, sel, {.stats = &nf});
     EXPECT_EQ(near_first, by_level) << "camera " << k;
-    std::sort(offered.begin(), offered.end());
-    EXPECT_EQ(offered, near_first) << "camera " << k;
+    std::sort(hook.offered.begin(), hook.offered.end());
+    EXPECT_EQ(hook.offered, near_first) << "camera " << k;
     EXPECT_EQ(nf.queries, lv.queries) << "the same nodes are tested, in another order";
-    if (near_first.size() > 4) { EXPECT_GT(hook_calls, 1u) << "shells, not one batch"; }
+    if (near_first.size() > 4) { EXPECT_GT(hook.calls, 1u) << "shells, not one batch"; }
+    EXPECT_GE(nf.levels, lv.levels) << "shells are no larger than the whole frontier";
   });
 }
 

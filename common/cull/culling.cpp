@@ -57,7 +57,10 @@ std::vector<uint32_t> hardware_cull(const Renderables& r, const Camera& cam, Occ
   // the LOD traversal from the root is exactly Algorithm 4.1.
   const LodSelector sel(r, cam, 1.0, 0.0);
   return hardware_cull_lod(r.hierarchy(), cam, q, sel,
-                           {.choices = {.order = HcOrder::levels}, .on_visible = on_visible, .stats = stats});
+                           {.on_visible = on_visible,
+                            .stats = stats,
+                            .first_batch = HcOptions::kWholeFrontier,
+                            .max_batch = HcOptions::kWholeFrontier});
 }
 
 std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
@@ -67,8 +70,7 @@ std::vector<uint32_t> hardware_cull(const Hierarchy& h, const Camera& cam, Occlu
 
 namespace {
 
-// hardware_cull_lod, batch by batch: take a batch from the frontier (a level, or a near-first
-// shell), test its nodes (frustum, near the eye, skipped by adaptive queries, or a query: all
+// hardware_cull_lod, batch by batch: take a batch from the frontier (a near-first shell), test its nodes (frustum, near the eye, skipped by adaptive queries, or a query: all
 // queries of the batch in flight at once), read the results, then accept or refine each visible
 // node; occluder fusion draws what the batch accepted before the next one is tested.
 class LodTraversal {
@@ -82,11 +84,10 @@ class LodTraversal {
         st_(o.stats ? *o.stats : local_),
         skipper_(o.choices.adaptive_queries.value_or(false) ? o.skipper : nullptr),
         enclosures_(o.choices.sealed ? o.enclosures : nullptr),
-        occluders_(o.choices.occluder_fusion ? o.occluders : nullptr),
+        fusion_(o.choices.occluder_fusion),
         fr_(cam.frustum()),
         tau_(sel.tau()),
-        pixel_lod_(o.visible_pixel_lod && tau_ > 0 && sel.renderables().lod() != nullptr),
-        near_first_(o.choices.order == HcOrder::near_first) {}
+        pixel_lod_(o.visible_pixel_lod && tau_ > 0 && sel.renderables().lod() != nullptr) {}
 
   std::vector<uint32_t> run() {
     if (o_.start.empty())
@@ -97,7 +98,7 @@ class LodTraversal {
       test_batch();
       read_results();
       accept_visible();
-      if (occluders_ && !accepted_.empty()) occluders_(accepted_);
+      if (fusion_ && !accepted_.empty()) q_.occluders_found(accepted_);
     }
     std::sort(out_.begin(), out_.end());
     return out_;
@@ -106,19 +107,10 @@ class LodTraversal {
  private:
   static constexpr uint64_t kNoQuery = ~uint64_t(0);
 
-  void push(uint32_t id) {
-    if (near_first_)
-      queue_.emplace(h_.node(id).box.distance2(cam_.eye), id);
-    else
-      next_.push_back(id);
-  }
+  void push(uint32_t id) { queue_.emplace(h_.node(id).box.distance2(cam_.eye), id); }
 
   bool take_batch() {
     batch_.clear();
-    if (!near_first_) {
-      batch_.swap(next_);
-      return !batch_.empty();
-    }
     // A shell: the nearest box, at distance d0, and every box within 2 d0 (at least first_batch,
     // at most max_batch), so each batch reaches twice as far as the one before and what it finds
     // is drawn before farther boxes are tested.
@@ -169,8 +161,8 @@ class LodTraversal {
         visible_.emplace_back(p.id, kNoQuery);
         continue;
       }
-      // The box shows; a leaf's own triangles may not (HcOptions::geometry_shows).
-      const bool hidden_inside = samples > 0 && o_.geometry_shows && h_.node(p.id).leaf() && !o_.geometry_shows(p.id);
+      // The box shows; a leaf's own triangles may not (OcclusionQueries::leaf_may_show).
+      const bool hidden_inside = samples > 0 && h_.node(p.id).leaf() && !q_.leaf_may_show(p.id);
       st_.geometry_hidden += hidden_inside;
       const bool shows = samples > 0 && !hidden_inside;
       if (skipper_) skipper_->record(p.id, shows);  // occluded: queried again from now on
@@ -232,12 +224,11 @@ class LodTraversal {
   CullStats& st_;
   QuerySkipper* const skipper_;
   const Enclosures* const enclosures_;
-  const std::function<void(std::span<const uint32_t>)> occluders_;
+  const bool fusion_;
   const Frustum fr_;
   const double tau_;
-  const bool pixel_lod_, near_first_;
-  // The frontier: a level at a time (levels), or a queue ordered by distance (near_first).
-  std::vector<uint32_t> next_;
+  const bool pixel_lod_;
+  // The frontier, ordered by distance from the eye.
   using Entry = std::pair<double, uint32_t>;  // (squared distance from the eye, node)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue_;
   std::vector<uint32_t> batch_, out_, accepted_;
@@ -254,47 +245,6 @@ class LodTraversal {
 std::vector<uint32_t> hardware_cull_lod(const Hierarchy& h, const Camera& cam, OcclusionQueries& q,
                                         const LodSelector& sel, const HcOptions& o) {
   return LodTraversal(h, cam, q, sel, o).run();
-}
-
-std::vector<uint32_t> VisibilityHold::held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
-                                           std::span<const uint32_t> found, uint32_t frame) const {
-  std::vector<uint32_t> out;
-  if (frames_ == 0 || prev.empty()) return out;
-  const Hierarchy& h = r.hierarchy();
-  // 1: a node of found; 2: a strict ancestor of one.
-  std::vector<uint8_t> mark(h.size(), 0);
-  for (uint32_t id : found) mark[r.node_of(id)] = 1;
-  for (uint32_t id : found)
-    for (uint32_t p = h.node(r.node_of(id)).parent; p != kNoNode && mark[p] == 0; p = h.node(p).parent) mark[p] = 2;
-  const Frustum fr = cam.frustum();
-  for (uint32_t id : prev) {
-    const uint32_t n = r.node_of(id);
-    if (mark[n] != 0 || !recent(n, frame) || fr.classify(h.node(n).box) == Containment::Outside) continue;
-    bool under_found = false;
-    for (uint32_t p = h.node(n).parent; p != kNoNode && !under_found; p = h.node(p).parent) under_found = mark[p] == 1;
-    if (!under_found) out.push_back(id);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
-bool QuerySkipper::skip(uint32_t node) {
-  State& s = state_.at(node);
-  if (s.remaining == 0) return false;
-  --s.remaining;
-  return true;
-}
-
-void QuerySkipper::record(uint32_t node, bool visible) {
-  State& s = state_.at(node);
-  if (!visible) {
-    s = State{};
-    return;
-  }
-  if (s.streak < kTrust) ++s.streak;
-  if (s.streak < kTrust) return;
-  s.wait = uint8_t(std::min<int>(kMaxWait, std::max<int>(2, 2 * s.wait)));
-  s.remaining = s.wait;
 }
 
 std::vector<uint32_t> items_of_nodes(const Hierarchy& h, std::span<const uint32_t> nodes) {

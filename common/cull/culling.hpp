@@ -1,7 +1,7 @@
-// Culling logic, independent of GL: hierarchical frustum culling and the HC traversal of the
+// Culling logic, independent of the renderer: hierarchical frustum culling and the HC traversal of the
 // occlusion switch (paper Algorithm 4.1, breadth-first with a level of queries in flight at once,
-// 4.7.1). The occlusion test itself sits behind OcclusionQueries: the GL implementation renders
-// boxes against the depth buffer; tests use a CPU fake.
+// 4.7.1). The occlusion test itself sits behind OcclusionQueries: the occlusion back ends
+// (occlusion_backend.hpp) test boxes against their depth; tests use CPU fakes.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "common/camera.hpp"
+#include "common/cull/backend_choice.hpp"
 #include "common/cull/enclosure.hpp"
+#include "common/cull/query_skipper.hpp"
 #include "common/scene/hierarchy.hpp"
 #include "common/lod/lod_select.hpp"
 
@@ -26,17 +28,29 @@ class OcclusionQueries {
   // Every result of the batch was read: handles may be recycled.
   virtual void end_batch() {}
   // Whether issue_cheap() can prove boxes occluded at a fraction of a test's cost (a depth
-  // pyramid on the CPU or in one dispatch per batch; HcQuerier): adaptive queries then still
+  // pyramid on the CPU or in one dispatch per batch): adaptive queries then still
   // test what they skip that way, so a leaf that became occluded leaves V at once instead of
   // after up to QuerySkipper::kMaxWait frames.
   virtual bool cheap_tests() const { return false; }
   // Only the cheap test for `box`: result() is 0 where it proves the box occluded, else 1 with
   // nothing tested further (assumed visible). Only where cheap_tests().
   virtual uint32_t issue_cheap(const Aabb& box) { return issue(box); }
+  // Occluder fusion (HcChoices::occluder_fusion): the renderables the batch just read accepted,
+  // before the next batch is issued. A tester that owns the depth it tests draws them (depth
+  // only) into it, so what was just found visible hides what lies behind it in the same frame;
+  // real geometry only adds depth that is really there, so the traversal stays conservative.
+  // Default: nothing drawn.
+  virtual void occluders_found(std::span<const uint32_t> renderables) { (void)renderables; }
+  // Whether `leaf`, whose box test passed, may show by its own triangles (false: it is hidden and
+  // culled, CullStats::geometry_hidden). Default: true (the box decides).
+  virtual bool leaf_may_show(uint32_t leaf) {
+    (void)leaf;
+    return true;
+  }
 };
 
 // Every box passes: with it HC's traversal returns the frustum set at the chosen LODs (a frame the
-// render client's OcclusionGate sends without occlusion). No GL.
+// render client's OcclusionGate sends without occlusion).
 class FrustumOnlyQueries final : public OcclusionQueries {
  public:
   uint32_t issue(const Aabb&) override { return 0; }
@@ -54,7 +68,7 @@ struct CullStats {
   uint32_t frustum_culled = 0;     // nodes rejected by the frustum test
   uint32_t queries = 0;            // occlusion queries issued
   uint32_t occluded = 0;           // nodes whose query returned 0 samples
-  uint32_t geometry_hidden = 0;    // leaves whose box passed and whose triangles did not (HcOptions::geometry_shows)
+  uint32_t geometry_hidden = 0;    // leaves whose box passed and whose triangles did not (leaf_may_show)
   uint32_t near_visible = 0;       // nodes decided visible without a query
   uint32_t levels = 0;             // query batches (levels) issued
   uint32_t pixel_stops = 0;        // nodes accepted because fewer pixels than tau showed (4.7.2)
@@ -62,78 +76,6 @@ struct CullStats {
   uint32_t skipped = 0;            // queries skipped by a QuerySkipper (assumed visible)
   uint32_t skipped_occluded = 0;   // of the queries it skipped, proven occluded by a cheap test (in occluded)
   uint32_t sealed = 0;             // nodes hidden inside solids (Enclosures::hides), no query
-};
-
-// Pays for occlusion queries only where they cull (the cost/benefit idea of the OpenGL-assisted
-// culling paper): a node whose query came back visible kTrust times in a row is assumed visible,
-// without a query, for its next `wait` visits; every confirmation doubles the wait (up to
-// kMaxWait), an occluded result resets it. Assuming visible is conservative: the node is accepted
-// or descended exactly as if its query had passed, so no frame changes; only the visible set may
-// keep a node for up to kMaxWait visits after it became occluded (where the querier has
-// cheap_tests(), only while its cheap test cannot prove that). A scene with little occlusion
-// (an open field, the outside of one object) thus stops paying for queries that never cull.
-class QuerySkipper {
- public:
-  // 2 and 32 (were 3 and 16): duplex orbit at 1024^2, HC CPU -15 to -20 %; c45walk at 512^2 tau 0,
-  // p99 frame interval 11.1-12.7 against 12.9-18.6 ms; PVS/exact +0.01-0.04 (docs/spikes.md).
-  static constexpr uint8_t kTrust = 2;
-  static constexpr uint8_t kMaxWait = 32;
-  // A leaf with more triangles than this is queried every time: skipping its query saves one
-  // box test, but if it has become occluded it is drawn for nothing, twice (the other node's
-  // OR and the render client), for up to kMaxWait frames. Duplex orbit at 512^2 (the cluster,
-  // paired runs): triangles sent 13.5 k -> 7.2 k per frame for +1 % queries, frame interval
-  // -7 %; 50 and 100 query more for less; the city and the saw unchanged (docs/results.md).
-  static constexpr uint64_t kMaxSkippedLeafTriangles = 150;
-  // Whether `n`'s query may be skipped at all (interior nodes: their children are tested).
-  static bool may_skip(const HNode& n) { return !n.leaf() || n.triangles <= kMaxSkippedLeafTriangles; }
-  explicit QuerySkipper(size_t nodes) : state_(nodes) {}
-  // True when `node` is assumed visible this time (consumes one visit of its wait).
-  bool skip(uint32_t node);
-  void record(uint32_t node, bool visible);
-
- private:
-  struct State {
-    uint8_t streak = 0, wait = 0, remaining = 0;
-  };
-  std::vector<State> state_;
-};
-
-// Hysteresis for the visible set (issue 15): a node HC found visible (in two frames, see recent())
-// stays in V for up to `frames` frames after the last frame it was seen, while it stays in the
-// frustum. Leaves that
-// flicker in and out of V between frames (a query that passes in one node's depth buffer and not
-// in the other's, a leaf seen through a gap every other frame) then cost no ids on the wire and
-// no re-draws at the edges of their visibility. Keeping more than is visible is conservative:
-// frames never change. Node-local state: each switch node records what its own HC found and the
-// additions it receives from the other node (an added id was found visible); what it cannot
-// know (the other node's kept ids) only shortens the hold.
-class VisibilityHold {
- public:
-  VisibilityHold(size_t nodes, uint32_t frames) : frames_(frames), last_(nodes, 0), prev_(nodes, 0) {}
-  uint32_t frames() const { return frames_; }
-  // `node` was found visible in `frame`.
-  void seen(uint32_t node, uint32_t frame) {
-    if (frame + 1 <= last_.at(node)) return;
-    prev_[node] = last_[node];
-    last_[node] = frame + 1;
-  }
-  // Seen in one of the `frames` frames before `frame` (or in it), and once more before that within
-  // 4 x `frames` frames. A node seen in one frame only is not held: a set that exploded for one
-  // frame (start-up, the eye leaving a closed room) is not carried into the next frames.
-  bool recent(uint32_t node, uint32_t frame) const {
-    const uint32_t l = last_.at(node), p = prev_[node];
-    return l != 0 && l - 1 + frames_ >= frame && p != 0 && p - 1 + 4 * frames_ >= frame;
-  }
-  // The renderables of `prev` (V_{f-1}, front-tracking coarsened) to keep in V_f beside `found`
-  // (HC's result, ascending): recently seen, box not outside the frustum, and neither the same
-  // node as, an ancestor of, nor a descendant of a node in `found` (V_f stays an antichain: one
-  // representation per part of the scene). Ascending.
-  std::vector<uint32_t> held(const Renderables& r, const Camera& cam, std::span<const uint32_t> prev,
-                             std::span<const uint32_t> found, uint32_t frame) const;
-
- private:
-  uint32_t frames_;
-  std::vector<uint32_t> last_, prev_;  // per node: last / previous frame seen + 1 (0: never)
 };
 
 // Leaves whose boxes are not outside the frustum, in ascending id order.
@@ -166,79 +108,36 @@ struct LodPolicy {
   LodSelector selector(const Renderables& r, const Camera& cam) const { return {r, cam, viewport_height_px, tau}; }
 };
 
-// The order in which the traversal batches its queries.
-enum class HcOrder {
-  levels,      // breadth-first: a whole level of the hierarchy per batch (paper 4.7.1)
-  near_first,  // nearest boxes first: shells from a distance-ordered queue (the nearest box at d
-               // and all within 2d), so the near occluders found (and drawn, HcOptions::occluders)
-               // hide what the next shell holds (the default)
-};
-
-// How HC tests a box (common/gl/hzb_query.hpp HcQuerier): an occlusion query each (queries: what
-// a hardware GPU would choose); a GPU depth pyramid first, with queries for the boxes it cannot
-// prove occluded (pyramid: no per-frame read-back); or a depth pyramid read back to the CPU once
-// a frame in front of batch-counted boxes (cpu_pyramid: the llvmpipe default). The answers are
-// the same: only what they cost differs.
-// by_renderer (the default, --hc-test auto): queries on a hardware GPU, cpu_pyramid on a software
-// renderer (llvmpipe), chosen when the GL context is known (hc_test_for in common/gl/hzb_query.hpp).
-enum class HcTest { queries, pyramid, cpu_pyramid, by_renderer };
-// Where the OR rasterises V's depth: in GL, or on the CPU (common/cull/depth_raster.hpp; at tau 0
-// HC then tests there too, boxes and leaves by their own triangles: common/cull/raster_queries.hpp).
-// by_renderer (the default, --or-raster auto): cpu on a software renderer (llvmpipe: GL's own
-// rasteriser runs on the same cores, with shading machinery a depth-only pass does not need), gl
-// on a hardware GPU (or_raster_for in common/gl/hzb_query.hpp).
-enum class OrRaster { gl, cpu, by_renderer };
-
 // How HC searches: the one option set, node-local (not in the config hash: the processes need not
 // agree, the visible set stays a conservative superset either way). The CLI fills it
 // (add_hc_options, protocol/cluster); the switch node's cull frame builds what each choice needs
 // (switch_node/cull_frame.hpp); SwitchStep::hc and hardware_cull_lod read it through HcOptions.
 struct HcChoices {
-  HcOrder order = HcOrder::near_first;
   // Adaptive queries and the visibility hold keep in V what a fresh test might drop (conservative),
-  // to save tests; nullopt: auto (resolved()).
+  // to save tests; nullopt: the back end's default (choose_backend()).
   std::optional<bool> adaptive_queries = std::nullopt;  // assume nodes whose queries keep passing visible for a while (HcOptions::skipper)
-  bool occluder_fusion = true;   // draw what each batch found visible before the next (HcOptions::occluders)
+  bool occluder_fusion = true;   // draw what each batch found visible before the next (OcclusionQueries::occluders_found)
   bool sealed = true;            // skip what is sealed inside solids (HcOptions::enclosures)
   std::optional<int> visibility_hold = std::nullopt;  // frames a node found visible stays in V (VisibilityHold; 0 off)
-  // How each box is tested (common/gl/hzb_query.hpp): by the renderer (cpu_pyramid on llvmpipe,
-  // queries on a hardware GPU: no per-frame read-back), or as the flag says.
-  HcTest test = HcTest::by_renderer;
-  OrRaster or_raster = OrRaster::by_renderer;
-
-  // The auto settings for where HC tests. Saving a test pays where a test is dear (a GL query or
-  // box draw: adaptive queries on, a hold of 2 frames), not where HC tests on the CPU (tests_on_cpu:
-  // a pyramid probe, then the box's faces): there what they keep costs the render client's draw
-  // more than the tests cost the node (both off; docs/results.md "What HC keeps").
-  HcChoices resolved(bool tests_on_cpu) const {
-    HcChoices c = *this;
-    if (!c.adaptive_queries) c.adaptive_queries = !tests_on_cpu;
-    if (!c.visibility_hold) c.visibility_hold = tests_on_cpu ? 0 : kAutoHoldFrames;
-    return c;
-  }
-  static constexpr int kAutoHoldFrames = 2;
+  // The occlusion back end (backend_choice.hpp; nullopt: auto, choose_backend()).
+  std::optional<BackendKind> backend = std::nullopt;
 };
 
 // What the LOD traversal needs beyond the hierarchy, camera, queries and selector.
 struct HcOptions {
-  // The traversal reads choices.order; adaptive queries and occluder fusion act through `skipper`
-  // and `occluders` (state the caller keeps across frames), each only when its choice is on.
+  // Adaptive queries act through `skipper` (state the caller keeps across frames) and occluder
+  // fusion through the queries (occluders_found), each only when its choice is on.
   HcChoices choices = {};
   bool visible_pixel_lod = false;
   std::span<const uint32_t> start = {};  // first batch: the fronts, occluded first; empty = the root
   QuerySkipper* skipper = nullptr;       // choices.adaptive_queries' state (null: query every node)
   const Enclosures* enclosures = nullptr;  // choices.sealed: nodes it hides for the camera are culled
   std::function<void(uint32_t)> on_visible = nullptr;  // each accepted renderable, as its batch resolves
-  // A leaf whose box test passed is visible only where this says its own triangles may show
-  // (null: the box decides). Tau 0 only: it tests the leaf at full detail.
-  std::function<bool(uint32_t leaf)> geometry_shows = nullptr;
   CullStats* stats = nullptr;
-  uint32_t first_batch = 1, max_batch = 4096;  // near_first: bounds of a shell's size
-  // Occluder fusion (choices.occluder_fusion): called after each batch with the renderables it
-  // accepted, before the next batch is issued; the caller draws them (depth only) into the buffer
-  // the queries test, so what was just found visible hides what lies behind it in the same frame.
-  // Real geometry only adds depth that is really there: the traversal stays conservative.
-  std::function<void(std::span<const uint32_t>)> occluders = nullptr;
+  // Bounds of a shell's size (hardware_cull_lod). Both at kWholeFrontier: every batch is the
+  // whole frontier (from the root: one level of the hierarchy a batch, paper 4.7.1).
+  uint32_t first_batch = 1, max_batch = 4096;
+  static constexpr uint32_t kWholeFrontier = ~0u;
 };
 
 // HardwareCull with levels of detail (Algorithm 4.1 with 4.7.1 batching and 4.7.2). Like

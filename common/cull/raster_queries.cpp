@@ -5,11 +5,10 @@
 namespace occ {
 
 namespace {
-// The pad of the GL query box (BoxQuerier::kRelativePad), so both rasterise the same box.
+// The pad of the renderer's query box (BoxQuerier::kRelativePad), so both rasterise the same box.
 constexpr double kRelativePad = 1e-5;
-// Probe rectangles of up to kSpan x kSpan texels (HcQuerier's policy): the pyramid only proves
-// what it proves at a glance; the rest goes to the box's faces, whose test costs their pixels
-// (DepthPyramid::occludes_refined cost more per box here than those tests).
+// Probe rectangles of up to kSpan x kSpan texels (the GL pyramid tests' policy): the pyramid only proves
+// what it proves at a glance; the rest goes to the box's faces.
 constexpr int kSpan = 16;
 }  // namespace
 

@@ -1,12 +1,12 @@
-// HC's box tests on the CPU (--or-raster cpu at tau 0): against the OR's depth as CpuOccluders
-// drew it, with no GL depth buffer, upload, read-back or occlusion query. A box is occluded where
-// a depth pyramid of that depth proves it (DepthPyramid::occludes), else where its faces, tested as
-// DepthRaster::shows() tests triangles (conservative toward showing: a centre GL may cover
-// counts, at the plane moved forward), find no pixel in front of the depth. Since the OR's CPU
-// depth is never nearer than GL's of the same occluders, a box occluded here is occluded in
-// every GL frame drawn over them. As with GL's queries (BoxQuerier), the caller decides boxes
-// the eye may see into before the near plane (visible_without_query; the traversal does).
-// Answers 0 or 1 sample: no counts, so not for
+// HC's box tests on the CPU (the CPU back end, cpu_backend.hpp): against the OR's depth as
+// CpuOccluders drew it, with no renderer depth buffer, read-back or occlusion query. A box is
+// occluded where a depth pyramid of that depth proves it (DepthPyramid::occludes), else where its
+// faces, tested as DepthRaster::shows() tests triangles (conservative toward showing: a centre
+// the renderer may cover counts, at the plane moved forward), find no pixel in front of the
+// depth. Since the OR's CPU depth is never nearer than the renderer's of the same occluders, a
+// box occluded here is occluded in every frame the renderer draws over them. As with the
+// renderer's queries, the caller decides boxes the eye may see into before the near plane
+// (visible_without_query; the traversal does). Answers 0 or 1 sample: no counts, so not for
 // visible-pixel LOD. Occluder fusion draws into the same raster: depth_added() brings the
 // pyramid up to date over what was drawn.
 #pragma once

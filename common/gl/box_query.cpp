@@ -262,7 +262,7 @@ void BoxBatchCounter::draw() {
   gl_.NamedBufferSubData(boxes_buf_, 0, GLsizeiptr(data.size() * sizeof(glm::vec4)), data.data());
   const std::vector<uint32_t> zeros(n, 0);
   gl_.NamedBufferSubData(counts_buf_, 0, GLsizeiptr(n * sizeof(uint32_t)), zeros.data());
-  gl_.UseProgram(box_.program);  // BoxQuerier's may be bound (HcQuerier issues both)
+  gl_.UseProgram(box_.program);  // BoxQuerier's may be bound (CpuPyramidTests issues both)
   gl_.BindVertexArray(box_.vao);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, boxes_buf_);
   gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, counts_buf_);

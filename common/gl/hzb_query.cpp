@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/gl/box_query.hpp"
 #include "common/gl/shader.hpp"
 
 namespace occ {
@@ -213,241 +214,66 @@ std::vector<float> GpuDepthPyramid::read_level(uint32_t level) const {
   return out;
 }
 
-HcQuerier::Policy HcQuerier::policy(HcTest test) {
-  Policy p;
-  if (test == HcTest::cpu_pyramid) p.min_decided_screens = 0.25;
-  return p;
-}
-
-namespace {
-// The pixels a probe's rectangle covers (at level 0).
 uint64_t probe_pixels(const PyramidProbe& p) {
   return (uint64_t(p.x1 - p.x0 + 1) * uint64_t(p.y1 - p.y0 + 1)) << (2 * p.level);
 }
-}  // namespace
 
-HcTest hc_test_for(HcTest test, RendererClass renderer) {
-  if (test != HcTest::by_renderer) return test;
-  return renderer == RendererClass::hardware ? HcTest::queries : HcTest::cpu_pyramid;
+uint32_t PyramidBatch::add(const Aabb& box, bool cheap_only, const Camera& cam, Viewport vp, int span) {
+  if (resolved) throw std::logic_error("depth pyramid tests: issue() after result() in one batch (call end_batch() first)");
+  boxes.push_back(box);
+  cheap.push_back(cheap_only ? 1 : 0);
+  probes.push_back(pyramid_probe(box, cam, vp, BoxQuerier::kRelativePad, span));
+  return uint32_t(boxes.size() - 1);
 }
 
-OrRaster or_raster_for(OrRaster raster, RendererClass renderer) {
-  if (raster != OrRaster::by_renderer) return raster;
-  return renderer == RendererClass::hardware ? OrRaster::gl : OrRaster::cpu;
-}
-
-HcQuerier::HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy)
-    : test_(hc_test_for(test, ctx.renderer_class())),
-      sample_counts_(sample_counts),
-      policy_(test == HcTest::by_renderer ? HcQuerier::policy(test_) : policy),
-      ctx_(ctx),
-      queries_(ctx) {
-  if (test_ == HcTest::cpu_pyramid) {
-    cpu_pyramid_ = std::make_unique<DepthPyramid>();
-    counter_ = std::make_unique<BoxBatchCounter>(ctx, sample_counts);
-  }
-  if (test_ == HcTest::pyramid) pyramid_ = std::make_unique<GpuDepthPyramid>(ctx);
-}
-
-void HcQuerier::begin(const Camera& cam, const float* depth) {
-  // cpu_pyramid: the frame just ended decided boxes covering that many pixels; frames whose
-  // pyramid would not pay do without it, with a frame with the pyramid every kRetryFrames to look again.
-  if (built_) proven_avg_ = proven_avg_ < 0 ? double(proven_frame_) : 0.5 * proven_avg_ + 0.5 * double(proven_frame_);
-  const double need = cpu_pyramid_ ? policy_.min_decided_screens * ctx_.width() * ctx_.height() : 0.0;
-  use_pyramid_ = (pyramid_ || cpu_pyramid_) &&
-                 (need == 0 || proven_avg_ < 0 || proven_avg_ >= need || ++frames_off_ % kRetryFrames == 0);
-  if (use_pyramid_) frames_off_ = 0;
-  proven_frame_ = 0;
-  cam_ = cam;
-  cpu_depth_ = depth;
-  built_ = stale_ = false;
-  clear_dirty();
-  q_begin(cam);
-}
-
-void HcQuerier::depth_added(std::span<const Aabb> drawn) {
-  stale_ = built_;
-  const int w = ctx_.width(), h = ctx_.height();
-  if (drawn.empty()) dirty_.add({0, 0, w - 1, h - 1});
-  for (const Aabb& box : drawn) dirty_.add_box(box, cam_, {w, h});
-  q_begin(cam_);
-}
-
-// cpu_pyramid: level 0 read back and the levels built once a frame; after occluder fusion drew,
-// the drawn rectangle read again and the levels above it rebuilt, when it is no larger than the
-// rectangles of the batch's boxes (both cost about the same per pixel; otherwise the boxes go to
-// the GPU against a pyramid that is stale there: still conservative for occlusion).
-void HcQuerier::cpu_refresh() {
-  const int w = ctx_.width(), h = ctx_.height();
-  if (!built_) {
-    float* level0 = cpu_pyramid_->level0(w, h);
-    if (cpu_depth_)
-      std::copy_n(cpu_depth_, size_t(w) * size_t(h), level0);
-    else
-      ctx_.read_depth(level0);
-    cpu_depth_ = nullptr;
-    cpu_pyramid_->build_levels();
-    built_ = true;
-    stale_ = false;
-    clear_dirty();
-    ++stats_.builds;
-    return;
-  }
-  if (dirty_.empty()) return;
-  double boxes = 0;
-  for (const PyramidProbe& p : probes_)
-    boxes += p.kind == PyramidProbe::Kind::probe ? double(probe_pixels(p)) : p.kind == PyramidProbe::Kind::query ? double(w) * h : 0.0;
-  if (dirty_.pixels() > boxes) return;
-  const PixelRect& d = dirty_;
-  ctx_.read_depth(d.x0, d.y0, d.x1 - d.x0 + 1, d.y1 - d.y0 + 1, cpu_pyramid_->level0(w, h));
-  cpu_pyramid_->build_levels(d.x0, d.y0, d.x1, d.y1);
-  stale_ = false;
-  clear_dirty();
-  ++stats_.refreshes;
-}
-
-uint32_t HcQuerier::issue(const Aabb& box) {
-  ++stats_.tests;
-  if (!use_pyramid_) return q_issue(box);
-  if (resolved_) throw std::logic_error("HcQuerier: issue() after result() in one batch (call end_batch() first)");
-  boxes_.push_back(box);
-  cheap_.push_back(0);
-  probes_.push_back(pyramid_probe(box, cam_, {ctx_.width(), ctx_.height()}, BoxQuerier::kRelativePad, policy_.span));
-  return uint32_t(boxes_.size() - 1);
-}
-
-uint32_t HcQuerier::issue_cheap(const Aabb& box) {
-  if (!use_pyramid_) throw std::logic_error("HcQuerier: issue_cheap() in a frame without the pyramid (cheap_tests())");
-  const uint32_t handle = issue(box);
-  cheap_.back() = 1;
-  ++stats_.cheap;
-  return handle;
-}
-
-void HcQuerier::resolve() {
-  resolved_ = true;
-  handle_.assign(boxes_.size(), kPending);
-  batch_.clear();
-  batch_index_.clear();
-  for (size_t i = 0; i < boxes_.size(); ++i) {
-    if (probes_[i].kind == PyramidProbe::Kind::no_samples) {
-      handle_[i] = kZero;
-    } else if (probes_[i].kind == PyramidProbe::Kind::probe) {
-      batch_.push_back(probes_[i]);
-      batch_index_.push_back(uint32_t(i));
+void PyramidBatch::resolve_start() {
+  resolved = true;
+  answer.assign(boxes.size(), kPending);
+  sent.clear();
+  sent_index.clear();
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    if (probes[i].kind == PyramidProbe::Kind::no_samples) {
+      answer[i] = kZero;
+    } else if (probes[i].kind == PyramidProbe::Kind::probe) {
+      sent.push_back(probes[i]);
+      sent_index.push_back(uint32_t(i));
     }
   }
-  if (cpu_pyramid_) cpu_refresh();
-  if (!batch_.empty()) {
-    if (!cpu_pyramid_ && (!built_ || (stale_ && batch_.size() >= policy_.rebuild_min_probes))) {
-      pyramid_->build();
-      built_ = true;
-      stale_ = false;
-      ++stats_.builds;
+}
+
+uint64_t PyramidBatch::take_occluded(uint64_t& pixels) {
+  uint64_t n = 0;
+  for (size_t j = 0; j < sent.size(); ++j)
+    if (occluded[j]) {
+      answer[sent_index[j]] = kZero;
+      ++n;
+      pixels += probe_pixels(sent[j]);
     }
-    if (cpu_pyramid_) {
-      occluded_.resize(batch_.size());
-      for (size_t j = 0; j < batch_.size(); ++j) occluded_[j] = cpu_pyramid_->occludes(batch_[j]);
-    } else {
-      pyramid_->test(batch_, occluded_);
-      ++stats_.dispatches;
+  return n;
+}
+
+uint64_t PyramidBatch::assume_cheap() {
+  uint64_t n = 0;
+  for (size_t i = 0; i < boxes.size(); ++i)
+    if (answer[i] == kPending && cheap[i]) {
+      answer[i] = kAssumed;
+      ++n;
     }
-    stats_.pyramid_tested += batch_.size();
-    for (size_t j = 0; j < batch_.size(); ++j)
-      if (occluded_[j]) {
-        handle_[batch_index_[j]] = kZero;
-        ++stats_.pyramid_occluded;
-        const uint64_t pixels = probe_pixels(batch_[j]);
-        stats_.pyramid_pixels += pixels;
-        proven_frame_ += cpu_pyramid_ ? pixels : 1;
-      }
-    if (!cpu_pyramid_) q_begin(cam_);  // the dispatches changed the program
-  }
-  // Skipped by adaptive queries (issue_cheap) and not proven occluded: assumed visible.
-  for (size_t i = 0; i < boxes_.size(); ++i)
-    if (handle_[i] == kPending && cheap_[i]) {
-      handle_[i] = kAssumed;
-      ++stats_.assumed;
-    }
-  // cpu_pyramid without sample counts also proves boxes that show, from level 0, which must be
-  // the current depth under the box: not where occluder fusion drew since it was read.
-  if (cpu_pyramid_ && !sample_counts_)
-    for (size_t i = 0; i < boxes_.size(); ++i)
-      if (handle_[i] == kPending && clean_under(boxes_[i]) && cpu_pyramid_->shows(boxes_[i], cam_)) {
-        handle_[i] = kShows;
-        ++stats_.shown;
-        proven_frame_ += probes_[i].kind == PyramidProbe::Kind::probe ? probe_pixels(probes_[i])
-                                                                       : uint64_t(ctx_.width()) * uint64_t(ctx_.height());
-      }
-  for (size_t i = 0; i < boxes_.size(); ++i)
-    if (handle_[i] == kPending) {
-      handle_[i] = q_issue(boxes_[i]);
-    }
+  return n;
 }
 
-void HcQuerier::clear_dirty() { dirty_.clear(); }
-
-bool HcQuerier::clean_under(const Aabb& box) const {
-  return dirty_.empty() || !dirty_.touches(box_footprint(box, cam_, {ctx_.width(), ctx_.height()}));
+uint32_t PyramidBatch::at(uint32_t handle) const {
+  if (handle >= boxes.size())
+    throw std::out_of_range("depth pyramid tests: handle " + std::to_string(handle) + " not issued in this batch (" +
+                            std::to_string(boxes.size()) + " issued)");
+  return answer[handle];
 }
 
-uint64_t HcQuerier::result(uint32_t handle) {
-  uint64_t samples = 0;
-  if (!use_pyramid_) {
-    samples = q_result(handle);
-  } else {
-    if (handle >= boxes_.size())
-      throw std::out_of_range("HcQuerier: handle " + std::to_string(handle) + " not issued in this batch (" +
-                              std::to_string(boxes_.size()) + " issued)");
-    if (!resolved_) resolve();
-    const uint32_t h = handle_[handle];
-    samples = h == kZero ? 0 : h == kShows || h == kAssumed ? 1 : q_result(h);
-  }
-  stats_.occluded += samples == 0;
-  return samples;
-}
-
-void HcQuerier::q_begin(const Camera& cam) {
-  if (counter_) counter_->begin(cam);
-  queries_.begin(cam);  // last: its program is bound for issue()
-}
-uint32_t HcQuerier::q_issue(const Aabb& box) {
-  if (counter_) {
-    // Boxes covering many pixels (or possibly the whole view) are cheaper as queries: every
-    // fragment of the batch draw that passes runs the counting shader.
-    const BoxFootprint fp = box_footprint(box, cam_, {ctx_.width(), ctx_.height()});
-    const bool big = fp.kind == BoxFootprint::Kind::NearPlane ||
-                     (fp.kind == BoxFootprint::Kind::OnScreen &&
-                      double(fp.x1 - fp.x0 + 1) * double(fp.y1 - fp.y0 + 1) > double(policy_.batch_max_pixels));
-    if (!big) {
-      ++stats_.batched;
-      return counter_->issue(box);
-    }
-  }
-  ++stats_.queries;
-  return queries_.issue(box) | kQueryBit;
-}
-
-uint64_t HcQuerier::q_result(uint32_t h) {
-  if (!counter_) return queries_.result(h & ~kQueryBit);
-  if (h & kQueryBit) {
-    if (!counter_->drawn()) counter_->draw();  // the batch draw first: one flush for both
-    return queries_.result(h & ~kQueryBit);
-  }
-  return counter_->result(h);
-}
-
-void HcQuerier::end_batch() {
-  queries_.reset();
-  if (counter_) {
-    if (counter_->drawn()) queries_.begin(cam_);  // the batch draw bound its own program
-    counter_->reset();
-    stats_.draws = counter_->draws();
-  }
-  boxes_.clear();
-  cheap_.clear();
-  probes_.clear();
-  resolved_ = false;
+void PyramidBatch::clear() {
+  boxes.clear();
+  cheap.clear();
+  probes.clear();
+  resolved = false;
 }
 
 }  // namespace occ

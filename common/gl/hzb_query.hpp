@@ -1,55 +1,28 @@
-// HC's occlusion tests with a GPU depth pyramid in front of the occlusion queries (issue 16).
+// HC's occlusion tests against GL's depth, the shared parts: the GPU depth pyramid, the interface
+// of the tests a GL back end runs (GlDepthTests: one class a strategy, gl_query_tests.hpp,
+// gl_pyramid_tests.hpp, gl_cpu_pyramid_tests.hpp), and the batch of boxes the two pyramid
+// strategies keep (PyramidBatch).
 //
 // GpuDepthPyramid: a hierarchical depth pyramid of farthest depths (reverse-Z: the MIN of 2 x 2
 // texels), built by a compute shader from the context's depth texture (GlContext::depth_texture),
-// two levels per dispatch, and never read back; level 0 is the depth texture itself, levels 1.. live in one R32F texture
-// (its mip k-1 holds level k). test() runs a batch of PyramidProbes (common/cull/hzb.hpp: rectangle,
-// level and depth bound computed on the CPU) in one compute dispatch and reads back one word per
-// probe from a small shader storage buffer. Level contents equal DepthPyramid::build on the same
-// depth (min is exact), so the CPU DepthPyramid::occludes is the shader's specification.
+// two levels per dispatch, and never read back; level 0 is the depth texture itself, levels 1..
+// live in one R32F texture (its mip k-1 holds level k). test() runs a batch of PyramidProbes
+// (common/cull/hzb.hpp: rectangle, level and depth bound computed on the CPU) in one compute
+// dispatch and reads back one word per probe from a small shader storage buffer. Level contents
+// equal DepthPyramid::build on the same depth (min is exact), so the CPU DepthPyramid::occludes
+// is the shader's specification.
 //
-// HcQuerier: the OcclusionQueries HC uses (switch nodes, cull_overview), by HcTest:
-//   queries      every box is a real occlusion query (BoxQuerier): what a hardware GPU would choose;
-//   pyramid      each batch's boxes are first tested against the GPU pyramid in one dispatch; only
-//                those it cannot prove occluded become real queries (issued together, then read);
-//                nothing is read back but one word per probe;
-//   cpu_pyramid  the llvmpipe default (issue 14): HC's depth read back once a frame (glReadPixels)
-//                into a DepthPyramid (common/cull/hzb) that proves boxes occluded
-//                (DepthPyramid::occludes) and, without sample counts and until occluder fusion
-//                draws more, boxes that show (DepthPyramid::shows: answered 1 with no test); the
-//                rest are counted by one draw per batch (BoxBatchCounter, no query objects), except
-//                those covering more than Policy::batch_max_pixels pixels or within reach of the
-//                near plane, which stay queries (the counting shader runs for every passing
-//                fragment). Frames whose pyramid decides boxes covering less than
-//                Policy::min_decided_screens viewports (a running average) do without it,
-//                retrying every kRetryFrames. On llvmpipe a box's test is the cost of rasterising
-//                it, so this is where HC's time went (docs/results.md).
-// The pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"), a box shown
-// on the CPU has a sample its query would count, and the batch draw counts the same samples:
-// the results, and so the visible sets, are those of `queries` (without `sample_counts` a
-// batch-counted or shown box answers 1 for any number of samples).
-//
-// Which depth the pyramid holds: begin() starts a frame's tests against a depth buffer drawn
-// since the last build (the OR): the pyramid is built before its first use in the frame.
-// depth_added() says more depth was drawn into the same buffer within the frame (occluder
-// fusion). Depth only ever gets nearer then (GL_GREATER, depth writes on), so the pyramid built
-// before it still proves only true occlusion: it stays in use (conservative; it just proves a
-// little less) and is rebuilt only for batches of at least Policy::rebuild_min_probes probes (a
-// build at 1024 x 1024 costs about as much as a hundred queries here, and rebuilding for every
-// batch proved only a few per cent more boxes: docs/scale.md).
-// Contracts: the GlContext is current on the calling thread and outlives the querier; nothing
-// draws into the depth buffer between begin()/depth_added() and the batch's results but the
-// querier itself (its queries write no depth).
+// A pyramid only removes queries whose answer would be 0 (hzb.hpp, "Precision"): every strategy
+// finds the visible sets of plain queries.
 #pragma once
 #include <cstdint>
-#include <memory>
 #include <span>
 #include <vector>
 
 #include "common/cull/culling.hpp"
-#include "common/gl/box_query.hpp"
-#include "common/gl/context.hpp"
 #include "common/cull/hzb.hpp"
+#include "common/cull/occlusion_backend.hpp"
+#include "common/gl/context.hpp"
 
 namespace occ {
 
@@ -82,109 +55,51 @@ class GpuDepthPyramid {
   GLint count_loc_ = -1, src_size_loc_[2] = {-1, -1}, dst_size_loc_[2] = {-1, -1}, two_loc_[2] = {-1, -1};
 };
 
-// The test HcTest::by_renderer stands for on a renderer of class `renderer`: queries on a hardware
-// GPU (batched occlusion queries against the OR's depth, nothing read back on the frame's path),
-// cpu_pyramid on a software renderer (llvmpipe: reading depth back is a memcpy, queries are
-// rasterised). Any other test is returned as it is. HcQuerier applies it to the test it is given.
-HcTest hc_test_for(HcTest test, RendererClass renderer);
-// --or-raster auto: cpu on a software renderer, gl on a hardware GPU; other choices as given.
-OrRaster or_raster_for(OrRaster raster, RendererClass renderer);
-
-class HcQuerier final : public OcclusionQueries {
+// The tests of a GL back end (gl_depth_backend.hpp), against the context's depth buffer.
+// Contracts: the GlContext is current on the calling thread and outlives the tests; nothing
+// draws into the depth buffer between begin()/depth_added() and the batch's results but the
+// tests themselves (their queries write no depth).
+class GlDepthTests : public OcclusionQueries {
  public:
-  // When the pyramid is used, and how it tests (defaults per HcTest: policy()).
-  struct Policy {
-    size_t rebuild_min_probes = 256;   // pyramid: rebuild a stale pyramid (depth_added) for batches this large
-    // cpu_pyramid, > 0: frames whose pyramid decides (proves occluded or showing) boxes whose
-    // rectangles cover fewer pixels than this many viewports (average) do without it (batch).
-    double min_decided_screens = 0;
-    // Probe rectangles span at most span x span texels (hzb.hpp): 2 proved a third of the boxes
-    // the queries found occluded on a plant walk, 16 nearly two thirds (docs/scale.md).
-    int span = 16;
-    // cpu_pyramid: boxes whose screen rectangle covers more pixels are queries (with the eye or the near
-    // plane in reach: always), smaller ones are counted by the batch draw.
-    double batch_max_pixels = 16384;
-  };
-  static constexpr uint32_t kRetryFrames = 8;
-  static Policy policy(HcTest test);
-
-  struct Stats {
-    uint64_t tests = 0;            // issue() calls: boxes tested
-    uint64_t queries = 0;          // real occlusion queries issued (query objects)
-    uint64_t batched = 0;          // cpu_pyramid: boxes counted by batch draws instead
-    uint64_t draws = 0;            // batch draws
-    uint64_t pyramid_tested = 0;   // boxes tested against the pyramid
-    uint64_t pyramid_occluded = 0; // of those, proven occluded (no query)
-    uint64_t builds = 0;           // pyramid builds
-    uint64_t refreshes = 0;        // cpu_pyramid: partial read-backs and rebuilds after occluder fusion
-    uint64_t dispatches = 0;       // test dispatches
-    uint64_t occluded = 0;         // boxes answered 0 samples (by the pyramid or a query)
-    uint64_t pyramid_pixels = 0;   // pixels of the rectangles of the boxes the pyramid proved
-    uint64_t shown = 0;            // cpu_pyramid: boxes proven to show (DepthPyramid::shows), no query
-    uint64_t cheap = 0;            // of the tests, issue_cheap() ones (the pyramid only)
-    uint64_t assumed = 0;          // of those, not proven occluded: answered 1, nothing tested further
-  };
-
-  // `sample_counts`: result() must be the number of samples (visible-pixel LOD), not just > 0.
-  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts = true) : HcQuerier(ctx, test, sample_counts, policy(test)) {}
-  HcQuerier(GlContext& ctx, HcTest test, bool sample_counts, const Policy& policy);
-  HcTest mode() const { return test_; }
-
-  // A frame's tests against a freshly drawn depth buffer, from `cam`. `depth`: that buffer as the
-  // CPU already holds it (what GlContext::write_depth uploaded: width x height, GL's row order,
-  // alive until the frame's first batch resolves); cpu_pyramid builds from it instead of reading
-  // GL's back.
-  void begin(const Camera& cam, const float* depth = nullptr);
-  // More depth was drawn into this frame's buffer (occluder fusion); restores the query state.
-  // `drawn`: the world boxes of what was drawn (cpu_pyramid then refreshes only their screen
-  // rectangles); empty: anything, anywhere.
-  void depth_added(std::span<const Aabb> drawn = {});
-  uint32_t issue(const Aabb& box) override;
-  // The pyramid's test alone (frames that use it): boxes it cannot prove occluded answer 1.
-  bool cheap_tests() const override { return use_pyramid_; }
-  uint32_t issue_cheap(const Aabb& box) override;
-  uint64_t result(uint32_t handle) override;
-  void end_batch() override;
+  virtual const char* name() const = 0;  // its --backend word
+  // A frame's tests against a freshly drawn depth buffer, from `cam`.
+  virtual void begin(const Camera& cam) = 0;
+  // More depth was drawn into this frame's buffer (occluder fusion), inside the world boxes
+  // `drawn` (empty: anything, anywhere); restores the query state.
+  virtual void depth_added(std::span<const Aabb> drawn) = 0;
   // Restores colour and depth writes.
-  void end() { queries_.end(); }
-
-  const Stats& stats() const { return stats_; }
-  BoxQuerier& box_querier() { return queries_; }
-
- private:
-  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kShows = ~0u - 2, kAssumed = ~0u - 3, kQueryBit = 1u << 31 };
-  void resolve();
-  void q_begin(const Camera& cam);
-  uint32_t q_issue(const Aabb& box);
-  uint64_t q_result(uint32_t h);
-
-  HcTest test_;
-  bool sample_counts_;
-  Policy policy_;
-  GlContext& ctx_;
-  BoxQuerier queries_;
-  std::unique_ptr<BoxBatchCounter> counter_;  // cpu_pyramid only
-  std::unique_ptr<GpuDepthPyramid> pyramid_;  // pyramid only
-  std::unique_ptr<DepthPyramid> cpu_pyramid_;  // cpu_pyramid only
-  const float* cpu_depth_ = nullptr;           // begin()'s depth, until the pyramid is built
-  Camera cam_;
-  bool built_ = false, stale_ = false, resolved_ = false, use_pyramid_ = false;
-  // cpu_pyramid: pixels drawn since level 0 was read (inclusive; empty when x0 > x1).
-  PixelRect dirty_;
-  void cpu_refresh();
-  bool clean_under(const Aabb& box) const;  // no pixel of its footprint drawn since read back
-  void clear_dirty();
-  uint64_t proven_frame_ = 0;   // cpu_pyramid: pixels of the rectangles of the boxes the pyramid
-                                // decided in this frame
-  double proven_avg_ = -1;      // running average over the frames that used it (-1: none yet)
-  uint32_t frames_off_ = 0;     // frames without the pyramid since it was last used
-  std::vector<Aabb> boxes_;             // this batch's boxes
-  std::vector<uint8_t> cheap_;          // per box: issued by issue_cheap()
-  std::vector<PyramidProbe> probes_;    // and their probes
-  std::vector<uint32_t> handle_;        // per box: its query handle, kZero (0 samples) or kPending
-  std::vector<PyramidProbe> batch_;     // probes sent to the GPU
-  std::vector<uint32_t> batch_index_, occluded_;
-  Stats stats_;
+  virtual void end() = 0;
+  virtual OcclusionCounts counts() const = 0;
 };
+
+// One batch of boxes in front of a depth pyramid: each box, whether issue_cheap() issued it (then
+// only the pyramid tests it: not proven occluded, it is assumed visible), its probe, and once
+// resolved its answer: kZero, kShows, kAssumed, or a handle of the strategy's own.
+struct PyramidBatch {
+  enum : uint32_t { kPending = ~0u, kZero = ~0u - 1, kShows = ~0u - 2, kAssumed = ~0u - 3 };
+  std::vector<Aabb> boxes;
+  std::vector<uint8_t> cheap;
+  std::vector<PyramidProbe> probes;
+  std::vector<uint32_t> answer;  // per box, after resolve_start()
+  std::vector<PyramidProbe> sent;  // the probes of Kind::probe, for the pyramid
+  std::vector<uint32_t> sent_index, occluded;  // their boxes; the pyramid's answers
+  bool resolved = false;
+
+  // Adds `box` (its probe for `vp`, rectangles of at most span x span texels); returns its handle.
+  uint32_t add(const Aabb& box, bool cheap_only, const Camera& cam, Viewport vp, int span);
+  // Starts resolving: boxes with no samples answer kZero, probes go to `sent`.
+  void resolve_start();
+  // The pyramid's answers are in `occluded`: those boxes answer kZero. Returns how many, and adds
+  // the pixels of their rectangles to `pixels`.
+  uint64_t take_occluded(uint64_t& pixels);
+  // Boxes issue_cheap() issued and not proven occluded answer kAssumed. Returns how many.
+  uint64_t assume_cheap();
+  // The answer of `handle` (throws where it was not issued in this batch).
+  uint32_t at(uint32_t handle) const;
+  void clear();
+};
+
+// The pixels a probe's rectangle covers (at level 0).
+uint64_t probe_pixels(const PyramidProbe& p);
 
 }  // namespace occ

@@ -36,7 +36,7 @@ struct SceneGl {
   std::unique_ptr<LoadedScene> loaded;
   std::unique_ptr<Renderables> renderables;  // with the LOD data when loaded with LODs
   Enclosures sealed;                         // items sealed inside solids (the switch nodes fill it before the upload)
-  std::unique_ptr<CpuOccluders> cpu_occluders;  // the switch nodes' OR on the CPU (--or-raster), else null
+  std::unique_ptr<CpuOccluders> cpu_occluders;  // the switch nodes' OR on the CPU (--backend cpu), else null
   std::unique_ptr<GlContext> ctx;
   std::unique_ptr<SceneRenderer> renderer;
   const Scene& scene() const { return loaded->scene; }

@@ -92,27 +92,21 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
              "HC starts from the previous frame's fronts (paper 4.6) instead of the root");
 }
 
-namespace {
-// The --hc-test words: one table for the flag and for hc_test_name().
-const std::vector<std::pair<std::string, HcTest>> kHcTests = {
-    {"auto", HcTest::by_renderer}, {"queries", HcTest::queries}, {"pyramid", HcTest::pyramid},
-    {"cpu-pyramid", HcTest::cpu_pyramid}};
-}  // namespace
-
-const char* hc_test_name(HcTest t) {
-  for (const auto& [word, test] : kHcTests)
-    if (test == t) return word.c_str();
-  return "?";
-}
-
 void add_hc_options(Cli& cli, HcChoices& c) {
-  cli.choice<HcOrder>("hc-order", &c.order, {{"levels", HcOrder::levels}, {"near-first", HcOrder::near_first}},
-                      "HC query batches: a hierarchy level each, or nearest boxes first in shells");
+  cli.choice<std::optional<BackendKind>>(
+      "backend", &c.backend, backend_words(),
+      "how the OR draws depth and HC tests boxes against it: auto = cpu on a software renderer such as llvmpipe at "
+      "tau 0 with the scene's triangles in memory, cpu-pyramid elsewhere there, queries on a hardware GPU (the "
+      "start-up says which); cpu = a depth-only rasteriser on the CPU conservative against the renderer's depth, "
+      "boxes and (tau 0) leaves by their own triangles tested there (not with --visible-pixel-lod or a scene "
+      "streamed within --geometry-budget); queries = an occlusion query a box; gpu-pyramid = a depth pyramid built "
+      "on the GPU first, queries for the rest; cpu-pyramid = the depth read back once a frame into a pyramid, the "
+      "rest counted by one draw per batch. Same frames");
   cli.choice<std::optional<bool>>(
       "adaptive-queries", &c.adaptive_queries, {{"auto", std::nullopt}, {"on", true}, {"off", false}},
       "assume nodes whose queries keep coming back visible visible for a while (no query; with a depth pyramid "
-      "(--hc-test pyramid, cpu-pyramid) still tested against it, so one that became occluded leaves V at once); "
-      "auto = off where HC tests on the CPU (the start-up says so), on elsewhere");
+      "(--backend cpu, gpu-pyramid, cpu-pyramid) still tested against it, so one that became occluded leaves V at "
+      "once); auto = off with --backend cpu, on elsewhere (the start-up says which)");
   const std::tuple<const char*, bool*, const char*> switches[] = {
       {"occluder-fusion", &c.occluder_fusion,
        "HC draws (depth only) what each batch found visible before the next batch's queries"},
@@ -120,28 +114,9 @@ void add_hc_options(Cli& cli, HcChoices& c) {
        "HC skips what is sealed inside closed convex opaque solids (the bars inside concrete), found at start-up"},
   };
   for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
-  cli.choice<HcTest>("hc-test", &c.test, kHcTests,
-                     "how HC tests a box: auto = by the renderer (queries on a hardware GPU, cpu-pyramid on a "
-                     "software renderer such as llvmpipe; the start-up says which); queries = an occlusion query "
-                     "each; pyramid = a depth "
-                     "pyramid built on the GPU from HC's depth buffer first proves boxes occluded (one compute "
-                     "dispatch per batch, no read-back), queries only for the rest; cpu-pyramid = a depth pyramid "
-                     "read back to the CPU once a frame proves what it can (boxes occluded and, without "
-                     "--visible-pixel-lod, boxes that show), the rest counted by one draw per batch (boxes over "
-                     "16384 pixels stay queries). Same results");
-  cli.choice<OrRaster>("or-raster", &c.or_raster,
-                       {{"auto", OrRaster::by_renderer}, {"gl", OrRaster::gl}, {"cpu", OrRaster::cpu}},
-                       "where the OR rasterises the visible set's depth: auto = by the renderer (cpu on a "
-                       "software renderer such as llvmpipe, gl on a hardware GPU; the start-up says which); "
-                       "gl; cpu = a depth-only rasteriser conservative against GL's depth, and at tau 0 HC then "
-                       "tests there too: boxes against that depth (no GL queries) and each leaf whose box shows "
-                       "by its own triangles (smaller visible sets: docs/results.md). cpu needs the scene's "
-                       "triangles in memory (not streamed within --geometry-budget), else the OR stays in GL. "
-                       "Same frames");
   cli.option("visibility-hold", &c.visibility_hold, 0, 255,
              "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off); "
-             "auto = 0 where HC tests on the CPU (the start-up says so), " +
-                 std::to_string(HcChoices::kAutoHoldFrames) + " elsewhere");
+             "auto = 0 with --backend cpu, " + std::to_string(kAutoVisibilityHold) + " elsewhere (the start-up says which)");
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {

@@ -54,10 +54,8 @@ struct ClusterConfig {
 };
 
 // The one HC option set (common/cull/culling.hpp HcChoices), from the command line:
-// --adaptive-queries, --hc-order, --occluder-fusion, --visibility-hold, --hc-test.
+// --backend, --adaptive-queries, --occluder-fusion, --sealed, --visibility-hold.
 void add_hc_options(Cli& cli, HcChoices& c);
-// The --hc-test word of `t` ("cpu-pyramid"), as logs name it.
-const char* hc_test_name(HcTest t);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
 // `occlusion_backend`: a switch node's back end as its start-up line names it (wire.hpp's rules:

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/cull/culling.hpp"
+#include "common/cull/visibility_hold.hpp"
 #include "common/scene/hierarchy.hpp"
 #include "common/lod/lod.hpp"
 #include "protocol/cluster/cluster.hpp"

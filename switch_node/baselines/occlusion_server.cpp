@@ -108,7 +108,11 @@ int serve(const ServerOptions& o) {
       const Clock::time_point hc_start = Clock::now();
       PyramidQueries queries(pyramid, cam->camera);
       // Breadth-first levels (the paper's 4.7.1), no adaptive queries, no fusion: its own traversal.
-      HcFrame hc = step.hc(frame, visible, cam->camera, queries, {.choices = {.order = HcOrder::levels}}, out);
+      HcFrame hc = step.hc(frame, visible, cam->camera, queries,
+                           {.choices = {.occluder_fusion = false},
+                            .first_batch = HcOptions::kWholeFrontier,
+                            .max_batch = HcOptions::kWholeFrontier},
+                           out);
       hc.eof.or_us = or_us;
       hc.eof.hc_us = micros_since(hc_start);
       hc.eof.hc_cpu_us = uint32_t(process_cpu_us() - hc_cpu0);

@@ -69,14 +69,23 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   ClusterConfig config;
   config.front_tracking = o.front_tracking;
   const Viewport vp{o.width, o.height};
-  // The OR on the CPU as the nodes' (--or-raster cpu); one for both cull frames, as each does its
-  // OR and HC before the other starts.
+  // The nodes' back end, chosen as theirs; the CPU's triangles, if it needs them, once for both
+  // cull frames, as each does its OR and HC before the other starts.
+  const BackendChoice choice =
+      choose_backend_for(*ctx, config, o.hc, !ls.scene.mapped && !ls.scene.geometry_released());
+  std::cerr << "cull_overview: " << backend_line(choice) << "\n";
   std::optional<CpuOccluders> cpu;
-  if (or_raster_for(o.hc.or_raster, ctx->renderer_class()) == OrRaster::cpu)
-    cpu = CpuOccluders::copy(ls.scene, h, o.width, o.height, nullptr);
+  if (choice.kind == BackendKind::cpu) {
+    std::string why;
+    cpu = CpuOccluders::copy(ls.scene, h, o.width, o.height, &why);
+    if (!cpu) throw InputError("--backend cpu: " + why);
+  }
   CpuOccluders* const or_cpu = cpu ? &*cpu : nullptr;
-  CullFrame node0(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 1", or_cpu);
-  CullFrame node1(*ctx, renderer, renderables, sealed, config, o.hc, vp, "switch node 0", or_cpu);
+  const HcChoices hc = with_backend_defaults(o.hc, choice);
+  CullFrame node0(make_backend(choice, *ctx, renderer, renderables, or_cpu, config), renderables, sealed, config, hc,
+                  vp, "switch node 1");
+  CullFrame node1(make_backend(choice, *ctx, renderer, renderables, or_cpu, config), renderables, sealed, config, hc,
+                  vp, "switch node 0");
   CullFrame* const nodes[2] = {&node0, &node1};
   std::vector<wire::Message> stream, next;  // HC(f-1)'s messages, as the other node reads them
   for (uint32_t f = 0; f <= last; ++f) {
@@ -95,6 +104,7 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
     out.send(hc.eof);
     stream.swap(next);
     last_stats = hc.stats;
+    last_stats.queries = hc.eof.queries;  // the boxes the back end tested
   }
   const VisibleSet& visible = nodes[last % 2]->visible();
   std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
