@@ -283,6 +283,9 @@ TEST(QuerySkipper, HeavyLeavesAreQueriedEveryTime) {
 }
 
 
+// Designated initializers leave the other inputs at their defaults on purpose.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 // The one choice of occlusion back end: auto by the renderer, tau and where the triangles are;
 // a forced cpu that cannot work is one error; --adaptive-queries and --visibility-hold at auto
 // come with the back end (off with cpu, on and kAutoVisibilityHold elsewhere), a setting given
@@ -317,3 +320,4 @@ TEST(BackendChoice, AutoByRendererTauAndTrianglesForcedChoicesStayOrFailClearly)
     EXPECT_EQ(off.visibility_hold, 0);
   }
 }
+#pragma GCC diagnostic pop

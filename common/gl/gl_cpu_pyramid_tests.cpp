@@ -162,7 +162,9 @@ OcclusionCounts CpuPyramidTests::counts() const {
   const auto n = [](uint64_t v) { return std::to_string(v); };
   char mp[32];
   std::snprintf(mp, sizeof mp, "%.2f", double(q.pyramid_pixels) / 1e6);
-  OcclusionCounts c{.boxes_tested = q.tests, .boxes_occluded = q.occluded};
+  OcclusionCounts c;
+  c.boxes_tested = q.tests;
+  c.boxes_occluded = q.occluded;
   c.more.push_back(n(q.queries) + " occlusion queries issued");
   c.more.push_back(n(q.batched) + " boxes in " + n(q.draws) + " batch draws");
   c.more.push_back(n(q.pyramid_occluded) + " proven occluded by the depth pyramid (" + mp +

@@ -71,7 +71,9 @@ void GpuPyramidTests::end_batch() {
 OcclusionCounts GpuPyramidTests::counts() const {
   const Stats& q = stats_;
   const auto n = [](uint64_t v) { return std::to_string(v); };
-  OcclusionCounts c{.boxes_tested = q.tests, .boxes_occluded = q.occluded};
+  OcclusionCounts c;
+  c.boxes_tested = q.tests;
+  c.boxes_occluded = q.occluded;
   c.more.push_back(n(q.queries) + " occlusion queries issued");
   c.more.push_back(n(q.pyramid_occluded) + " proven occluded by the depth pyramid of " + n(q.pyramid_tested) +
                    " tested against it in " + n(q.dispatches) + " dispatches, " + n(q.builds) + " pyramid builds");
