@@ -3,6 +3,7 @@
 #include <cmath>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "common/error.hpp"
 
@@ -28,12 +29,19 @@ long whole_number(const std::string& name, const std::string& v, long min, long 
 Cli::Cli(std::string program, std::string usage, std::string description)
     : program_(std::move(program)), usage_(std::move(usage)), description_(std::move(description)) {}
 
+void Cli::add(Opt o) {
+  for (const Opt& other : opts_)
+    if (other.name == o.name) throw std::logic_error("--" + o.name + " declared twice");
+  o.group = group_;
+  opts_.push_back(std::move(o));
+}
+
 void Cli::flag(const std::string& name, bool* out, const std::string& help) {
-  opts_.push_back({name, "", help, false, [out](const std::string&) { *out = true; }, ""});
+  add({name, "", help, false, [out](const std::string&) { *out = true; }, ""});
 }
 
 void Cli::option(const std::string& name, std::string* out, const std::string& value, const std::string& help) {
-  opts_.push_back({name, value, help, true, [out](const std::string& v) { *out = v; }, *out});
+  add({name, value, help, true, [out](const std::string& v) { *out = v; }, *out});
 }
 
 void Cli::option(const std::string& name, int* out, long min, long max, const std::string& help) {
@@ -45,7 +53,7 @@ void Cli::option(const std::string& name, uint32_t* out, long min, long max, con
 }
 
 void Cli::option(const std::string& name, std::optional<int>* out, long min, long max, const std::string& help) {
-  opts_.push_back({name, "N|auto", help, true,
+  add({name, "N|auto", help, true,
                    [=](const std::string& v) {
                      if (v == "auto")
                        *out = std::nullopt;
@@ -57,14 +65,14 @@ void Cli::option(const std::string& name, std::optional<int>* out, long min, lon
 
 template <class T>
 void Cli::integer(const std::string& name, T* out, long min, long max, const std::string& help) {
-  opts_.push_back({name, "N", help, true, [=](const std::string& v) { *out = T(whole_number(name, v, min, max)); },
+  add({name, "N", help, true, [=](const std::string& v) { *out = T(whole_number(name, v, min, max)); },
                    std::to_string(*out)});
 }
 
 void Cli::option(const std::string& name, double* out, double min, double max, const std::string& help) {
   std::ostringstream def;
   def << *out;
-  opts_.push_back({name, "X", help, true,
+  add({name, "X", help, true,
                    [=](const std::string& v) {
                      const std::optional<double> parsed = parse_finite(v);
                      if (!parsed) throw InputError("--" + name + " '" + v + "': not a finite number");
@@ -95,7 +103,7 @@ void Cli::word_option(const std::string& name, const std::vector<std::string>& w
                       const std::string& help, std::function<void(size_t)> set) {
   std::string alts;
   for (auto& w : words) alts += (alts.empty() ? "" : "|") + w;
-  opts_.push_back({name, alts, help, true,
+  add({name, alts, help, true,
                    [=](const std::string& v) {
                      for (size_t i = 0; i < words.size(); ++i)
                        if (v == words[i]) return set(i);
@@ -108,13 +116,22 @@ void Cli::choice(const std::string& name, std::string* out, std::vector<std::str
   word_option(name, words, *out, help, [out, words](size_t i) { *out = words[i]; });
 }
 
+void Cli::custom(const std::string& name, const std::string& value, const std::string& default_text,
+                 const std::string& help, std::function<void(const std::string&)> set) {
+  add({name, value, help, true, std::move(set), default_text});
+}
+
+long Cli::whole(const std::string& name, const std::string& v, long min, long max, const std::string& other) {
+  return whole_number(name, v, min, max, other);
+}
+
 void Cli::on_off(const std::string& name, bool* out, const std::string& help) {
   choice<bool>(name, out, {{"on", true}, {"off", false}}, help);
 }
 
 void Cli::multi(const std::string& name, std::vector<std::string>* out, const std::string& value,
                 const std::string& help) {
-  opts_.push_back({name, value, help, true, [out](const std::string& v) { out->push_back(v); }, ""});
+  add({name, value, help, true, [out](const std::string& v) { out->push_back(v); }, ""});
 }
 
 bool Cli::parse(int argc, char** argv) {
@@ -153,14 +170,21 @@ bool Cli::parse(int argc, char** argv) {
 
 std::string Cli::help() const {
   std::ostringstream o;
-  o << "usage: " << program_ << " " << usage_ << "\n\n" << description_ << "\n\noptions:\n";
-  for (const Opt& opt : opts_) {
-    std::string left = "  --" + opt.name + (opt.takes_value ? " " + opt.value : "");
-    o << left << std::string(left.size() < 30 ? 30 - left.size() : 1, ' ') << opt.help;
-    if (opt.takes_value && !opt.default_text.empty()) o << " (default " << opt.default_text << ")";
-    o << "\n";
+  o << "usage: " << program_ << " " << usage_ << "\n\n" << description_ << "\n";
+  static const char* const kHeadings[] = {"scene and path", "output", "cluster and network", "accuracy", "expert"};
+  for (int g = 0; g <= int(CliGroup::expert); ++g) {
+    bool heading = false;
+    for (const Opt& opt : opts_) {
+      if (int(opt.group) != g) continue;
+      if (!heading) o << "\n" << kHeadings[g] << ":\n";
+      heading = true;
+      std::string left = "  --" + opt.name + (opt.takes_value ? " " + opt.value : "");
+      o << left << std::string(left.size() < 30 ? 30 - left.size() : 1, ' ') << opt.help;
+      if (opt.takes_value && !opt.default_text.empty()) o << " (default " << opt.default_text << ")";
+      o << "\n";
+    }
   }
-  o << "  --help                      this text\n";
+  o << "\n  --help                      this text\n";
   o << "  --version                   the occswitch version\n";
   return o.str();
 }

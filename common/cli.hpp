@@ -11,9 +11,17 @@
 
 namespace occ {
 
+// The headings --help sorts options under, printed in this order.
+enum class CliGroup { scene, output, cluster, accuracy, expert };
+
 class Cli {
  public:
   Cli(std::string program, std::string usage, std::string description);
+
+  // The options declared from now on are listed under `g`'s heading (before any call: expert).
+  void group(CliGroup g) { group_ = g; }
+  // How many options are declared (--help and --version not counted).
+  size_t count() const { return opts_.size(); }
 
   void flag(const std::string& name, bool* out, const std::string& help);
   void option(const std::string& name, std::string* out, const std::string& value, const std::string& help);
@@ -27,10 +35,17 @@ class Cli {
   // One of a fixed set of words, each naming a value of T (an enum): typed configuration.
   template <class T>
   void choice(const std::string& name, T* out, std::vector<std::pair<std::string, T>> words, const std::string& help);
+  // An option whose word `set` parses (throwing InputError naming --name for a bad one);
+  // `value` names its words in --help, `default_text` the default.
+  void custom(const std::string& name, const std::string& value, const std::string& default_text,
+              const std::string& help, std::function<void(const std::string&)> set);
   // "on" | "off" into a bool.
   void on_off(const std::string& name, bool* out, const std::string& help);
   // Repeatable option: each occurrence appends.
   void multi(const std::string& name, std::vector<std::string>* out, const std::string& value, const std::string& help);
+
+  // `v` as a whole number min..max, else InputError "--name 'v': ..." (`other`: what else it may be).
+  static long whole(const std::string& name, const std::string& v, long min, long max, const std::string& other = "");
 
   // Returns false when --help or --version was given (printed to stdout): the caller exits 0.
   bool parse(int argc, char** argv);
@@ -42,7 +57,9 @@ class Cli {
     bool takes_value;
     std::function<void(const std::string&)> set;
     std::string default_text;
+    CliGroup group = CliGroup::expert;
   };
+  void add(Opt o);
   // Registers a --name WORD option: set(word) is called for words in `words`, others are refused.
   void word_option(const std::string& name, const std::vector<std::string>& words, const std::string& default_word,
                    const std::string& help, std::function<void(size_t)> set);
@@ -50,6 +67,7 @@ class Cli {
   void integer(const std::string& name, T* out, long min, long max, const std::string& help);
   std::string program_, usage_, description_;
   std::vector<Opt> opts_;
+  CliGroup group_ = CliGroup::expert;
 };
 
 template <class T>

@@ -150,8 +150,7 @@ std::optional<std::string> DiffReceiver::on_end_of_frame(const VisibleSet& set,
   return verify(eof, set);
 }
 
-DiffSender::DiffSender(uint32_t chunk_ids, bool full_sets, Send send)
-    : chunk_ids_(chunk_ids), full_sets_(full_sets), send_(std::move(send)) {
+DiffSender::DiffSender(uint32_t chunk_ids, Send send) : chunk_ids_(chunk_ids), send_(std::move(send)) {
   if (chunk_ids_ < 1 || chunk_ids_ > wire::kMaxDiffIds)
     throw std::invalid_argument("diff chunk of " + std::to_string(chunk_ids) + " ids: must be 1.." +
                                 std::to_string(wire::kMaxDiffIds));
@@ -171,7 +170,7 @@ void DiffSender::flush(bool force) {
 }
 
 void DiffSender::visible(uint32_t id) {
-  if (!full_sets_ && prev_->contains(id)) return;
+  if (prev_->contains(id)) return;
   pending_.push_back(id);
   diff_.added.push_back(id);
   flush(false);
@@ -179,11 +178,9 @@ void DiffSender::visible(uint32_t id) {
 
 wire::EndOfFrame DiffSender::end(const VisibleSet& cur) {
   flush(true);
-  if (!full_sets_) {
-    for (uint32_t id : prev_->ids())
-      if (!cur.contains(id)) diff_.removed.push_back(id);
-    for (auto& chunk : wire::chunk_node_diff(frame_, {}, diff_.removed, chunk_ids_)) send_(chunk);
-  }
+  for (uint32_t id : prev_->ids())
+    if (!cur.contains(id)) diff_.removed.push_back(id);
+  for (auto& chunk : wire::chunk_node_diff(frame_, {}, diff_.removed, chunk_ids_)) send_(chunk);
   return make_end_of_frame(frame_, diff_, cur);
 }
 

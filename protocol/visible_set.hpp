@@ -90,12 +90,11 @@ class DiffReceiver {
 
 // Sending end of one diff stream (HC, or the depth-readback server): streams V_f's new ids in
 // NodeDiff chunks of at most chunk_ids as the traversal finds them, then V_{f-1}'s removed ids,
-// then hands back the EndOfFrame. With full sets every visible id is streamed and nothing is
-// removed (the receiver clears its set at the frame's first message). send() throws to abort.
+// then hands back the EndOfFrame. send() throws to abort.
 class DiffSender {
  public:
   using Send = std::function<void(const wire::Message&)>;
-  DiffSender(uint32_t chunk_ids, bool full_sets, Send send);
+  DiffSender(uint32_t chunk_ids, Send send);
 
   // Starts frame `frame` against `prev` (V_{f-1}; with front tracking the coarsened V'), which
   // must stay unchanged until end().
@@ -110,7 +109,6 @@ class DiffSender {
  private:
   void flush(bool force);
   uint32_t chunk_ids_;
-  bool full_sets_;
   Send send_;
   uint32_t frame_ = 0;
   const VisibleSet* prev_ = nullptr;

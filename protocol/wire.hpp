@@ -275,4 +275,11 @@ std::vector<NodeDiff> chunk_node_diff(uint32_t frame, std::span<const uint32_t> 
                                       std::span<const uint32_t> removed,
                                       uint32_t max_ids = kDefaultDiffChunkIds);
 
+// The bytes on the wire (headers included) of one frame's whole visible set of `ids` sent as
+// NodeDiff chunks of at most `max_ids` added ids: what a frame would take without diffs.
+inline uint64_t full_set_wire_bytes(uint64_t ids, uint32_t max_ids = kDefaultDiffChunkIds) {
+  const uint64_t messages = (ids + max_ids - 1) / max_ids;
+  return messages * (kHeaderBytes + 12) + 4 * ids;
+}
+
 }  // namespace occ::wire

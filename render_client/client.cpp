@@ -39,7 +39,7 @@ class Client {
       : o_(o),
         links_(o),
         receiver_(o, links_, path_),
-        gate_({.policy = o.occlusion_gate, .test_alternate = o.test_alternate}) {}
+        gate_({.policy = o.occlusion_gate, .alternate_every = o.alternate_every}) {}
 
   int run() {
     start();
@@ -65,7 +65,7 @@ class Client {
         viewer_->start(ls.scene.bounds(), {o_.width, o_.height});  // path_ grows with next_camera()
       else
         path_ = load_camera_path(o_.path, ls.scene.bounds(), {o_.width, o_.height});
-      if (!o_.save_path.empty()) save_camera_path(o_.save_path, path_);
+      if (!o_.record.empty() && !viewer_) save_camera_path(o_.record, path_);
     });
     if (viewer_ && o_.config.camera_mode == CameraMode::lockstep)
       std::cerr << "render_client: --window in lockstep camera mode: the view lags " << o_.lookahead
@@ -102,7 +102,7 @@ class Client {
     VisibleSet visible(g_.renderables->count());
     // Front tracking is the switch's (both nodes, or one of them alone after a failure): a
     // single occlusion_server sends plain diffs.
-    const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), links_.is_switch() && o_.config.tracks_fronts());
+    const SwitchStep step(*g_.renderables, o_.config.lod_policy(o_.height), links_.is_switch() && o_.config.front_tracking);
     // `lookahead` cameras ahead, then one per frame received. Latest mode: the nodes take the
     // newest camera after the previous frame's, so at most `lookahead` frames are ever in flight.
     while (next_camera() < uint32_t(o_.lookahead) && have_camera(next_camera())) send_next_camera();
@@ -213,6 +213,8 @@ class Client {
     row.queries = eof.queries;
     row.triangles = f.drawn.st.triangles;
     row.bytes_received = f.served ? f.served->bytes : 0;
+    row.full_set_bytes =
+        f.served ? f.served->bytes - f.served->diff_bytes + wire::full_set_wire_bytes(f.served->eof.visible_count) : 0;
     row.hc_ms = eof.hc_us / 1000.0;
     row.or_ms = eof.or_us / 1000.0;
     row.frame_interval_ms = stats_.interval_ms(f.shown);
@@ -267,7 +269,7 @@ class Client {
     stats_.print_table(leaf_count_, g_.scene().triangle_count(), backends);
     stats_.print(leaf_count_, g_.scene().triangle_count(), receiver_.resyncs(), gate_.frames_off());
     print_geometry_line(stdout, "render_client", g_.renderer->geometry_pool());
-    if (links_.is_switch() && o_.occlusion_gate == OcclusionGate::Policy::automatic && o_.test_alternate == 0)
+    if (links_.is_switch() && o_.occlusion_gate == OcclusionGate::Policy::automatic)
       std::cerr << "render_client: occlusion gate: " << gate_.describe() << " (frame interval)\n";
     drawer_->print_summary();
   }
@@ -279,7 +281,7 @@ class Client {
   std::vector<Camera> path_;
   NodeLinks links_;
   FrameReceiver receiver_;
-  OcclusionGate gate_;  // occlusion only where it pays (--occlusion-gate)
+  OcclusionGate gate_;  // occlusion only where it pays (--occlusion)
   std::optional<FrameOutput> out_;
   RunStats stats_;
   size_t leaf_count_ = 0;

@@ -61,6 +61,7 @@ void RunStats::add(const FrameStats& row, Clock::time_point shown, uint64_t cpu_
   latency_.push_back(row.latency_ms);
   visible_ += row.visible;
   bytes_ += row.bytes_received;
+  full_set_bytes_ += row.full_set_bytes;
   triangles_ += row.triangles;
   hc_ms_ += row.hc_ms;
   or_ms_ += row.or_ms;
@@ -113,8 +114,9 @@ void RunStats::print_table(size_t leaves, uint64_t scene_triangles, const std::s
   t.text("culled (not drawn)",
          format("%.1f %% of objects, %.1f %% of triangles", 100.0 * (1.0 - double(visible_) / frames / std::max<size_t>(leaves, 1)),
                 100.0 * (1.0 - double(triangles_) / frames / std::max<uint64_t>(scene_triangles, 1))));
-  t.text("wrong pixels", "not checked (frame_diff compares frames with a --reference run's)");
-  t.text("bytes a frame", format("%.0f B received from the nodes (mean)", double(bytes_) / frames));
+  t.text("wrong pixels", "not checked (frame_diff compares frames with a reference run's)");
+  t.text("bytes a frame", format("%.0f B received from the nodes (mean; the whole visible sets would take %.0f B)",
+                                 double(bytes_) / frames, double(full_set_bytes_) / frames));
   std::string names;
   for (int k = 0; k < 2; ++k)
     if (!backends[k].empty()) names += format("%snode %d %s", names.empty() ? "" : ", ", k, backends[k].c_str());

@@ -26,6 +26,8 @@ struct FrameStats {
   uint32_t frame = 0, camera = 0;
   int hc_node = -1;  // the node that culled it; -1: frustum culling here
   uint64_t visible = 0, added = 0, removed = 0, queries = 0, triangles = 0, bytes_received = 0;
+  // The bytes the frame would have taken with the whole visible set sent instead of the diff.
+  uint64_t full_set_bytes = 0;
   double hc_ms = 0, or_ms = 0, rvg_ms = 0, latency_ms = 0, frame_interval_ms = 0;
   double wait_ms = 0;  // waiting for the frame's set from the nodes (0: it was in)
   double hc_cpu_ms = 0, or_cpu_ms = 0, or_tail_cpu_ms = 0, rvg_cpu_ms = 0, rvg_frame_cpu_ms = 0, or_tail_ms = 0;
@@ -42,6 +44,7 @@ struct FrameStats {
   void fields(F&& f) const {
     f("frame", frame); f("camera", camera); f("hc_node", hc_node); f("visible", visible); f("added", added);
     f("removed", removed); f("queries", queries); f("triangles", triangles); f("bytes_received", bytes_received);
+    f("full_set_bytes", full_set_bytes);
     f("hc_ms", hc_ms); f("or_ms", or_ms); f("rvg_ms", rvg_ms); f("latency_ms", latency_ms);
     f("frame_interval_ms", frame_interval_ms); f("hc_cpu_ms", hc_cpu_ms); f("or_cpu_ms", or_cpu_ms);
     f("or_tail_cpu_ms", or_tail_cpu_ms); f("rvg_cpu_ms", rvg_cpu_ms); f("rvg_frame_cpu_ms", rvg_frame_cpu_ms);
@@ -85,7 +88,7 @@ class RunStats {
   std::vector<double> rvg_ms_each_, wait_ms_each_;
   std::vector<double> node_or_ms_[2], node_hc_ms_[2];  // over the frames node k served
   size_t without_occlusion_ = 0;  // frames a node served with the frustum set (Camera.occlusion 0)
-  uint64_t visible_ = 0, bytes_ = 0, triangles_ = 0;
+  uint64_t visible_ = 0, bytes_ = 0, full_set_bytes_ = 0, triangles_ = 0;
   double hc_ms_ = 0, or_ms_ = 0, rvg_ms_ = 0, wait_ms_ = 0;
   uint32_t camera_gap_max_ = 0;
   size_t mode_frames_[4] = {0, 0, 0, 0};

@@ -9,18 +9,18 @@
 namespace occ {
 
 namespace {
-// --two-pass auto on a hardware GPU is off: its pass 1 reads the frame's depth back to the CPU,
+// --occlusion auto on a hardware GPU has two passes off: its pass 1 reads the frame's depth back to the CPU,
 // which stalls a GPU's pipeline (on llvmpipe it is a copy, and the gate measures whether it pays).
 OcclusionGate::Policy two_pass_policy(OcclusionGate::Policy flag, RendererClass renderer) {
   if (flag != OcclusionGate::Policy::automatic || renderer != RendererClass::hardware) return flag;
-  std::cerr << "render_client: two passes off (--two-pass auto on a hardware renderer: no depth read-back)\n";
+  std::cerr << "render_client: two passes off (--occlusion auto on a hardware renderer: no depth read-back)\n";
   return OcclusionGate::Policy::off;
 }
 }  // namespace
 
 FrameDrawer::FrameDrawer(const ClientOptions& o, SceneGl& g)
     : g_(g),
-      gate_({.policy = two_pass_policy(o.two_pass, g.ctx->renderer_class()), .test_alternate = o.test_alternate,
+      gate_({.policy = two_pass_policy(o.two_pass, g.ctx->renderer_class()), .alternate_every = o.alternate_every,
              .trial_after = 3, .start_on = false}),
       two_pass_(*g.ctx, *g.renderer, g.hierarchy(), *g.renderables) {}
 

@@ -1,6 +1,6 @@
 // How the render client draws a frame's set: the switch's visible set in one pass; a frustum set
 // (the switch culled without occlusion, or no node serves) in two passes against the frame's own
-// depth where the --two-pass gate measures that they pay (common/gl/two_pass.hpp); and the
+// depth where the two-pass gate measures that they pay (common/gl/two_pass.hpp); and the
 // window's O overlay of what occlusion culling removed.
 #pragma once
 #include <cstdint>
@@ -25,8 +25,8 @@ class FrameDrawer {
     TwoPassDrawer::Frame tp;  // two passes: what each did (else empty)
     bool frustum_set = false;
     bool two_pass = false;
-    bool held = false;  // a frustum set drawn the way the --two-pass gate last decided, its trials held
-    // Whether the frame shows what its set costs the way the --two-pass gate last decided (not a
+    bool held = false;  // a frustum set drawn the way the two-pass gate last decided, its trials held
+    // Whether the frame shows what its set costs the way the two-pass gate last decided (not a
     // trial of the other way): a sample for the occlusion gate.
     bool representative = true;
     // The set's triangles: what one pass draws (two passes may draw fewer).
@@ -34,14 +34,14 @@ class FrameDrawer {
   };
   // Draws `ids` (renderables) with camera `cam`, finished (glFinish); `frustum_set`: a set the
   // switch did not cull with occlusion. `hold`: the occlusion gate is measuring frames without
-  // occlusion (OcclusionGate::measuring_without): frustum sets are drawn the way the --two-pass
+  // occlusion (OcclusionGate::measuring_without): frustum sets are drawn the way the two-pass
   // gate last decided, and its trials wait (one experiment at a time).
   Drawn draw(const Camera& cam, const std::vector<uint32_t>& ids, bool frustum_set, bool hold = false);
-  // A frame drawn by draw() took `render_ms` to show: the --two-pass gate's measure.
+  // A frame drawn by draw() took `render_ms` to show: the two-pass gate's measure.
   void measured(const Drawn& d, double render_ms);
   // What the last draw() drew: `ids` less what two passes proved hidden.
   std::vector<uint32_t> drawn_ids(const Drawn& d, const std::vector<uint32_t>& ids) const;
-  // An item buffer of renderables `ids` with camera `cam` (--item-buffer): each pixel the id of
+  // An item buffer of renderables `ids` with camera `cam` (--images items): each pixel the id of
   // the item (leaf, any level) or HLOD that drew it (SceneRenderer::draw_renderables, ItemIds).
   // Leaves the frame buffer holding it.
   Image item_buffer(const Camera& cam, const std::vector<uint32_t>& ids);
@@ -54,7 +54,7 @@ class FrameDrawer {
 
  private:
   SceneGl& g_;
-  // Frustum sets culled here (--two-pass): on = two passes, off = one; measured by render time.
+  // Frustum sets culled here (--occlusion): on = two passes, off = one; measured by render time.
   // It starts with one pass (what the occlusion gate's first windows measure frames without
   // occlusion in) and tries two passes after a full window of it.
   OcclusionGate gate_;

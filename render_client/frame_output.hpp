@@ -18,7 +18,7 @@ class FrameOutput {
   void write_frame(uint32_t frame, const Image& img);
   // One per column, in order: the numbers, then `text` (words without commas) for the last columns.
   void write_row(const std::vector<double>& values, const std::vector<std::string>& text = {});
-  // --item-buffer: DIR/items_%05d.png, an item buffer of the frame (RGBA8 = a little-endian u32 id per
+  // --images items: DIR/items_%05d.png, an item buffer of the frame (RGBA8 = a little-endian u32 id per
   // pixel), DIR/depth_%05d.png its depth (the float's bits, the same way; `depth` as GL reads it,
   // bottom row first), and once DIR/items.txt, the ids' space (render_client/tools/item_diff.hpp).
   void write_items(uint32_t frame, const Image& ids, const std::vector<float>& depth);

@@ -125,12 +125,10 @@ FrameReceiver::Served FrameReceiver::receive_frame(int k, uint32_t frame, Visibl
   // nodes do; the diff is relative to the result, whose hash EndOfFrame.front_hash carries.
   const uint64_t expected_front = step.coarsen(visible, from_wire(*wcam));
   // 2. Diff chunks, then EndOfFrame.
-  bool cleared = false;
   for (;;) {
     net::Received m = links_.receive_from(k, frame);
     s.bytes += m.wire_bytes;
-    if (o_.config.full_sets && !cleared) visible.clear();
-    cleared = true;
+    if (std::holds_alternative<wire::NodeDiff>(m.message)) s.diff_bytes += m.wire_bytes;
     if (auto* d = std::get_if<wire::NodeDiff>(&m.message)) {
       if (auto err = streams_[k].on_diff(visible, *d)) throw fault(k, frame, "desync: " + *err);
     } else if (auto* e = std::get_if<wire::EndOfFrame>(&m.message)) {

@@ -43,6 +43,7 @@ class FrameReceiver {
     wire::Camera wcam;
     wire::EndOfFrame eof;
     uint64_t bytes = 0;
+    uint64_t diff_bytes = 0;  // of them, the NodeDiff messages'
   };
   std::optional<Served> receive(int k, uint32_t frame, VisibleSet& visible, const SwitchStep& step);
   // The camera frame `frame` used (cameras strictly increase).

@@ -23,28 +23,28 @@ struct ClientOptions {
   ClusterConfig config;
   std::string path;  // empty: walk:60, or interactive with --window (main.cpp)
   std::string out;
-  bool no_images = false;
-  bool item_buffer = false;  // --item-buffer: DIR/items_%05d.png per frame (render_client/tools/item_diff.hpp)
+  bool no_images = false;    // --images off
+  bool item_buffer = false;  // --images items: DIR/items_%05d.png per frame (render_client/tools/item_diff.hpp)
   int width = 512, height = 512;
   GlBackend gl = GlBackend::Auto;
-  // reference mode
-  bool reference = false;
+  // reference mode (no --connect)
   Cull cull = Cull::frustum;
   bool exact = false;  // item-buffer pass per frame: exactly visible nodes
-  std::string save_scene;  // write the loaded scene as glTF (ditto, generated scenes included)
   // cluster mode
   std::vector<std::string> connect;  // the two switch nodes
   int lookahead = 2;  // cameras sent ahead of the displayed frame (docs/latency.md: 2 = the paper's pipeline)
   int timeout_ms = 30000;
   bool degrade = true;  // --on-node-failure degrade|exit (node_links.hpp)
-  OcclusionGate::Policy occlusion_gate = OcclusionGate::Policy::automatic;  // --occlusion-gate
-  OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;        // --two-pass (on/off/automatic)
-  uint32_t test_alternate = 0;  // tests only (OCC_TEST_ALTERNATE, main.cpp): both gates alternate
+  // --occlusion (main.cpp) sets both gates: the switch's and this process's two passes.
+  OcclusionGate::Policy occlusion_gate = OcclusionGate::Policy::automatic;
+  OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;
+  uint32_t alternate_every = 4;  // Policy::alternate (--occlusion alternate:N)
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   // --window (viewer.hpp)
   bool window = false;
-  std::string record;  // every camera shown, as a path CSV
-  std::string save_path;  // --save-path: the path (generated or read) as CSV (also for bench.sh's OSG rows)
+  // OUT/path.csv with --out (main.cpp): every camera shown (--window), or the path (generated or
+  // read), as a path CSV
+  std::string record;
 };
 
 int run_reference(const ClientOptions& o);

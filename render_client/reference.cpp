@@ -22,7 +22,6 @@
 #include "render_client/frame_output.hpp"
 #include "render_client/options.hpp"
 #include "render_client/run_table.hpp"
-#include "render_client/scene_export.hpp"
 #include "render_client/viewer.hpp"
 
 namespace occ {
@@ -51,7 +50,7 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 //   oracle_ms/oracle_cpu_ms: a shaded render of exactly the visible nodes, what a renderer that
 //     knew visibility for free would pay (the scene's own frame-to-frame variation);
 //   oracle_diff_pixels: where that render differs from the frame (0 unless the item buffer missed
-//     a visible node; -1 with --no-images: not compared).
+//     a visible node; -1 with --images off: not compared).
 struct ExactStats {
   uint64_t visible = 0, triangles = 0, missed = 0, added = 0, removed = 0;
   double oracle_ms = 0, oracle_cpu_ms = 0, oracle_diff_pixels = -1;
@@ -109,7 +108,7 @@ class ExactVisibility {
       ctx.gl().CreateQueries(GL_SAMPLES_PASSED, GLsizei(blended_queries_.size()), blended_queries_.data());
   }
 
-  // The frame just drawn with `cam` (`image`: it, or empty with --no-images) by a method that
+  // The frame just drawn with `cam` (`image`: it, or empty with --images off) by a method that
   // drew the leaves `drawn`.
   ExactStats measure(const Camera& cam, std::vector<uint32_t> drawn, const Image& image) {
     ExactStats e;
@@ -200,8 +199,7 @@ class ReferenceRun {
         viewer_->start(ls.scene.bounds(), vp);
       else
         path_ = load_camera_path(o_.path, ls.scene.bounds(), vp);
-      if (!o_.save_path.empty()) save_camera_path(o_.save_path, path_);
-      if (!o_.save_scene.empty()) save_gltf(ls.scene, o_.save_scene);
+      if (!o_.record.empty()) save_camera_path(o_.record, path_);
     });
     // One process with the machine to itself: parts sized to the frame keep llvmpipe's rasteriser
     // thread busy while the rest is binned (the cluster's processes keep fixed parts: set_flush_automatic).
@@ -272,7 +270,7 @@ class ReferenceRun {
   void print_table() const {
     const size_t n = frame_ms_.size();
     const bool queries = o_.cull == Cull::stop_and_wait || o_.cull == Cull::chc;
-    RunTable t(format("run (%zu frames, one process: --reference --cull %s)", n, cull_name(o_.cull)));
+    RunTable t(format("run (%zu frames, one process: --cull %s)", n, cull_name(o_.cull)));
     t.times("frame ms (draw)", frame_ms_);
     t.text("fps", format("%.2f", 1000.0 * n / total_ms_));
     t.text("culled (not drawn)",

@@ -93,7 +93,7 @@ bool Viewer::next_camera(std::vector<Camera>& cameras) {
   // Reference renderer: nothing moves, so wait up to 100 ms for the user first (an idle window
   // refreshes at about 10 fps). Not in the cluster: there pacing the cameras lets frames queue up
   // (in latest mode both nodes may use one camera: two frames per camera sent) and the view lags.
-  if (o_.reference && nav_->changes() == sent_changes_)
+  if (o_.connect.empty() && nav_->changes() == sent_changes_)
     changed_.wait_for(lock, std::chrono::milliseconds(100), [&] { return quit_ || nav_->changes() != sent_changes_; });
   if (quit_) return false;
   sent_changes_ = nav_->changes();
@@ -182,7 +182,7 @@ void Viewer::handle(const WindowEvent& ev) {
         overlay_ = !overlay_;
         std::cerr << "render_client: culling overlay " << (overlay_ ? "on" : "off") << "\n";
         say(!overlay_ ? "culling overlay off"
-                      : o_.reference ? "culling overlay: the reference renderer culls no occluded boxes"
+                      : o_.connect.empty() ? "culling overlay: the reference renderer culls no occluded boxes"
                                      : "culling overlay: occlusion-culled boxes in orange");
       }
       break;

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Two checkouts' clusters on the same views, paired: for every scene, path and size, the cluster
 of checkout A (scripts/cluster.sh of that tree, with its build/bin) then B's, --pairs times
-(A B A B ...), --no-images, tau 0. Each figure is the median frame interval at the render
+(A B A B ...), --images off, tau 0. Each figure is the median frame interval at the render
 client's display (stats.csv frame_interval_ms, frames --skip on) of one run, then the median over
 the pairs; the ratio is B over A. Use it to show that a change made no view slower: run it on a
 quiet machine. Prints a markdown table and writes it to OUT/ab.md. Asserts nothing about speed.
@@ -36,7 +36,7 @@ def interval(stats, skip):
 
 def cluster(tree, scene, path, size, out, extra):
     cmd = [os.path.join(tree, "scripts", "cluster.sh"), "--scene", scene, "--path", path, "--width", size,
-           "--height", size, "--no-images", "--on-node-failure", "exit", "--out", out, *extra]
+           "--height", size, "--images", "off", "--on-node-failure", "exit", "--out", out, *extra]
     env = dict(os.environ)
     env.pop("OCC_BIN", None)  # each tree's own binaries
     with open(out + ".log", "w") as f:

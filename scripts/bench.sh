@@ -8,11 +8,11 @@
 #   4 chc       single process, coherent hierarchical culling (previous visibility, no waiting)
 #   5 gigawalk  depth-readback occlusion server (software HZB) + render client: 2 processes
 #   6 switch    the occlusion switch: 2 switch nodes + render client: 3 processes
-#   (+ switch with --full-sets, for what incremental transmission saves)
+#   (what incremental transmission saves: the switch run's full_set_bytes beside its bytes)
 #   7 OpenSceneGraph: no culling, frustum culling, OcclusionQueryNode, when the OSG peer of
 #     ../shared/peers/osg is built (OSG_PEER=/path/to/osg_peer, default /tmp/osgpeer-build/osg_peer);
 #     skipped with a message otherwise. A generated scene (city, layout) reaches it as the glTF
-#     file render_client --save-scene writes (the same geometry and placement).
+#     file scene_export writes (the same geometry and placement).
 # Every method's frames are compared with its own renderer's brute force (wrong pixels, total and
 # worst frame; the two multi-process methods get a second run with images for that, so PNG writing
 # never counts as frame time). Each process's CPU time per frame and stage comes from the process
@@ -60,26 +60,26 @@ if [ ! -x "$osg_peer" ]; then
 elif [ ! -x "$osg_run" ]; then
   osg_skip="$osg_run not found"
 else
-  osg_scene=$out/osg_scene/scene.gltf  # what render_client --save-scene writes
+  osg_scene=$out/osg_scene/scene.gltf  # what scene_export writes
   case "$scene" in *.gltf|*.glb) [ -f "$scene" ] && osg_scene=$scene ;; esac
 fi
 rm -rf "$out"/osg_*
 
 for cull in none frustum stop-and-wait chc; do
   log "$cull"
-  extra=(); [ "$cull" = none ] && extra=(--exact --save-path "$out/none/path.csv")
+  extra=(); [ "$cull" = none ] && extra=(--exact)  # its OUT/path.csv: the cameras for the OSG rows
   if [ "$cull" = none ] && [ "$osg_scene" = "$out/osg_scene/scene.gltf" ]; then
     mkdir -p "$out/osg_scene"
-    extra+=(--save-scene "$osg_scene")
+    "$BIN/scene_export" --scene "$scene" --out "$osg_scene" >"$out/osg_scene/log.txt" 2>&1
   fi
   mkdir -p "$out/$cull"
   # render_ms and cpu_ms stop before the PNG is written: one run gives times and frames.
-  "$BIN/render_client" --reference --scene "$scene" --path "$path" "${view[@]}" --cull "$cull" \
+  "$BIN/render_client" --scene "$scene" --path "$path" "${view[@]}" --cull "$cull" \
     "${extra[@]}" --out "$out/$cull" >"$out/$cull/log.txt" 2>&1
   [ "$cull" = none ] || wrong "$out/$cull" "$out/none"
 done
 
-# gigawalk DIR [--no-images]: the occlusion server and a render client with one --connect.
+# gigawalk DIR [--images off]: the occlusion server and a render client with one --connect.
 gigawalk() {
   local dir=$1 server
   shift
@@ -93,22 +93,19 @@ gigawalk() {
   wait $server
 }
 log "gigawalk (occlusion_server + render_client)"
-gigawalk "$out/gigawalk" --no-images
+gigawalk "$out/gigawalk" --images off
 log "gigawalk, frames for the comparison"
 gigawalk "$out/gigawalk_frames"
 wrong "$out/gigawalk" "$out/none" "$out/gigawalk_frames"
 drop_frames "$out/gigawalk_frames"
 
 log "switch (3 processes)"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --no-images --out "$out/switch" >/dev/null
+"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --images off --out "$out/switch" >/dev/null
 cp "$out/switch/render_client.log" "$out/switch/log.txt"
 log "switch, frames for the comparison"
 "$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --out "$out/switch_frames" >/dev/null
 wrong "$out/switch" "$out/none" "$out/switch_frames"
 drop_frames "$out/switch_frames"
-log "switch --full-sets"
-"$here/scripts/cluster.sh" --scene "$scene" --path "$path" "${view[@]}" "${switch_flags[@]}" --on-node-failure exit --no-images --full-sets \
-  --out "$out/switch_full" >/dev/null
 
 # OpenSceneGraph on the same cameras (the path as CSV) and viewport, each mode against OSG's own
 # brute force (its shading differs from ours).

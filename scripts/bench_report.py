@@ -164,12 +164,13 @@ def summarize(out, delay_ms=0.0, gbit=1.0, lookahead=2):
 
 
 def incremental(out):
-    """(ids/frame, bytes/frame) of the incremental and the full-sets switch runs, or None."""
-    if not (os.path.exists(f"{out}/switch/stats.csv") and os.path.exists(f"{out}/switch_full/stats.csv")):
+    """(ids/frame, bytes/frame) of the switch run's diffs and of the whole visible sets it would have
+    sent instead (stats.csv's visible and full_set_bytes), or None."""
+    if not os.path.exists(f"{out}/switch/stats.csv"):
         return None
-    inc, full = read_rows(f"{out}/switch/stats.csv"), read_rows(f"{out}/switch_full/stats.csv")
-    ids = lambda rows: statistics.mean(x["added"] + x["removed"] for x in rows)
-    return ids(inc), mean_of(inc, "bytes_received"), ids(full), mean_of(full, "bytes_received")
+    inc = read_rows(f"{out}/switch/stats.csv")
+    ids = statistics.mean(x["added"] + x["removed"] for x in inc)
+    return ids, mean_of(inc, "bytes_received"), mean_of(inc, "visible"), mean_of(inc, "full_set_bytes")
 
 
 def fmt(v, digits=2):
@@ -274,15 +275,15 @@ def write_md(out, results, scene, path, width, height, delay_ms, gbit):
 def write_per_frame(out, results):
     keys = [m for m, _ in REFERENCE] + [GIGAWALK[0], SWITCH[0]]
     by = {r["method"]: r for r in results}
-    if any(k not in by for k in keys) or not os.path.exists(f"{out}/switch_full/stats.csv"):
+    if any(k not in by for k in keys) or not os.path.exists(f"{out}/switch/stats.csv"):
         return
-    inc, full = read_rows(f"{out}/switch/stats.csv"), read_rows(f"{out}/switch_full/stats.csv")
+    inc = read_rows(f"{out}/switch/stats.csv")
     with open(f"{out}/per_frame.dat", "w") as f:
         f.write("# frame " + " ".join(f"fps_{k}" for k in keys) + " ids_incremental ids_full\n")
-        n = min(min(len(by[k]["frame_ms"]) for k in keys), len(inc), len(full))
+        n = min(min(len(by[k]["frame_ms"]) for k in keys), len(inc))
         for i in range(n):
             fps = " ".join(f"{1000 / max(by[k]['frame_ms'][i], 1e-6):.2f}" for k in keys)
-            f.write(f"{i} {fps} {inc[i]['added'] + inc[i]['removed']:.0f} {full[i]['added'] + full[i]['removed']:.0f}\n")
+            f.write(f"{i} {fps} {inc[i]['added'] + inc[i]['removed']:.0f} {inc[i]['visible']:.0f}\n")
 
 
 def check_model(run_dir, delay_ms, gbit, lookahead):

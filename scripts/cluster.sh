@@ -19,13 +19,10 @@
 # --on-node-failure exit a node's death ends the run as before.
 #
 # --path walk|orbit|fly (N frames from --frames, default 60), walk:N, or a CSV file (a missing
-# file or an unknown kind is refused before anything starts). --lookahead N (render client,
-# default 2): cameras sent ahead, docs/latency.md.
-# Extra args reach all three processes (--width W --height H --camera-mode M --full-sets --gl B
-# --arity ...), except render-client-only ones (--no-images --item-buffer --lookahead N --on-node-failure P
-# --occlusion-gate G --two-pass T) and node-only ones
-# (--diff-chunk B, --adaptive-queries, --occluder-fusion, --sealed, --visibility-hold, --backend),
-# which go where they belong. OCC_BIN overrides the binaries' folder;
+# file or an unknown kind is refused before anything starts).
+# Extra args reach all three processes (--width W --height H --camera-mode M --pixel-error X --gl B
+# ...), except render-client-only ones (--images I --on-node-failure P --occlusion O --lookahead N)
+# and node-only ones (--backend B, --coherence N), which go where they belong. OCC_BIN overrides the binaries' folder;
 # OCC_MAX_SECONDS (default 900) bounds the whole run; OCC_PORT_WAIT_S (default 60) each node's start.
 # --link DELAY_MS:RATE_MBIT[:JITTER_MS] routes every link (render client <-> each node, node 1 ->
 # node 0) through a link_relay that adds that one-way delay, jitter and bandwidth cap per
@@ -39,7 +36,8 @@
 # keys: W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset,
 # P screenshot, O culling overlay, Esc quits). Without --path you drive from the start; with --path the path plays
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
-# time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv saves the flight as a path.
+# time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv copies the flight (OUT/path.csv,
+# every camera shown) there as a path.
 # --node-raster-threads N (default 0): llvmpipe's rasteriser threads in each switch node
 # (LP_NUM_THREADS for the nodes only). 0 rasterises on the node's own thread: its work is many
 # small passes it waits for (OR flushes, HC box tests), and three processes already fill this
@@ -73,7 +71,7 @@ source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 key_file="" node_threads=0 client_threads=auto restart_nodes=3
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 record="" key_file="" node_threads=0 client_threads=auto restart_nodes=3
 pin_nodes=auto host_cpus=""
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
@@ -88,6 +86,7 @@ while [ $# -gt 0 ]; do
     --pin-nodes) occ_need_value "$@"; pin_nodes=$2; shift 2 ;;
     --host-cpus) occ_need_value "$@"; host_cpus=$2; shift 2 ;;
     --window) window=1; rvg_only+=("$1"); shift ;;
+    --record) occ_need_value "$@"; record=$2; shift 2 ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;
   esac
@@ -240,7 +239,7 @@ start_node() {
   local ns=("${hg0[@]}" "${in_a[@]}") peer=()
   [ "$1" = 1 ] && ns=("${hg1[@]}" "${in_b[@]}") peer=(--peer "$peer0")
   "${ns[@]}" "${pin[@]}" env LP_NUM_THREADS="$node_threads" "$BIN/switch_node" --id "$1" --scene "$scene" "${peer[@]}" \
-    --listen "$listen" --port "$2" --port-file "${3%.log}.port" "${common[@]}" "${node_only[@]}" >"$3" 2>&1 &
+    --listen "${listen%:*}:$2" --port-file "${3%.log}.port" "${common[@]}" "${node_only[@]}" >"$3" 2>&1 &
   node_pid=$!
   pids+=($node_pid)
   echo $node_pid >"$out/node$1.pid"
@@ -423,4 +422,7 @@ for n in node0 node1; do
   echo "cluster: $n${story[$n]#;}"
 done
 [ ${#story[@]} -gt 0 ] && grep -h "^modes:" "$out/render_client.log"
+if [ -n "$record" ] && [ -s "$out/path.csv" ]; then
+  cp "$out/path.csv" "$record" && echo "cluster: the cameras shown are in $record (replay: --path $record)"
+fi
 exit $status

@@ -33,7 +33,6 @@ while [ $# -gt 0 ]; do
     --cluster-key-file) occ_need_value "$@"; key_file=$2; shift 2 ;;
     --netns|--link|--window|--record|--pin-nodes|--host-cpus) occ_die "$1 runs on one machine: not with --hosts" ;;
     -h|--help) occ_usage; exit 0 ;;
-    --full-sets|--no-images) rest+=("$1"); shift ;;
     --*) occ_need_value "$@"; rest+=("$1" "$2"); shift 2 ;;
     *) occ_unexpected "$1" ;;
   esac

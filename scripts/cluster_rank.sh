@@ -127,7 +127,7 @@ fi
 # start_node PORT LOG: this rank's switch node on PORT (0: a free one), its port in LOG's .port file.
 start_node() {
   rm -f "${2%.log}.port"
-  "$BIN/switch_node" --id "$rank" --scene "$scene" "${peer[@]}" --listen "$listen" --port "$1" \
+  "$BIN/switch_node" --id "$rank" --scene "$scene" "${peer[@]}" --listen "${listen%:*}:$1" \
     --port-file "${2%.log}.port" "${common[@]}" "${node_only[@]}" >"$2" 2>&1 &
   child=$!
   echo $child >"$out/$role.pid"

@@ -51,11 +51,8 @@ occ_set() {
 occ_route_flag() {
   occ_shift=2
   case "$1" in
-    --no-images|--item-buffer) rvg_only+=("$1"); occ_shift=1 ;;
-    --full-sets) common+=("$1"); occ_shift=1 ;;
-    --record|--lookahead|--on-node-failure|--occlusion-gate|--two-pass) occ_need_value "$@"; rvg_only+=("$1" "$2") ;;
-    --diff-chunk|--adaptive-queries|--occluder-fusion|--sealed|--visibility-hold|--backend)
-      occ_need_value "$@"; node_only+=("$1" "$2") ;;
+    --images|--on-node-failure|--occlusion|--lookahead) occ_need_value "$@"; rvg_only+=("$1" "$2") ;;
+    --coherence|--backend) occ_need_value "$@"; node_only+=("$1" "$2") ;;
     --*) occ_need_value "$@"; common+=("$1" "$2") ;;
     *) occ_unexpected "$1" ;;
   esac

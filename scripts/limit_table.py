@@ -2,10 +2,10 @@
 """The cluster against the limit (docs/results.md, "cluster / oracle"): for every scene, path and
 viewport given, one after another on the same cameras, at tau 0:
 
-  oracle   a render of exactly the visible objects (render_client --reference --cull none --exact,
+  oracle   a render of exactly the visible objects (render_client --cull none --exact,
            its oracle_ms column: what no culling can beat on this renderer); the same run's
            render_ms is brute force (every object, no culling)
-  frustum  render_client --reference --cull frustum (one process, hierarchical frustum culling)
+  frustum  render_client --cull frustum (one process, hierarchical frustum culling)
   cluster  scripts/cluster.sh (two switch nodes and the render client): the frame interval at the
            render client's display
 
@@ -15,7 +15,7 @@ pixels: the cluster's frames of one more run with images against brute force's (
 PVS/exact: on the frames the switch culled with occlusion (the gate sends frustum sets where that
 pays, and those are not its visible set), the triangles the render client drew over the exactly
 visible ones on the same cameras, all repeats together; beside it the share of such frames. Box
-floor: the same ratio for the single-process stop-and-wait baseline (render_client --reference
+floor: the same ratio for the single-process stop-and-wait baseline (render_client
 --cull stop-and-wait --exact: front to back, each leaf's box queried against the depth of
 everything nearer), over all frames from --skip on, one untimed run: what testing boxes cannot
 prove hidden, whoever tests them. --host-cpus CORES (root): the timed runs as on hosts of CORES
@@ -91,7 +91,7 @@ def pvs_over_exact(d, skip):
 
 def measure(scene, path, size, args, out):
     view = ["--width", str(size), "--height", str(size)]
-    ref = [os.path.join(BIN, "render_client"), "--reference", "--scene", scene, "--path", path, *view]
+    ref = [os.path.join(BIN, "render_client"), "--scene", scene, "--path", path, *view]
     # The timed runs: with --host-cpus each in a CPU group of its own (the cluster: one per process).
     timed, cluster_flags = ref, list(args.cluster_args)
     if args.host_cpus:
@@ -102,9 +102,9 @@ def measure(scene, path, size, args, out):
         d = os.path.join(out, f"r{r}")
         os.makedirs(d, exist_ok=True)
         print(f"limit_table: {scene} {path} {size}^2, repeat {r + 1} of {args.repeats}", file=sys.stderr)
-        run(timed + ["--cull", "none", "--exact", "--no-images", "--out", f"{d}/none"], f"{d}/none.log")
-        run(timed + ["--cull", "frustum", "--no-images", "--out", f"{d}/frustum"], f"{d}/frustum.log")
-        run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--no-images",
+        run(timed + ["--cull", "none", "--exact", "--images", "off", "--out", f"{d}/none"], f"{d}/none.log")
+        run(timed + ["--cull", "frustum", "--images", "off", "--out", f"{d}/frustum"], f"{d}/frustum.log")
+        run([os.path.join(HERE, "cluster.sh"), "--scene", scene, "--path", path, *view, "--images", "off",
              "--on-node-failure", "exit", "--out", f"{d}/cluster", *cluster_flags], f"{d}/cluster.log")
         runs["oracle"].append(single(f"{d}/none/stats.csv", "oracle_ms", "oracle_cpu_ms", args))
         runs["none"].append(single(f"{d}/none/stats.csv", "render_ms", "cpu_ms", args))
@@ -113,7 +113,7 @@ def measure(scene, path, size, args, out):
     pvs = [pvs_over_exact(os.path.join(out, f"r{r}"), args.skip) for r in range(args.repeats)]
     drawn_tri, exact_tri, occlusion_frames, frames = (sum(p[k] for p in pvs) for k in range(4))
     # The box floor: one untimed run of the stop-and-wait baseline.
-    run(ref + ["--cull", "stop-and-wait", "--exact", "--no-images", "--out", f"{out}/box_floor"],
+    run(ref + ["--cull", "stop-and-wait", "--exact", "--images", "off", "--out", f"{out}/box_floor"],
         f"{out}/box_floor.log")
     floor_drawn, floor_exact = (sum(column(f"{out}/box_floor/stats.csv", c, args.skip))
                                 for c in ("triangles_drawn", "exact_triangles"))

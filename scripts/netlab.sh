@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Network experiments: what latency and bandwidth do to the occlusion switch. Runs the cluster
-# (scripts/cluster.sh) with every link routed through link_relay, for each delay x rate, then for
-# each diff chunk size b at one fixed delay (the paper's buffering trade-off, section 3.5). All
-# traffic stays on 127.0.0.1.
+# (scripts/cluster.sh) with every link routed through link_relay, for each delay x rate (diff chunks
+# of the paper's b = 100 ids: b from 10 to 1000 measured alike, docs/latency.md). All traffic
+# stays on 127.0.0.1.
 #
 #   scripts/netlab.sh --scene S [--path P] [--frames N] [--delays "0 1 5 20"] [--rates "10 100 1000"]
-#                     [--chunks "1 10 100 1000"] [--chunk-delay-ms 5] [--camera-mode latest|lockstep]
+#                     [--camera-mode latest|lockstep]
 #                     [--repeats N] [--width W --height H] [--out DIR] [--netns]
 #
 # --repeats N (default 3) runs every point N times, interleaved (all points once, then all again),
@@ -18,17 +18,17 @@
 # Writes OUT/net_runs.csv (one row per run: repeat, delay_ms, rate_mbit, chunk_ids, fps, latency
 # mean/p95, bytes/frame, frames completed), OUT/net.csv (per point: runs, failed runs, the frames
 # the figures rest on (all runs, shortest run), and median,min,max of each figure:
-# scripts/netlab_aggregate.py), OUT/net_fps.png, OUT/net_latency.png, OUT/net_chunks.png (medians
+# scripts/netlab_aggregate.py), OUT/net_fps.png, OUT/net_latency.png (medians
 # with min-max bars). Rates are Mbit/s per direction; delays are one-way, per link. --netns
 # (root): the three processes run in three network namespaces joined by veth pairs, rates as tc
 # tbf qdiscs (see scripts/cluster.sh).
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
-scene="" path="walk" frames=150 delays="0 1 5 20" rates="10 100 1000" chunks="1 10 100 1000" chunk_delay_ms=5
+scene="" path="walk" frames=150 delays="0 1 5 20" rates="10 100 1000"
 camera_mode=latest width=$OCC_WIDTH height=$OCC_HEIGHT out="out/netlab" netns=() repeats=3
 while [ $# -gt 0 ]; do
   case "$1" in
-    --scene|--path|--frames|--delays|--rates|--chunks|--chunk-delay-ms|--camera-mode|--width|--height|--out|--repeats) occ_set "$@"; shift 2 ;;
+    --scene|--path|--frames|--delays|--rates|--camera-mode|--width|--height|--out|--repeats) occ_set "$@"; shift 2 ;;
     --mode) occ_die "--mode is now --camera-mode (as in cluster.sh and the binaries)" ;;
     --netns) netns=(--netns); shift ;;
     -h|--help) occ_usage; exit 0 ;;
@@ -43,11 +43,11 @@ mkdir -p "$out"
 runs_csv="$out/net_runs.csv" csv="$out/net.csv"
 echo "repeat,delay_ms,rate_mbit,chunk_ids,fps,latency_ms_mean,latency_ms_p95,bytes_per_frame,frames" >"$runs_csv"
 
-run() {  # repeat delay rate chunk
+run() {  # repeat delay rate chunk (always 100 ids: the nodes' fixed b)
   local dir="$out/d$2_r$3_b$4_k$1"
-  echo "netlab: repeat $1/$repeats: delay $2 ms, rate $3 Mbit/s, chunk $4 ids" >&2
+  echo "netlab: repeat $1/$repeats: delay $2 ms, rate $3 Mbit/s" >&2
   if ! "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --width "$width" --height "$height" \
-      --camera-mode "$camera_mode" --no-images --on-node-failure exit --diff-chunk "$4" --link "$2:$3" "${netns[@]}" --out "$dir" >/dev/null; then
+      --camera-mode "$camera_mode" --images off --on-node-failure exit --link "$2:$3" "${netns[@]}" --out "$dir" >/dev/null; then
     echo "netlab: run failed (see $dir)" >&2
     echo "$1,$2,$3,$4,,,,,0" >>"$runs_csv"
     return
@@ -58,10 +58,9 @@ run() {  # repeat delay rate chunk
   echo "$1,$2,$3,$4,$(get mean_fps),$(get latency_ms_mean),$(get latency_ms_p95),$(get mean_bytes_per_frame),$(get frames)" >>"$runs_csv"
 }
 
-# The points (delay rate chunk), each once: the chunk sweep's b = 100 may be a delay x rate point.
+# The points (delay rate chunk), each once.
 points=()
 for d in $delays; do for r in $rates; do points+=("$d $r 100"); done; done
-for b in $chunks; do points+=("$chunk_delay_ms 1000 $b"); done
 mapfile -t points < <(printf '%s\n' "${points[@]}" | awk '!seen[$0]++')
 for ((k = 1; k <= repeats; k++)); do
   for p in "${points[@]}"; do run "$k" $p; done
@@ -70,6 +69,6 @@ python3 "$here/scripts/netlab_aggregate.py" "$runs_csv" "$csv"
 column -s, -t "$csv"
 
 if command -v gnuplot >/dev/null; then
-  gnuplot -e "csv='$csv'; out='$out'; chunk_delay=$chunk_delay_ms; rates='$rates'" "$here/scripts/netlab_plots.gp"
-  echo "netlab: plots in $out/net_fps.png, $out/net_latency.png, $out/net_chunks.png" >&2
+  gnuplot -e "csv='$csv'; out='$out'; rates='$rates'" "$here/scripts/netlab_plots.gp"
+  echo "netlab: plots in $out/net_fps.png, $out/net_latency.png" >&2
 fi

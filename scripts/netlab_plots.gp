@@ -1,4 +1,4 @@
-# gnuplot -e "csv='net.csv'; out='DIR'; chunk_delay=5; rates='10 100 1000'" scripts/netlab_plots.gp
+# gnuplot -e "csv='net.csv'; out='DIR'; rates='10 100 1000'" scripts/netlab_plots.gp
 # net.csv (scripts/netlab_aggregate.py) columns: 1 delay_ms, 2 rate_mbit, 3 chunk_ids, 4 runs,
 # 5 failed, 6 frames, 7 frames_min, then median,min,max of: 8-10 fps, 11-13 latency_ms_mean,
 # 14-16 latency_ms_p95, 17-19 bytes_per_frame. Each point is drawn at its median with a bar from
@@ -11,7 +11,6 @@ set key outside right
 set grid
 set offsets graph 0.03, graph 0.03, 0, 0  # room for the bars of the first and last point
 rate_rows(r) = sprintf("< awk -F, 'NR > 1 && $4 > 0 && $3 == 100 && $2 == %s' '%s' | sort -t, -k1,1n -u", r, csv)
-chunk_rows = sprintf("< awk -F, 'NR > 1 && $4 > 0 && $1 == %g && $2 == 1000' '%s' | sort -t, -k3,3n -u", chunk_delay, csv)
 set xlabel "one-way delay per link (ms)"
 set output out."/net_fps.png"
 set title "Frame rate against link delay (diff chunk b = 100; median of the runs, bars min-max)"
@@ -22,11 +21,3 @@ set title "Camera-to-display latency against link delay (b = 100; median, bars m
 set ylabel "latency ms (mean solid; p95 dashed)"
 plot for [r in rates] rate_rows(r) using 1:11:12:13 with yerrorlines lw 1.5 title r." Mbit/s mean", \
      for [r in rates] rate_rows(r) using 1:14:15:16 with yerrorlines dt 2 title r." Mbit/s p95"
-set output out."/net_chunks.png"
-set title sprintf("Diff chunk size b against latency (delay %g ms, 1000 Mbit/s; median, bars min-max)", chunk_delay)
-set xlabel "node ids per diff message (b)"
-set logscale x
-set ylabel "ms / fps"
-plot chunk_rows using 3:11:12:13 with yerrorlines lw 1.5 title "latency mean ms", \
-     chunk_rows using 3:14:15:16 with yerrorlines dt 2 title "latency p95 ms", \
-     chunk_rows using 3:8:9:10 with yerrorlines lw 1.5 title "fps"

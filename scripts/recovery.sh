@@ -41,7 +41,7 @@ node() {  # id port-args log
 }
 node 0 "--port 0 --port-file $out/n0.port" node0.log; n0=${pids[-1]}; p0=$(port "$out/n0.port")
 node 1 "--port 0 --port-file $out/n1.port" node1.log; n1=${pids[-1]}; p1=$(port "$out/n1.port")
-"$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --no-images --connect "127.0.0.1:$p0" \
+"$BIN/render_client" --scene "$scene" --path "$path" --out "$out" --images off --connect "127.0.0.1:$p0" \
   --connect "127.0.0.1:$p1" "${extra[@]}" >"$out/render_client.log" 2>&1 &
 rvg=$!
 while kill -0 $rvg 2>/dev/null && [ "$(rows)" -lt "$kill_at" ]; do sleep 0.02; done

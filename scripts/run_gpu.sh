@@ -113,7 +113,7 @@ first_error() { grep -m 1 '^error' "$1" 2>/dev/null || tail -n 1 "$1" 2>/dev/nul
 
 # The renderer: a GPU, or refused.
 mkdir -p "$out/gl_check"
-"$BIN/render_client" --reference --scene city:2x2 --path walk:1 --width 64 --height 64 --no-images \
+"$BIN/render_client" --scene city:2x2 --path walk:1 --width 64 --height 64 --images off \
   --lod-cache "$cache" --out "$out/gl_check" >"$out/gl_check/log.txt" 2>&1 ||
   fail "no GL context (log: $out/gl_check/log.txt): $(first_error "$out/gl_check/log.txt")"
 gl_line=$(grep -m 1 'GL_RENDERER' "$out/gl_check/log.txt")
@@ -145,7 +145,7 @@ peak_rss() { grep -ho 'peak_rss_mb=[0-9]*' "$1" 2>/dev/null | tail -n 1 | cut -d
 # run_one KIND DIR PATH IMAGES: KIND none|frustum|chc (reference renderer) or cluster; IMAGES 0|1.
 run_one() {
   local kind=$1 d=$2 p=$3 images=$4 rc=0
-  local img=(); [ "$images" = 1 ] || img=(--no-images)
+  local img=(); [ "$images" = 1 ] || img=(--images off)
   mkdir -p "$d"
   if [ "$kind" = cluster ]; then
     local node=(); [ -z "$backend" ] || node=(--backend "$backend")
@@ -153,9 +153,9 @@ run_one() {
       --lod-cache "$cache" --on-node-failure exit --out "$d" "${img[@]}" "${node[@]}" >"$d/cluster.txt" 2>&1 || rc=$?
     [ $rc = 0 ] || fail "cluster on $scene ${w}x$h failed (logs: $d): $(first_error "$d/cluster.txt")"
   else
-    local save=(); [ "$kind" = none ] && [ "$images" = 0 ] && save=(--save-path "$cdir/path.csv")
-    timeout 900 "$BIN/render_client" --reference --scene "$scene" --path "$p" --width "$w" --height "$h" --cull "$kind" \
-      --lod-cache "$cache" --out "$d" "${img[@]}" "${save[@]}" >"$d/log.txt" 2>&1 || rc=$?
+    timeout 900 "$BIN/render_client" --scene "$scene" --path "$p" --width "$w" --height "$h" --cull "$kind" \
+      --lod-cache "$cache" --out "$d" "${img[@]}" >"$d/log.txt" 2>&1 || rc=$?
+    [ "$kind" = none ] && [ "$images" = 0 ] && [ $rc = 0 ] && cp "$d/path.csv" "$cdir/path.csv"
     [ $rc = 0 ] || fail "$kind on $scene ${w}x$h failed (status $rc, log: $d/log.txt): $(first_error "$d/log.txt")"
   fi
 }
@@ -177,7 +177,7 @@ for name in "${scene_list[@]}"; do
   log "$name: building (or loading from $cache)"
   scene_dir=$out/${name//[:\/]/_}
   mkdir -p "$scene_dir/build"
-  "$BIN/render_client" --reference --scene "$scene" --path walk:1 --width 64 --height 64 --no-images \
+  "$BIN/render_client" --scene "$scene" --path walk:1 --width 64 --height 64 --images off \
     --lod-cache "$cache" --out "$scene_dir/build" >"$scene_dir/build/log.txt" 2>&1 ||
     fail "$scene: cannot build the scene (log: $scene_dir/build/log.txt): $(first_error "$scene_dir/build/log.txt")"
   log "$name: ready in $((SECONDS - t0)) s ($(grep -m 1 -o '[0-9.]* M triangles' "$scene_dir/build/log.txt"))"

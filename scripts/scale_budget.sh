@@ -49,7 +49,7 @@ for m in $sizes; do
     echo "scale_budget: plant:$m --geometry-budget $mode ..." >&2
     t0=$(date +%s.%N)
     if ! OCC_START_AT_ONCE=1 OCC_PORT_WAIT_S=${OCC_PORT_WAIT_S:-2400} OCC_MAX_SECONDS=${OCC_MAX_SECONDS:-3000} scripts/cluster.sh \
-      --scene plant:$m --path "$path" --width "$width" --height "$height" --pixel-error "$pixel_error" --no-images \
+      --scene plant:$m --path "$path" --width "$width" --height "$height" --pixel-error "$pixel_error" --images off \
       --timeout-ms 900000 --geometry-budget "$mode" --out "$d" >"$d.log" 2>&1; then
       echo "error: scale_budget.sh: plant:$m --geometry-budget $mode failed: $(tail -1 "$d.log")" >&2
       continue

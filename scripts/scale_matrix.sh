@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Frame time and memory against scene size (docs/scale.md): the generated plant at
 # several sizes, rendered by frustum culling and CHC (one process each) and by the switch (three
-# processes), --no-images, on one path. Per size and method: mean and median frame time, mean
+# processes), --images off, on one path. Per size and method: mean and median frame time, mean
 # nodes drawn (visible set for the switch), triangles per frame, peak resident memory (the sum
 # of the three processes for the switch). Writes OUT/scale.csv and, with gnuplot, OUT/scale.png.
 #
@@ -50,8 +50,8 @@ for m in $sizes; do
   for cull in frustum chc; do
     d=$out/plant_${m}_$cull
     echo "scale_matrix: plant:$m $cull ..." >&2
-    if ! "$BIN"/render_client --reference --cull $cull --scene plant:$m --path "$path" --width "$W" --height "$H" \
-      --no-images --out "$d" >"$d.log" 2>&1; then
+    if ! "$BIN"/render_client --cull $cull --scene plant:$m --path "$path" --width "$W" --height "$H" \
+      --images off --out "$d" >"$d.log" 2>&1; then
       echo "error: scale_matrix.sh: plant:$m --cull $cull failed: $(tail -1 "$d.log")" >&2
       continue
     fi
@@ -61,7 +61,7 @@ for m in $sizes; do
   d=$out/plant_${m}_switch
   echo "scale_matrix: plant:$m switch ..." >&2
   if ! OCC_PORT_WAIT_S=${OCC_PORT_WAIT_S:-2400} scripts/cluster.sh --scene plant:$m --path "$path" --width "$W" \
-    --height "$H" --pixel-error "$tau" --no-images --timeout-ms 900000 --out "$d" >"$d.log" 2>&1; then
+    --height "$H" --pixel-error "$tau" --images off --timeout-ms 900000 --out "$d" >"$d.log" 2>&1; then
     echo "error: scale_matrix.sh: plant:$m switch failed: $(tail -1 "$d.log")" >&2
     continue
   fi

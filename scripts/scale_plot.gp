@@ -3,7 +3,7 @@
 set terminal pngcairo size 1100,500 font ",10"
 set output dir."/scale.png"
 set datafile separator ","
-set multiplot layout 1,2 title "plant:M on llvmpipe (LP\\_NUM\\_THREADS=1), --no-images"
+set multiplot layout 1,2 title "plant:M on llvmpipe (LP\\_NUM\\_THREADS=1), --images off"
 set grid
 set logscale xy
 set key top left

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The issue-15 measurement matrix (docs/spikes.md): every path at 512² and 1024², tau 0 and 1,
-# a --full-sets run at tau 0, and an item-buffer run (every camera) for PVS/exact and the exact
+# The spikes measurement matrix (docs/spikes.md): every path at 512² and 1024², tau 0 and 1
+# (each run's stats.csv says what the whole sets would have taken), and an item-buffer run (every camera) for PVS/exact and the exact
 # set's own ids saved (what an incremental set could save at best on the path).
 #   scripts/spikes_matrix.sh OUT [extra cluster args...]      e.g. OUT=out/sp/base
 # Paths: the generated city walks (45x45 passes through buildings, 20x20 follows a street), street
@@ -30,18 +30,14 @@ for p in "${paths[@]}"; do
     ex=out/sp/exact1/${label}_$size
     if [ -z "${SKIP_EXACT:-}" ] && [ ! -s "$ex/stats.csv" ]; then
       mkdir -p "$ex"
-      "$BIN"/render_client --reference --scene "$scene" --path "$path" --width $size --height $size \
-        --no-images --exact --cull frustum --out "$ex" >"$ex/log" 2>&1 || echo "exact $label $size failed" >&2
+      "$BIN"/render_client --scene "$scene" --path "$path" --width $size --height $size \
+        --images off --exact --cull frustum --out "$ex" >"$ex/log" 2>&1 || echo "exact $label $size failed" >&2
     fi
     for tau in 0 1; do
-      for fs in "" full; do
-        [ -n "$fs" ] && [ $tau != 0 ] && continue
-        d=$out/${label}_${size}_t$tau${fs:+_full}
-        scripts/cluster.sh --scene "$scene" --path "$path" --width $size --height $size --pixel-error $tau \
-          --no-images --out "$d" ${fs:+--full-sets} "$@" >"$d.log" 2>&1 || { echo "run $d failed" >&2; continue; }
-      done
       d=$out/${label}_${size}_t$tau
-      args=(); [ $tau = 0 ] && args+=(--full-sets "${d}_full")
+      scripts/cluster.sh --scene "$scene" --path "$path" --width $size --height $size --pixel-error $tau \
+        --images off --out "$d" "$@" >"$d.log" 2>&1 || { echo "run $d failed" >&2; continue; }
+      args=()
       [ -s "$ex/stats.csv" ] && args+=(--exact "$ex" --exact-every 1)
       python3 scripts/spikes_report.py "$d" "${args[@]}" --label "${label} ${size}² tau $tau" | tee -a "$out/report.txt"
     done

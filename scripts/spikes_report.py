@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Frame-time spikes, id churn and PVS size of cluster runs (docs/spikes.md).
 
-  scripts/spikes_report.py RUN_DIR [--full-sets DIR] [--exact DIR [--exact-every K]] [--label L] [--dat F]
+  scripts/spikes_report.py RUN_DIR [--exact DIR [--exact-every K]] [--label L] [--dat F]
   scripts/spikes_report.py --table BEFORE_DIR AFTER_DIR      (two scripts/spikes_matrix.sh outputs)
 
 One line per run (stats.csv of scripts/cluster.sh): frame-interval median / mean / p99 and their
@@ -10,7 +10,7 @@ frame, and PVS/exact when an item-buffer run is given. --table prints a markdown
 after, for every run the two matrices share.
 
 Frame 0 is left out of every figure (start-up, and its set is sent whole). --exact DIR: a
-`render_client --reference --cull frustum --exact` run on every K-th camera of the same path
+`render_client --cull frustum --exact` run on every K-th camera of the same path
 (frame j there = frame j*K here); PVS/exact = mean over those frames of |V| / exact (a frame that
 sees nothing and draws nothing counts 1). With K = 1 (every camera) it also gives the exact set's
 own ids saved: what an incremental set of exactly the visible leaves would save on this path;
@@ -45,7 +45,7 @@ def model_ms(r):
     return out
 
 
-def figures(run, full=None, exact=None, every=1):
+def figures(run, exact=None, every=1):
     allr = rows(run)
     r = allr[1:]
     iv = sorted(x["frame_interval_ms"] for x in r)
@@ -56,8 +56,8 @@ def figures(run, full=None, exact=None, every=1):
              mmed=statistics.median(mo), mmean=statistics.mean(mo), mp99=pct(mo, 0.99),
              V=vis / len(r), ids=ids / len(r), saved=100 * (1 - ids / max(vis, 1)),
              B=statistics.mean(x["bytes_received"] for x in r), maxV=max(x["visible"] for x in r))
-    if full and os.path.exists(f"{full}/stats.csv") and len(rows(full)) > 1:
-        f["Bfull"] = statistics.mean(x["bytes_received"] for x in rows(full)[1:])
+    if r and "full_set_bytes" in r[0]:  # what the whole visible sets would have taken
+        f["Bfull"] = statistics.mean(x["full_set_bytes"] for x in r)
     if exact and os.path.exists(f"{exact}/stats.csv"):
         ratios = []
         for j, e in enumerate(rows(exact)):
@@ -112,8 +112,8 @@ def table(before, after):
                 ex = f"out/sp/exact1/{label}_{size}"
                 if not (os.path.exists(f"{before}/{name}/stats.csv") and os.path.exists(f"{after}/{name}/stats.csv")):
                     continue
-                b = figures(f"{before}/{name}", f"{before}/{name}_full", ex, 1)
-                a = figures(f"{after}/{name}", f"{after}/{name}_full", ex, 1)
+                b = figures(f"{before}/{name}", ex, 1)
+                a = figures(f"{after}/{name}", ex, 1)
                 bytes_cell = arrow(b["B"], a["B"], "{:.0f}")
                 if "Bfull" in b and "Bfull" in a:
                     bytes_cell += f" ({b['Bfull']:.0f} → {a['Bfull']:.0f})"
@@ -130,7 +130,6 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("run", nargs="?")
     ap.add_argument("--table", nargs=2, metavar=("BEFORE", "AFTER"))
-    ap.add_argument("--full-sets")
     ap.add_argument("--exact")
     ap.add_argument("--exact-every", type=int, default=1)
     ap.add_argument("--label", default="")
@@ -148,7 +147,7 @@ def main():
             for x, m in zip(r, model_ms(r)):
                 f.write(f"{x['frame']:.0f} {x['frame_interval_ms']:.3f} {m:.3f} {x['visible']:.0f} "
                         f"{x['added'] + x['removed']:.0f}\n")
-    print(line(a.label or a.run, figures(a.run, a.full_sets, a.exact, a.exact_every)))
+    print(line(a.label or a.run, figures(a.run, a.exact, a.exact_every)))
 
 
 if __name__ == "__main__":

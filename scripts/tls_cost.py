@@ -49,7 +49,7 @@ def main():
     ap.add_argument("--path", default="walk:2000")
     ap.add_argument("--out", default="out/tls_cost")
     args, extra = ap.parse_known_args()
-    extra = ["--scene", "city", "--path", args.path, "--width", "256", "--height", "256", "--no-images", *extra]
+    extra = ["--scene", "city", "--path", args.path, "--width", "256", "--height", "256", "--images", "off", *extra]
     fields = ("cpu_ms_per_frame", "wire_down", "wire_up")
     ratios = {f: [] for f in fields}
     for i in range(args.pairs):

@@ -22,7 +22,7 @@ done
 [[ "$fps" =~ ^[0-9]+$ && "$fps" -ge 1 && "$fps" -le 240 ]] || { echo "error: --fps '$fps': must be 1..240" >&2; exit 2; }
 command -v ffmpeg >/dev/null || { echo "error: ffmpeg not found (scripts/setup.sh installs it)" >&2; exit 2; }
 n=$(find "$dir" -maxdepth 1 -name 'frame_[0-9][0-9][0-9][0-9][0-9].png' | wc -l)
-[ "$n" -gt 0 ] || { echo "error: '$dir' has no frame_NNNNN.png (render with --out and without --no-images)" >&2; exit 2; }
+[ "$n" -gt 0 ] || { echo "error: '$dir' has no frame_NNNNN.png (render with --out and without --images off)" >&2; exit 2; }
 first=$(find "$dir" -maxdepth 1 -name 'frame_[0-9][0-9][0-9][0-9][0-9].png' | sort | head -1)
 start=$(basename "$first" .png); start=$((10#${start#frame_}))
 out=${out:-$dir/video.mp4}

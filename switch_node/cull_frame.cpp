@@ -104,18 +104,6 @@ void CullFrame::begin_stream(uint32_t frame) {
 Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
   const std::string f = "frame " + std::to_string(in_.frame) + ": ";
   auto lost = [](std::string why) { return Error{std::move(why)}; };
-  // The frame's first diff or EndOfFrame: in full-sets mode it replaces the set; only ids not in
-  // V' were found visible (for the hold).
-  auto start_frame = [&] {
-    if (config_.full_sets && !in_.started) {
-      if (hold_) {
-        in_.before.assign(visible_.ids().begin(), visible_.ids().end());
-        std::sort(in_.before.begin(), in_.before.end());
-      }
-      visible_.clear();
-    }
-    in_.started = true;
-  };
   if (const auto* c = std::get_if<wire::Camera>(&m)) {
     if (in_.have_camera) return lost(f + "sent two cameras");
     in_.have_camera = true;
@@ -126,18 +114,14 @@ Result<CullFrame::Stream> CullFrame::take(const wire::Message& m) {
   }
   if (const auto* d = std::get_if<wire::NodeDiff>(&m)) {
     if (!in_.have_camera) return lost(f + "sent its diff before its camera");
-    start_frame();
     if (auto err = stream_.on_diff(visible_, *d)) return lost("desync: " + *err);
     if (hold_)  // the other node found these visible in this frame (added to V')
-      for (uint32_t id : d->added)
-        if (!config_.full_sets || !std::binary_search(in_.before.begin(), in_.before.end(), id))
-          hold_->seen(r_.node_of(id), in_.frame);
+      for (uint32_t id : d->added) hold_->seen(r_.node_of(id), in_.frame);
     if (or_ == OrState::drawn && backend_->draw(d->added) > 0) backend_->flush();  // as in draw_v
     return Stream::more;
   }
   if (const auto* e = std::get_if<wire::EndOfFrame>(&m)) {
     if (!in_.have_camera) return lost(f + "sent its diff before its camera");
-    start_frame();
     if (e->frame != in_.frame)
       return lost("ended frame " + std::to_string(e->frame) + ", expected " + std::to_string(in_.frame));
     if (auto err = stream_.on_end_of_frame(visible_, *e)) return lost("desync: " + *err);

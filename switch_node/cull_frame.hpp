@@ -123,9 +123,8 @@ class CullFrame {
   // The stream of one frame (begin_stream).
   struct Incoming {
     uint32_t frame = 0;
-    bool have_camera = false, started = false;
+    bool have_camera = false;
     uint64_t expected_front = 0;
-    std::vector<uint32_t> before;  // full sets with a hold: V' (sorted)
   } in_;
   CullTotals totals_;
 };

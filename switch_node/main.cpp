@@ -21,22 +21,24 @@ int main(int argc, char** argv) {
                  "and culls with hardware occlusion queries (HC), streaming visible-set diffs to the\n"
                  "render client and to the other node. Node 0 listens for node 1 and the render client;\n"
                  "node 1 connects to node 0 (--peer) and listens for the render client.");
+    cli.group(occ::CliGroup::cluster);
     cli.option("id", &o.id, 0, 1, "which node of the switch (HC on frames f with f % 2 == id)");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl, "must match the render client");
     occ::add_listen_options(cli, o.listen);
     cli.option("peer", &o.peer, "HOST:PORT", "node 1 only: switch node 0's address");
-    occ::add_cluster_options(cli, o.config);
-    cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message (the paper's b)");
-    occ::add_hc_options(cli, o.hc);
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for a peer or a message (for the next camera: twice this)");
     std::string key_file;
     occ::add_key_option(cli, &key_file);
-    cli.flag("serve", &o.serve,
-             "stay up for successive render clients, one at a time (both nodes need it); a second client while "
-             "one is served is told the cluster is busy");
-    cli.option("sessions", &o.sessions, 0, 1000000, "with --serve: exit after this many render clients (0 = never)");
+    cli.custom("serve", "N|forever", "",
+               "stay up for N successive render clients (forever: no end), one at a time (both nodes need it); a "
+               "second client while one is served is told the cluster is busy (default: one client, then exit)",
+               [&o](const std::string& v) {
+                 o.serve = true;
+                 o.sessions = v == "forever" ? 0 : int(occ::Cli::whole("serve", v, 1, 1000000, " or forever"));
+               });
+    occ::add_cluster_options(cli, o.config);
+    occ::add_hc_options(cli, o.hc);
     if (!cli.parse(argc, argv)) return 0;
-    if (o.sessions > 0 && !o.serve) throw occ::InputError("--sessions needs --serve");
     if (o.id == 1 && o.peer.empty()) throw occ::InputError("--peer is required for --id 1 (switch node 0's HOST:PORT)");
     if (o.id == 0 && !o.peer.empty()) throw occ::InputError("--peer is for --id 1 only: node 0 listens for node 1");
     occ::resolve_listen(o.listen);  // fail before loading the scene

@@ -226,7 +226,7 @@ class Session {
   void hc_frame(uint32_t frame, const NumberedCamera& cam) {
     const Clock::time_point hc_start = Clock::now();
     const uint64_t hc_cpu0 = process_cpu_us();
-    DiffSender out(uint32_t(o_.diff_chunk_ids), o_.config.full_sets, [this](const wire::Message& m) { send_out(m); });
+    DiffSender out(wire::kDefaultDiffChunkIds, [this](const wire::Message& m) { send_out(m); });
     HcFrame hc = cull_.hc(frame, cam.camera, out);
     hc.eof.or_us = or_.us;
     hc.eof.hc_us = micros_since(hc_start);
@@ -460,13 +460,13 @@ class SwitchNode {
     if (!o_.serve) return serve_one();
     // --serve: one render client after the other, each in a session of its own (both nodes
     // start it from scratch: new connections, including the link between the nodes, and fresh
-    // per-client state), until --sessions clients have been served (0: forever).
+    // per-client state), until --serve's number of clients have been served (or forever).
     int failed = 0;
     for (int n = 1;; ++n) {
       const int code = serve_one();
       failed += code != 0;
       if (o_.sessions > 0 && n >= o_.sessions) {
-        std::cerr << who_ << ": served " << n << " render clients (" << failed << " failed), as --sessions asked\n";
+        std::cerr << who_ << ": served " << n << " render clients (" << failed << " failed), as --serve asked\n";
         return failed ? 1 : 0;
       }
       std::cerr << who_ << ": render client " << n << (code ? " failed" : " done")

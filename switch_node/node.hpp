@@ -21,12 +21,11 @@ struct NodeOptions {
   GlBackend gl = GlBackend::Auto;
   ListenOptions listen;
   std::string peer;  // node 1: where node 0 listens
-  int diff_chunk_ids = 100;
   HcChoices hc;
   int timeout_ms = 30000;
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
   bool serve = false;                  // --serve: one render client after the other
-  int sessions = 0;                    // --serve: exit after this many clients (0: never)
+  int sessions = 0;                    // --serve N: exit after N clients (0, forever: never)
 };
 
 // Returns the process exit code: 0 after the render client said Bye, 1 on a failure (printed

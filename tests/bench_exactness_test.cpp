@@ -21,7 +21,7 @@ namespace {
 int render(const fs::path& out, const std::string& scene, const std::string& path, const std::string& cull, int w,
            int h) {
   fs::create_directories(out);
-  Proc p({bin("render_client"), "--reference", "--scene", scene, "--path", path, "--width", std::to_string(w),
+  Proc p({bin("render_client"), "--scene", scene, "--path", path, "--width", std::to_string(w),
           "--height", std::to_string(h), "--cull", cull, "--exact", "--out", out.string()},
          out / "log.txt");
   return p.wait(300s);
@@ -90,23 +90,24 @@ TEST(Exactness, ChcAndStopAndWaitFramesEqualBruteForceOnAGeneratedCity) {
   EXPECT_EQ(chc["exact_added"], none["exact_added"]);
 }
 
-// bench.sh hands generated scenes to the OpenSceneGraph peer as the glTF file --save-scene
+// bench.sh hands generated scenes to the OpenSceneGraph peer as the glTF file scene_export
 // writes: it must be the same scene, so rendering it gives the same frames as the spec.
 TEST(Exactness, ASavedSceneRendersExactlyLikeItsSpec) {
   fs::path dir = fresh_dir("save_scene");
   const std::string spec = "city:3x3:2:6:2";
   {
     fs::create_directories(dir / "spec");
-    Proc p({bin("render_client"), "--reference", "--scene", spec, "--path", "walk:12", "--width", "160", "--height",
-            "120", "--cull", "none", "--save-scene", (dir / "city.gltf").string(), "--save-path",
-            (dir / "path.csv").string(), "--out", (dir / "spec").string()},
+    Proc p({bin("render_client"), "--scene", spec, "--path", "walk:12", "--width", "160", "--height",
+            "120", "--cull", "none", "--out", (dir / "spec").string()},
            dir / "spec.log");
     ASSERT_EQ(p.wait(120s), 0) << read_file(dir / "spec.log");
+    Proc e({bin("scene_export"), "--scene", spec, "--out", (dir / "city.gltf").string()}, dir / "export.log");
+    ASSERT_EQ(e.wait(120s), 0) << read_file(dir / "export.log");
   }
   ASSERT_TRUE(fs::exists(dir / "city.bin"));
   fs::create_directories(dir / "gltf");
-  Proc p({bin("render_client"), "--reference", "--scene", (dir / "city.gltf").string(), "--path",
-          (dir / "path.csv").string(), "--width", "160", "--height", "120", "--cull", "none", "--out",
+  Proc p({bin("render_client"), "--scene", (dir / "city.gltf").string(), "--path",
+          (dir / "spec" / "path.csv").string(), "--width", "160", "--height", "120", "--cull", "none", "--out",
           (dir / "gltf").string()},
          dir / "gltf.log");
   ASSERT_EQ(p.wait(120s), 0) << read_file(dir / "gltf.log");
@@ -116,18 +117,20 @@ TEST(Exactness, ASavedSceneRendersExactlyLikeItsSpec) {
   EXPECT_EQ(a["triangles_drawn"], b["triangles_drawn"]);
 }
 
-// A plant is read lazily from its scene cache (--geometry-budget, the default): --save-scene reads
+// A plant is read lazily from its scene cache (--geometry-budget, the default): scene_export reads
 // its meshes back from the cache, and writes the files it writes when the plant is read whole.
 TEST(Exactness, ASavedPlantReadLazilyIsTheFileOfThePlantReadWhole) {
   fs::path dir = fresh_dir("save_plant");
   for (const std::string budget : {"1", "all"}) {
-    Proc p({bin("render_client"), "--reference", "--scene", "plant:0.05", "--path", "walk:2", "--width", "64",
-            "--height", "48", "--no-images", "--lod-cache", (dir / "cache").string(), "--geometry-budget", budget,
-            "--save-scene", (dir / (budget + ".gltf")).string(), "--out", (dir / budget).string()},
+    Proc p({bin("scene_export"), "--scene", "plant:0.05", "--lod-cache", (dir / "cache").string(),
+            "--geometry-budget", budget, "--out", (dir / (budget + ".gltf")).string()},
            dir / (budget + ".log"));
     ASSERT_EQ(p.wait(120s), 0) << read_file(dir / (budget + ".log"));
   }
-  EXPECT_NE(read_file(dir / "1.log").find("geometry streams"), std::string::npos) << read_file(dir / "1.log");
+  EXPECT_NE(read_file(dir / "1.log").find("meshes read back from the scene cache"), std::string::npos)
+      << read_file(dir / "1.log");
+  EXPECT_EQ(read_file(dir / "all.log").find("meshes read back from the scene cache"), std::string::npos)
+      << read_file(dir / "all.log");
   const std::string lazy_bin = read_file(dir / "1.bin"), whole_bin = read_file(dir / "all.bin");
   EXPECT_GT(lazy_bin.size(), 100000u);
   EXPECT_TRUE(lazy_bin == whole_bin) << lazy_bin.size() << " vs " << whole_bin.size() << " bytes";
@@ -153,7 +156,7 @@ TEST(Exactness, TheSwitchNeverCullsASliverBehindItsOwnDepth) {
   ASSERT_EQ(walk.size(), 400u);
   occ::save_camera_path((dir / "path.csv").string(), std::vector<occ::Camera>(walk.begin() + 85, walk.begin() + 101));
   fs::create_directories(dir / "none");
-  Proc ref({bin("render_client"), "--reference", "--scene", scene, "--path", (dir / "path.csv").string(), "--width",
+  Proc ref({bin("render_client"), "--scene", scene, "--path", (dir / "path.csv").string(), "--width",
             "400", "--height", "300", "--cull", "none", "--out", (dir / "none").string()},
            dir / "none.log");
   ASSERT_EQ(ref.wait(300s), 0) << read_file(dir / "none.log");

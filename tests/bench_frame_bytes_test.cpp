@@ -59,7 +59,7 @@ TEST(FrameBytes, TheRenderClientChargesEachFrameWithItsOwnMessagesWhenItsIoThrea
   ASSERT_TRUE(listener) << listener.error();
   fs::path dir = fresh_dir("frame_bytes");
   Proc rvg({bin("render_client"), "--scene", spec, "--path", "walk:" + std::to_string(frames), "--width", "64",
-            "--height", "48", "--connect", "127.0.0.1:" + std::to_string(listener->port()), "--no-images", "--out",
+            "--height", "48", "--connect", "127.0.0.1:" + std::to_string(listener->port()), "--images", "off", "--out",
             dir.string()},
            dir / "client.log");
   const wire::Hello mine = occ::make_hello(wire::Role::switch_node, 0, vp, ls.fingerprint, ls.hierarchy.params(),

@@ -25,9 +25,9 @@ struct ClusterOptions {
   int timeout_ms = 20000;                          // --timeout-ms of all three
   std::vector<std::string> all;                    // more flags for all three
   std::vector<std::string> node0, node1, client;   // more flags for one of them
-  // The render client's --occlusion-gate: "on" (every frame with occlusion) keeps the runs of the
-  // switch's own tests deterministic; the gate's tests set it.
-  std::string occlusion_gate = "on";
+  // The render client's --occlusion: "switch" (every frame with occlusion by the switch) keeps
+  // the runs of the switch's own tests deterministic; the gate's tests set it.
+  std::string occlusion = "switch";
   bool relay_node1 = false;                        // the client reaches node 1 through link_relay
   bool relay_node_link = false;                    // or: node 1 reaches node 0 through link_relay
   std::chrono::milliseconds client_wait = std::chrono::seconds(300);  // finish(): the client's end
@@ -64,7 +64,8 @@ class Cluster {
   int restart_node(int k) {
     auto& p = k == 0 ? n0_again_ : n1_again_;
     const std::string port = std::to_string(k == 0 ? p0_ : p1_), pf = file("n" + std::to_string(k) + "_again.port");
-    std::vector<std::string> a = {bin("switch_node"), "--id", std::to_string(k), "--port", port, "--port-file", pf};
+    std::vector<std::string> a = {bin("switch_node"), "--id", std::to_string(k), "--listen", "127.0.0.1:" + port,
+                                  "--port-file", pf};
     if (k == 1) a.insert(a.end(), {"--peer", local(p0_)});
     p.emplace(args(a, k == 0 ? o_.node0 : o_.node1), out_ / ("node" + std::to_string(k) + "_again.log"));
     return wait_port(pf, *p);
@@ -84,7 +85,7 @@ class Cluster {
   }
   void start_client() {
     client_.emplace(args({bin("render_client"), "--path", o_.path, "--out", out_.string(), "--connect", local(p0_),
-                          "--connect", local(o_.relay_node1 ? pr_ : p1_), "--occlusion-gate", o_.occlusion_gate},
+                          "--connect", local(o_.relay_node1 ? pr_ : p1_), "--occlusion", o_.occlusion},
                          o_.client),
                     out_ / "render_client.log");
   }

@@ -4,8 +4,12 @@
 
 #include <sched.h>
 
+#include <algorithm>
 #include <fstream>
+#include <map>
 #include <memory>
+#include <set>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -27,7 +31,8 @@ std::string script(const std::string& name) { return std::string(OCC_SOURCE_DIR)
 TEST(Conventions, EveryBinaryAndScriptHasTheSameVersion) {
   const fs::path dir = fresh_dir("version");
   ASSERT_FALSE(version().empty());
-  for (const char* b : {"render_client", "switch_node", "occlusion_server", "frame_diff", "cull_overview", "link_relay"}) {
+  for (const char* b : {"render_client", "switch_node", "occlusion_server", "frame_diff", "cull_overview", "link_relay",
+                        "scene_export"}) {
     Proc p({bin(b), "--version"}, dir / (std::string(b) + ".log"));
     EXPECT_EQ(p.wait(30s), 0) << b << ": " << p.log();
     EXPECT_EQ(p.log().rfind(std::string(b) + " (occswitch) " + version(), 0), 0u) << p.log();
@@ -39,6 +44,58 @@ TEST(Conventions, EveryBinaryAndScriptHasTheSameVersion) {
     EXPECT_EQ(p.wait(30s), 0) << s << ": " << p.log();
     EXPECT_EQ(p.log(), std::string(s) + " (occswitch) " + version() + "\n");
   }
+}
+
+namespace {
+// A binary's --help as heading -> its flags (--help and --version left out), headings in order.
+std::vector<std::pair<std::string, std::vector<std::string>>> help_groups(const std::string& binary,
+                                                                           const fs::path& log) {
+  Proc p({bin(binary), "--help"}, log);
+  EXPECT_EQ(p.wait(30s), 0) << binary << ": " << p.log();
+  std::vector<std::pair<std::string, std::vector<std::string>>> groups;
+  std::istringstream in(p.log());
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line.back() == ':' && line[0] != ' ' && line.rfind("usage", 0) != 0) {
+      groups.push_back({line.substr(0, line.size() - 1), {}});
+    } else if (line.rfind("  --", 0) == 0) {
+      const std::string flag = line.substr(2, line.find(' ', 2) - 2);
+      if (flag != "--help" && flag != "--version" && !groups.empty()) groups.back().second.push_back(flag);
+    }
+  }
+  return groups;
+}
+size_t flag_count(const std::vector<std::pair<std::string, std::vector<std::string>>>& g) {
+  size_t n = 0;
+  for (const auto& [heading, flags] : g) n += flags.size();
+  return n;
+}
+}  // namespace
+
+// The knobs a user needs, grouped: --help sorts them under the same five headings in the same
+// order everywhere; switch_node has at most 20 flags and render_client at most 24; cull_overview
+// replays the nodes' culling, so it takes every scene, accuracy and expert flag of switch_node.
+TEST(Conventions, HelpIsGroupedAndTheFlagsAreFew) {
+  const fs::path dir = fresh_dir("help_groups");
+  const std::vector<std::string> order = {"scene and path", "output", "cluster and network", "accuracy", "expert"};
+  std::map<std::string, std::vector<std::pair<std::string, std::vector<std::string>>>> help;
+  for (const char* b : {"switch_node", "render_client", "cull_overview"}) {
+    help[b] = help_groups(b, dir / (std::string(b) + ".log"));
+    size_t at = 0;
+    for (const auto& [heading, flags] : help[b]) {
+      const auto it = std::find(order.begin() + long(at), order.end(), heading);
+      ASSERT_NE(it, order.end()) << b << ": heading '" << heading << "' unknown or out of order";
+      at = size_t(it - order.begin()) + 1;
+      EXPECT_FALSE(flags.empty()) << b << ": " << heading;
+    }
+  }
+  EXPECT_LE(flag_count(help["switch_node"]), 20u);
+  EXPECT_LE(flag_count(help["render_client"]), 24u);
+  std::set<std::string> overview;
+  for (const auto& [heading, flags] : help["cull_overview"]) overview.insert(flags.begin(), flags.end());
+  for (const auto& [heading, flags] : help["switch_node"])
+    if (heading != "cluster and network") {
+      for (const std::string& f : flags) EXPECT_TRUE(overview.count(f)) << "cull_overview lacks switch_node's " << f;
+    }
 }
 
 TEST(Conventions, ScriptHelpIsHelpAndDoesNothingElse) {
@@ -59,7 +116,7 @@ TEST(Conventions, ScriptHelpIsHelpAndDoesNothingElse) {
 TEST(Conventions, VideoFromFrames) {
   if (!fs::exists("/usr/bin/ffmpeg")) GTEST_SKIP() << "needs ffmpeg (Debian package ffmpeg): not installed";
   const fs::path dir = fresh_dir("video");
-  Proc r({bin("render_client"), "--reference", "--scene", "city:2x2:2:4:1", "--path", "walk:12", "--width", "65",
+  Proc r({bin("render_client"), "--scene", "city:2x2:2:4:1", "--path", "walk:12", "--width", "65",
           "--height", "49", "--out", (dir / "f").string()},
          dir / "render.log");
   ASSERT_EQ(r.wait(60s), 0) << r.log();
@@ -187,7 +244,7 @@ TEST(Conventions, ClusterPinsBothNodesToItsLastCpu) {
   for (const std::string mode : {"on", "off"}) {
     std::vector<std::string> args = {"/usr/bin/env", "LP_NUM_THREADS=3"};
     for (const std::string& a :
-         cluster(dir / mode, {"--scene", "city:2x2:2:4:1", "--path", "walk:8000", "--no-images", "--pin-nodes", mode}))
+         cluster(dir / mode, {"--scene", "city:2x2:2:4:1", "--path", "walk:8000", "--images", "off", "--pin-nodes", mode}))
       args.push_back(a);
     Proc p(args, dir / (mode + ".log"));
     // Each process's CPUs, read while it runs (the nodes from their start, the client once
@@ -295,7 +352,7 @@ TEST(Conventions, ClusterHostCpusGivesEachProcessCpuTimeOfItsOwn) {
   const std::string all = cpus_allowed("self");
   std::vector<std::string> args = {"/usr/bin/env", "LP_NUM_THREADS=3"};
   for (const std::string& a : cluster(dir / "run", {"--scene", "city:2x2:2:4:1", "--path", "walk:8000",
-                                                     "--no-images", "--host-cpus", "0.5"}))
+                                                     "--images", "off", "--host-cpus", "0.5"}))
     args.push_back(a);
   Proc p(args, dir / "run.log");
   std::string group[3], quota[3], cpus[3], threads[3];

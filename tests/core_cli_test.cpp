@@ -55,6 +55,40 @@ TEST(Cli, ParsesEveryKindAndRejectsBadValuesByName) {
   EXPECT_NE(cli.help().find("--camera-mode latest|lockstep"), std::string::npos);
 }
 
+// --help lists the options under their group's heading, the groups in CliGroup's order whatever
+// the order of declaration, and leaves out headings without options; count() counts options.
+TEST(Cli, HelpGroupsOptionsUnderHeadingsInOrder) {
+  int width = 64, n = 0;
+  std::string word = "a";
+  Cli cli("prog", "[options]", "test");
+  cli.option("n", &n, 0, 9, "expert by default");
+  cli.group(CliGroup::accuracy);
+  cli.option("width", &width, 16, 16384, "w");
+  cli.group(CliGroup::scene);
+  cli.custom("word", "a|b", "a", "custom", [&](const std::string& v) {
+    if (v != "a" && v != "b") throw occ::InputError("--word '" + v + "': expected a or b");
+    word = v;
+  });
+  EXPECT_EQ(cli.count(), 3u);
+  const std::string h = cli.help();
+  const size_t scene = h.find("\nscene and path:\n"), accuracy = h.find("\naccuracy:\n"), expert = h.find("\nexpert:\n");
+  ASSERT_NE(scene, std::string::npos) << h;
+  EXPECT_LT(scene, h.find("--word a|b"));
+  EXPECT_LT(h.find("--word a|b"), accuracy);
+  EXPECT_LT(accuracy, h.find("--width N"));
+  EXPECT_LT(h.find("--width N"), expert);
+  EXPECT_LT(expert, h.find("--n N"));
+  EXPECT_EQ(h.find("output:"), std::string::npos) << h;
+  EXPECT_NE(h.find("(default a)"), std::string::npos);
+  Args b{"prog", "--word", "b"};
+  ASSERT_TRUE(cli.parse(b.argc(), b.argv()));
+  EXPECT_EQ(word, "b");
+  EXPECT_EQ(error_of(cli, {"prog", "--word", "c"}), "--word 'c': expected a or b");
+  EXPECT_THROW(cli.option("n", &n, 0, 9, "twice"), std::logic_error);
+  EXPECT_EQ(Cli::whole("n", "7", 0, 9), 7);
+  EXPECT_THROW(Cli::whole("n", "10", 0, 9), occ::InputError);
+}
+
 TEST(Cli, AWholeNumberOrAutoIsNulloptForAuto) {
   std::optional<int> hold;
   Cli cli("prog", "[options]", "test");

@@ -309,14 +309,13 @@ TEST(OcclusionGate, FixedPoliciesIgnoreTimings) {
   }
 }
 
-// The tests' hook (not a user mode): `test_alternate` cameras each way in turn, whatever the
-// policy and the timings.
-TEST(OcclusionGate, TestAlternateSwitchesEveryPeriodWhateverTheTimings) {
-  for (auto policy : {OcclusionGate::Policy::automatic, OcclusionGate::Policy::on, OcclusionGate::Policy::off}) {
-    OcclusionGate every{{.policy = policy, .test_alternate = 4}};
+// Policy::alternate (--occlusion alternate:N): N cameras each way in turn, whatever the timings.
+TEST(OcclusionGate, AlternateSwitchesEveryPeriodWhateverTheTimings) {
+  for (uint32_t every_n : {1u, 4u}) {
+    OcclusionGate every{{.policy = OcclusionGate::Policy::alternate, .alternate_every = every_n}};
     Sim s{[](uint32_t, bool occ) { return occ ? 18.0 : 13.0; }};
     s.run(every, 16);
-    for (uint32_t c = 0; c < 16; ++c) EXPECT_EQ(every.occlusion(c), (c / 4) % 2 == 0) << c;
+    for (uint32_t c = 0; c < 16; ++c) EXPECT_EQ(every.occlusion(c), (c / every_n) % 2 == 0) << c;
     EXPECT_EQ(s.off_frames, 8u);
     EXPECT_FALSE(every.wants_frustum_triangles());
     EXPECT_EQ(every.trials(), 0u);

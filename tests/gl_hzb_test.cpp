@@ -281,7 +281,7 @@ TEST(GlDepthTests, EveryStrategyFindsTheVisibleSetsOfQueriesOnAWalk) {
     const SwitchStep step(renderables, config, hgt);
     QuerySkipper skipper(p.h.size());
     VisibilityHold hold(p.h.size(), 2);
-    DiffSender nowhere(wire::kMaxDiffIds, false, [](const wire::Message&) {});
+    DiffSender nowhere(wire::kMaxDiffIds, [](const wire::Message&) {});
     VisibleSet visible(renderables.count());
     std::vector<std::vector<uint32_t>> sets;
     for (int f = 0; f < frames; ++f) {

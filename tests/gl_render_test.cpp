@@ -404,7 +404,6 @@ TEST(SceneRenderer, AutomaticFlushPartsAreAnEighthOfTheCallWithinBounds) {
 TEST(FlushSchedule, CutsCallsIntoPartsAndFlushesWhenAPartIsFull) {
   FlushSchedule s;
   EXPECT_EQ(s.fixed(), std::optional<uint32_t>(FlushSchedule::kMaxPart));
-  EXPECT_FALSE(s.pinned());
   s.request(100u);
   s.begin_call(1000);
   EXPECT_TRUE(s.fits(99));

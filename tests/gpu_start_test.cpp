@@ -22,13 +22,13 @@ const std::string kScene = "city:3x3:2:6:1";
 const std::vector<std::string> kView = {"--width", "96", "--height", "64"};
 const std::string kMissing = "/nonexistent/occ-missing-library.so";
 
-// render_client --reference ... with extra environment variables (NAME=VALUE) through env(1).
+// render_client (the reference renderer) ... with extra environment variables (NAME=VALUE) through env(1).
 Outcome reference_with_env(const fs::path& out, const std::vector<std::string>& env,
                            const std::vector<std::string>& flags) {
   fs::create_directories(out);
   std::vector<std::string> a = {"/usr/bin/env"};
   a.insert(a.end(), env.begin(), env.end());
-  for (const std::string& s : {bin("render_client"), std::string("--reference"), std::string("--scene"), kScene,
+  for (const std::string& s : {bin("render_client"), std::string("--scene"), kScene,
                                std::string("--path"), std::string("walk:4"), std::string("--out"), out.string()})
     a.push_back(s);
   a.insert(a.end(), kView.begin(), kView.end());

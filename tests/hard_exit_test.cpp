@@ -28,7 +28,7 @@ TEST(HardExit, LeavingAClosedRoomNeverDrawsMoreThanAFewTimesTheVisibleSet) {
   const fs::path dir = expect_cluster_equals_reference("exit", "hard:exit", exit_path(), view);
   // The exactly visible leaves of every frame (item buffer), against what the RVG drew.
   const std::string csv = (dir / "path.csv").string();
-  Proc exact({bin("render_client"), "--reference", "--exact", "--cull", "none", "--no-images", "--scene", "hard:exit",
+  Proc exact({bin("render_client"), "--exact", "--cull", "none", "--images", "off", "--scene", "hard:exit",
               "--path", csv, "--out", (dir / "exact").string(), "--width", "128", "--height", "128"},
              dir / "exact.log");
   ASSERT_EQ(exact.wait(120s), 0) << exact.log();

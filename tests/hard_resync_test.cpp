@@ -105,7 +105,7 @@ class Replay {
         }
       }
       next.assign(1, to_wire(f, path_[f], vp_));
-      DiffSender out(wire::kDefaultDiffChunkIds, config.full_sets, [&](const wire::Message& m) { next.push_back(m); });
+      DiffSender out(wire::kDefaultDiffChunkIds, [&](const wire::Message& m) { next.push_back(m); });
       HcFrame hc = hc_node.hc(f, path_[f], out);
       out.send(hc.eof);
       stream.swap(next);

@@ -18,7 +18,7 @@ Outcome run(std::vector<std::string> args, const std::string& name) {
 
 TEST(Cli, EveryBinaryHasHelp) {
   for (const char* b : {"render_client", "switch_node", "frame_diff", "occlusion_server", "link_relay", "cull_overview",
-                        "protocol_bench"}) {
+                        "protocol_bench", "scene_export"}) {
     Outcome o = run({bin(b), "--help"}, std::string(b) + "_help");
     EXPECT_EQ(o.code, 0) << b;
     EXPECT_NE(o.log.find("usage:"), std::string::npos) << b << ": " << o.log;
@@ -28,28 +28,27 @@ TEST(Cli, EveryBinaryHasHelp) {
 TEST(Cli, RenderClientBadInputGetsOneNamedError) {
   fs::path dir = fresh_dir("cli_inputs");
   const std::string ref = bin("render_client");
-  expect_one_error(run({ref, "--reference", "--bogus"}, "unknown"), {"unknown flag --bogus"});
-  expect_one_error(run({ref, "--reference", "--width", "0"}, "w0"), {"--width '0'"});
-  expect_one_error(run({ref, "--reference", "--height", "100000"}, "h100k"), {"--height '100000'"});
-  expect_one_error(run({ref, "--reference", "--scene", "/nonexistent/x.gltf"}, "noscene"), {"/nonexistent/x.gltf"});
+  expect_one_error(run({ref, "--bogus"}, "unknown"), {"unknown flag --bogus"});
+  expect_one_error(run({ref, "--width", "0"}, "w0"), {"--width '0'"});
+  expect_one_error(run({ref, "--height", "100000"}, "h100k"), {"--height '100000'"});
+  expect_one_error(run({ref, "--scene", "/nonexistent/x.gltf"}, "noscene"), {"/nonexistent/x.gltf"});
   std::ofstream(dir / "bad.gltf") << "{ \"asset\": {\"version\": \"2.0\"}, \"meshes\": [], \"nodes\": [{\"mesh\": 3}], "
                                      "\"scenes\": [{\"nodes\": [0]}] }";
-  expect_one_error(run({ref, "--reference", "--scene", (dir / "bad.gltf").string()}, "badgltf"),
+  expect_one_error(run({ref, "--scene", (dir / "bad.gltf").string()}, "badgltf"),
                    {"bad.gltf", "node 0", "mesh 3"});
-  expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--path", "/nonexistent/p.csv"}, "nopath"),
+  expect_one_error(run({ref, "--scene", "city:2x2:1:2:1", "--path", "/nonexistent/p.csv"}, "nopath"),
                    {"/nonexistent/p.csv"});
   std::ofstream(dir / "nan.csv") << "0,0,1,5,0,0,0,0,1,0,60\n1,0,1,nan,0,0,0,0,1,0,60\n";
-  expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--path", (dir / "nan.csv").string()}, "nan"),
+  expect_one_error(run({ref, "--scene", "city:2x2:1:2:1", "--path", (dir / "nan.csv").string()}, "nan"),
                    {"nan.csv", "line 2", "eye_z"});
-  expect_one_error(run({ref, "--scene", "city:2x2:1:2:1"}, "noconnect"), {"--connect"});
-  expect_one_error(run({ref, "--reference", "--scene", "city:0x2"}, "badcity"), {"city:0x2"});
-  // Retired modes are unknown values now; the tests' hook takes a count only.
-  expect_one_error(run({ref, "--occlusion-gate", "selected"}, "gate_selected"), {"--occlusion-gate 'selected'"});
-  expect_one_error(run({ref, "--two-pass", "alternate"}, "two_pass_alternate"), {"--two-pass 'alternate'"});
-  ::setenv("OCC_TEST_ALTERNATE", "often", 1);
-  const Outcome hook = run({ref, "--scene", "city:2x2:1:2:1", "--connect", "127.0.0.1:1"}, "test_alternate");
-  ::unsetenv("OCC_TEST_ALTERNATE");
-  expect_one_error(hook, {"OCC_TEST_ALTERNATE 'often'"});
+  expect_one_error(run({ref, "--connect", "127.0.0.1:1", "--connect", "127.0.0.1:2", "--connect", "127.0.0.1:3"}, "three"),
+                   {"--connect", "3 times"});
+  expect_one_error(run({ref, "--connect", "127.0.0.1:1", "--exact"}, "exact_cluster"), {"--exact"});
+  expect_one_error(run({ref, "--cluster-key-file", "/nonexistent/key"}, "key_reference"), {"--cluster-key-file"});
+  expect_one_error(run({ref, "--scene", "city:0x2"}, "badcity"), {"city:0x2"});
+  expect_one_error(run({ref, "--occlusion", "sometimes"}, "occlusion_word"), {"--occlusion 'sometimes'"});
+  expect_one_error(run({ref, "--occlusion", "alternate:0"}, "alternate0"), {"--occlusion '0'", "1..1000"});
+  expect_one_error(run({ref, "--images", "jpeg"}, "images_word"), {"--images 'jpeg'"});
 }
 
 TEST(Cli, SwitchNodeBadInputGetsOneNamedError) {
@@ -60,13 +59,13 @@ TEST(Cli, SwitchNodeBadInputGetsOneNamedError) {
   expect_one_error(run({sn, "--id", "0", "--camera-mode", "sometimes"}, "mode"), {"--camera-mode 'sometimes'"});
 }
 
-// --port 0 --port-file F (the spelling) listens on a free port of 127.0.0.1 and writes it;
-// a port out of range is one named error.
+// --listen 127.0.0.1:0 --port-file F listens on a free port of 127.0.0.1 and writes it; a port out
+// of range is one named error.
 TEST(Cli, SwitchNodePortAndPortFile) {
   fs::path dir = fresh_dir("cli_port");
   const fs::path pf = dir / "node0.port";
   Outcome o = run({bin("switch_node"), "--id", "0", "--scene", "city:2x2:1:2:1", "--width", "64", "--height", "64",
-                   "--port", "0", "--port-file", pf.string(), "--timeout-ms", "300"},
+                   "--listen", "127.0.0.1:0", "--port-file", pf.string(), "--timeout-ms", "300"},
                   "port0");
   EXPECT_EQ(o.code, 1) << o.log;  // nobody connects: a clear timeout
   std::ifstream in(pf);
@@ -75,6 +74,7 @@ TEST(Cli, SwitchNodePortAndPortFile) {
   EXPECT_GT(port, 0);
   EXPECT_NE(o.log.find("listening on 127.0.0.1:" + std::to_string(port)), std::string::npos) << o.log;
   EXPECT_NE(o.log.find("no valid peer"), std::string::npos) << o.log;
-  expect_one_error(run({bin("switch_node"), "--port", "70000"}, "port70000"), {"--port '70000'"});
-  expect_one_error(run({bin("occlusion_server"), "--port", "x"}, "portx"), {"--port 'x'"});
+  expect_one_error(run({bin("switch_node"), "--listen", "127.0.0.1:70000"}, "port70000"), {"--listen"});
+  expect_one_error(run({bin("occlusion_server"), "--listen", "127.0.0.1:x"}, "portx"), {"--listen"});
+  expect_one_error(run({bin("switch_node"), "--serve", "0"}, "serve0"), {"--serve '0'"});
 }

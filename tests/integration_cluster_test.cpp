@@ -1,5 +1,6 @@
 // The occlusion switch end to end: three real processes over loopback, compared with the
 // reference renderer frame by frame (conservative culling must not change a pixel).
+#include <cmath>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -85,11 +86,11 @@ void expect_cluster_equals_reference(const std::string& name, const std::string&
 }
 
 // The plant's 40-camera walk (`o`: cluster("plant:0.3", "walk:40")) with the render client's
-// --occlusion-gate `policy`, frames checked against the reference; the run's stats (40 rows) in
+// --occlusion `policy`, frames checked against the reference; the run's stats (40 rows) in
 // `stats`. Null when the cluster run failed.
 std::optional<ClusterRun> plant_walk_with_gate(const fs::path& dir, const std::string& policy, ClusterOptions& o,
                                                std::map<std::string, std::vector<double>>& stats) {
-  o.occlusion_gate = policy;
+  o.occlusion = policy;
   std::optional<ClusterRun> r = expect_cluster_equals_reference(dir, o, kView, 40);
   if (!r) return r;
   stats = read_csv(dir / "cluster" / "stats.csv");
@@ -148,18 +149,15 @@ TEST(Cluster, PlantWalkWithDepthPyramidHcEqualsReference) {
 }
 
 // Occlusion only where it pays: the render client's gate switches frames between the
-// switch with occlusion and frustum sets (no OR, no queries on the HC node). The tests' hook
-// OCC_TEST_ALTERNATE=4 (render_client/main.cpp) switches every 4 cameras, so both changes of mode
-// happen many times: the frames stay the reference's; frames without occlusion issued no queries
-// and drew at least the frustum set's leaves; both nodes served some of them. The render client
-// culls those frustum sets itself in two passes (the same hook: 4 of them each way), hiding
-// leaves behind the aisle's walls.
+// switch with occlusion and frustum sets (no OR, no queries on the HC node). --occlusion
+// alternate:4 switches every 4 cameras, so both changes of mode happen many times: the frames
+// stay the reference's; frames without occlusion issued no queries and drew at least the frustum
+// set's leaves; both nodes served some of them. The render client culls those frustum sets
+// itself in two passes (4 of them each way in turn), hiding leaves behind the aisle's walls.
 TEST(Cluster, FramesWithAndWithoutOcclusionInTurnEqualReference) {
   ClusterOptions o = cluster("plant:0.3", "walk:40");
   std::map<std::string, std::vector<double>> stats;
-  ::setenv("OCC_TEST_ALTERNATE", "4", 1);  // inherited by the processes started now
-  const std::optional<ClusterRun> r = plant_walk_with_gate(fresh_dir("plant_gate"), "on", o, stats);
-  ::unsetenv("OCC_TEST_ALTERNATE");
+  const std::optional<ClusterRun> r = plant_walk_with_gate(fresh_dir("plant_gate"), "alternate:4", o, stats);
   if (!r) return;
   size_t with = 0, without = 0, visible_with = 0, visible_without = 0, two_pass = 0, hidden = 0;
   for (size_t f = 0; f < 40; ++f) {
@@ -268,7 +266,7 @@ TEST(Cluster, PipesOrbitWithTheOrInGlOnNode0AndOnTheCpuOnNode1EqualsReference) {
 
 // Defaults by renderer class: with every process told it runs on a hardware GPU
 // (OCC_RENDERER_CLASS=hardware, on llvmpipe), --backend auto picks occlusion queries (no depth
-// read-back on the frame's path) and --two-pass auto is off; the frames still equal the reference.
+// read-back on the frame's path) and two passes are off; the frames still equal the reference.
 // The software choice (cpu-pyramid, two passes by measurement) is every other test's default.
 TEST(Cluster, HardwareRendererDefaultsQueriesNoTwoPassEqualsReference) {
   fs::path dir = fresh_dir("hardware_defaults");
@@ -283,7 +281,7 @@ TEST(Cluster, HardwareRendererDefaultsQueriesNoTwoPassEqualsReference) {
     EXPECT_NE(log->find("occlusion back end queries: "), std::string::npos) << *log;  // the summary: what it ran
     EXPECT_EQ(log->find("cpu-pyramid"), std::string::npos) << *log;
   }
-  EXPECT_NE(r->rvg_log.find("two passes off (--two-pass auto on a hardware renderer"), std::string::npos)
+  EXPECT_NE(r->rvg_log.find("two passes off (--occlusion auto on a hardware renderer"), std::string::npos)
       << r->rvg_log;
 }
 
@@ -292,22 +290,23 @@ TEST(Cluster, DuplexWalkEqualsReference) {
   expect_cluster_equals_reference("duplex", shared("scenes/duplex/Duplex_A_20110505.gltf"), "walk:60", 60, false);
 }
 
-TEST(Cluster, IncrementalDiffsUseFewerBytesThanFullSets) {
+// What incremental transmission saves, computed in every run: each frame's full_set_bytes is
+// what the whole visible set would have taken (its camera and end of frame as received, every id
+// in chunks of the paper's b); on a walk the diffs take fewer bytes.
+TEST(Cluster, IncrementalDiffsUseFewerBytesThanTheWholeSets) {
   fs::path dir = fresh_dir("fullsets");
   ClusterOptions o = cluster(kCity, "walk:90");
-  o.client = {"--no-images"};
-  // Adaptive queries and occluder fusion off: with them the set may keep assumed-visible nodes or
-  // depend on what was drawn before each query, and full sets turn front tracking off, so the two
-  // traversals (both conservative) would differ.
-  o.node0 = o.node1 = {"--adaptive-queries", "off", "--occluder-fusion", "off"};
-  ClusterRun inc = run_cluster(dir / "inc", o);
-  o.all = {"--full-sets"};
-  ClusterRun full = run_cluster(dir / "full", o);
-  ASSERT_EQ(inc.rvg_code, 0) << inc.rvg_log;
-  ASSERT_EQ(full.rvg_code, 0) << full.rvg_log;
-  auto a = read_csv(dir / "inc" / "stats.csv"), b = read_csv(dir / "full" / "stats.csv");
-  EXPECT_EQ(a["visible"], b["visible"]);  // same sets either way
-  EXPECT_LT(sum(a["bytes_received"]), sum(b["bytes_received"]));
+  o.client = {"--images", "off"};
+  ClusterRun r = run_cluster(dir / "inc", o);
+  ASSERT_EQ(r.rvg_code, 0) << r.rvg_log;
+  auto a = read_csv(dir / "inc" / "stats.csv");
+  ASSERT_EQ(a["visible"].size(), 90u);
+  for (size_t f = 0; f < 90; ++f) {
+    const double v = a["visible"][f], chunks = std::ceil(v / 100);
+    EXPECT_GE(a["full_set_bytes"][f], 4 * v + 18 * chunks) << "frame " << f;
+  }
+  EXPECT_LT(2 * sum(a["bytes_received"]), sum(a["full_set_bytes"]));
+  EXPECT_NE(r.rvg_log.find("the whole visible sets would take"), std::string::npos) << r.rvg_log;
 }
 
 // --on-node-failure exit (benchmarks): a killed node ends the run at once, named. The default,
@@ -357,7 +356,7 @@ TEST(Cluster, LatestCameraModeRunsToTheLastCameraWithVerifiedFrames) {
   // Without images (fast client) and with them (PNG writing makes the client the slowest stage:
   // before, both nodes then used one camera for two frames and a backlog of frames built up).
   for (bool images : {false, true}) {
-    o.client = images ? std::vector<std::string>{"--lookahead", "3"} : std::vector<std::string>{"--no-images"};
+    o.client = images ? std::vector<std::string>{"--lookahead", "3"} : std::vector<std::string>{"--images", "off"};
     const fs::path run = dir / (images ? "slow" : "fast");
     ClusterRun r = run_cluster(run, o);
     ASSERT_EQ(r.rvg_code, 0) << r.rvg_log;
@@ -393,7 +392,7 @@ TEST(ClusterLod, PixelErrorWalkVerifiesOnAllProcessesAndStaysCloseToReference) {
   const std::string path = "walk:60";
   ClusterOptions o = cluster(kCity, path);
   o.all = {"--lod-cache", (dir / "cache").string()};
-  o.client = {"--no-images"};
+  o.client = {"--images", "off"};
   // GL's depth at both: at tau 0 the CPU back end (llvmpipe's default) also culls leaves by their
   // own triangles, which levels of detail do not (the test compares what LODs save).
   o.node0 = o.node1 = {"--backend", "cpu-pyramid"};
@@ -465,7 +464,7 @@ TEST(ClusterLod, VisiblePixelLodAndNoFrontTrackingRunVerified) {
     const fs::path out = dir / extra[3];
     ClusterOptions o = cluster(kCity, "walk:40");
     o.all = extra;
-    o.client = {"--no-images"};
+    o.client = {"--images", "off"};
     ClusterRun r = run_cluster(out, o);
     ASSERT_EQ(r.rvg_code, 0) << r.logs();
     EXPECT_EQ(r.node0_code, 0) << r.node0_log;
@@ -653,7 +652,7 @@ TEST(Cluster, ReferenceRunTableAgreesWithItsStatsCsv) {
   // The reference's key=value line starts "reference (chc): "; the table ends before it.
   const std::string log = std::regex_replace(ref.log, std::regex("\nreference \\(chc\\): "), "\nsummary: ");
   const std::map<std::string, std::string> rows = run_table(log, &title);
-  EXPECT_EQ(title, "run (8 frames, one process: --reference --cull chc)") << ref.log;
+  EXPECT_EQ(title, "run (8 frames, one process: --cull chc)") << ref.log;
   auto stats = read_csv(dir / "stats.csv");
   ASSERT_EQ(stats["frame"].size(), 8u);
   ASSERT_EQ(rows.count("frame ms (draw)"), 1u) << ref.log;

@@ -114,7 +114,7 @@ TEST_F(Hosts, AWrongScenePathOrAnUnreachableHostIsNamedAndNothingIsLeft) {
 // Ctrl-C (SIGTERM here) mid-run: every process on every host is stopped, the work folders removed.
 TEST_F(Hosts, InterruptedRunLeavesNothingBehind) {
   std::vector<std::string> a = cluster_args(hosts_, kScene, "walk:1000000");
-  a.push_back("--no-images");
+  a.insert(a.end(), {"--images", "off"});
   Proc run(a, dir_ / "cluster.log");
   ASSERT_GE(wait_frames(dir_ / "remote" / "out" / "stats.csv", 5, 120s, &run), 5u) << run.log();
   run.signal(SIGTERM);

@@ -87,8 +87,8 @@ std::string write_path(const fs::path& file, int frames) {
 
 }  // namespace
 
-// The switch culls with occlusion (--occlusion-gate on); then the switch sends frustum sets and
-// the render client culls them itself in two passes (--occlusion-gate off --two-pass on): glass
+// The switch culls with occlusion (--occlusion switch); then the switch sends frustum sets and
+// the render client culls them itself in two passes (--occlusion client): glass
 // never hides anything and the frames are the reference's either way.
 TEST(ClusterMaterials, GlassFenceAndBackFacingWallsEqualTheReferenceExactly) {
   const fs::path dir = fresh_dir("materials");
@@ -98,8 +98,7 @@ TEST(ClusterMaterials, GlassFenceAndBackFacingWallsEqualTheReferenceExactly) {
   for (const bool two_pass : {false, true}) {
     const std::string run = two_pass ? "two_pass" : "cluster";
     ClusterOptions o(scene, path, kView);
-    o.occlusion_gate = two_pass ? "off" : "on";
-    if (two_pass) o.client = {"--two-pass", "on"};
+    o.occlusion = two_pass ? "client" : "switch";
     const ClusterRun r = run_cluster(dir / run, o);
     const std::string logs = r.logs();
     ASSERT_EQ(r.rvg_code, 0) << logs;
@@ -150,7 +149,7 @@ TEST(ClusterMaterials, DuplexWithSingleSidedMaterialsAndGlassEqualsTheReferenceE
   const fs::path dir = fresh_dir("duplex_exact");
   const std::string scene = shared("scenes/duplex/Duplex_A_20110505.gltf");
   ClusterOptions o(scene, "walk:60", kView);
-  o.occlusion_gate = "auto";  // the render client's default
+  o.occlusion = "auto";  // the render client's default
   const ClusterRun r = run_cluster(dir / "cluster", o);
   const std::string logs = r.logs();
   ASSERT_EQ(r.rvg_code, 0) << logs;

@@ -38,7 +38,7 @@ std::vector<std::string> client_argv(const ClusterOptions& o, int p0, int p1, co
                                 "--out", out.string(),
                                 "--connect", "127.0.0.1:" + std::to_string(p0), "--connect",
                                 "127.0.0.1:" + std::to_string(p1), "--timeout-ms", std::to_string(o.timeout_ms),
-                                "--occlusion-gate", o.occlusion_gate};
+                                "--occlusion", o.occlusion};
   a.insert(a.end(), o.view.begin(), o.view.end());
   a.insert(a.end(), more.begin(), more.end());
   return a;
@@ -174,7 +174,7 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
   const std::string key = write_key(dir / "cluster.key", 'c');
   ClusterOptions o(kCity, "walk:60", kView);
   o.all = {"--cluster-key-file", key};
-  o.node0 = o.node1 = {"--serve", "--sessions", "3"};
+  o.node0 = o.node1 = {"--serve", "3"};
   HeldCluster h(dir / "first", o);
   Cluster& c = h.c;
   ASSERT_TRUE(h.start()) << c.logs();
@@ -205,12 +205,12 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
                                    dir / "third.log", 120s);
   ASSERT_EQ(third.code, 0) << third.log << c.logs();
 
-  // --sessions 3: both nodes end after the third client; one of the three sessions failed.
+  // --serve 3: both nodes end after the third client; one of the three sessions failed.
   const ClusterRun r = c.finish();
   EXPECT_EQ(r.node0_code, 1) << r.node0_log;
   EXPECT_EQ(r.node1_code, 1) << r.node1_log;
   for (const std::string* log : {&r.node0_log, &r.node1_log}) {
-    EXPECT_NE(log->find("served 3 render clients (1 failed), as --sessions asked"), std::string::npos) << *log;
+    EXPECT_NE(log->find("served 3 render clients (1 failed), as --serve asked"), std::string::npos) << *log;
     EXPECT_NE(log->find("render client 1 done; waiting for the next one (--serve)"), std::string::npos) << *log;
     EXPECT_NE(log->find("render client 2 failed; waiting for the next one (--serve)"), std::string::npos) << *log;
     EXPECT_EQ(count(*log, ": connected: peer "), 3u) << *log;  // a fresh link between the nodes per client
@@ -230,21 +230,21 @@ TEST(Serve, TheNodesOutliveTheirClientsOneAtATime) {
 
 // A node's summary of a client counts that client's frames only (each client gets a
 // fresh session: nothing is reset by hand, so no counter can be forgotten). Two clients one after
-// the other, neither with occlusion (--occlusion-gate off): every HC frame of each is a frustum
+// the other, neither with occlusion (--occlusion frustum): every HC frame of each is a frustum
 // set, so each summary's frames without occlusion equal its own HC frames.
 TEST(Serve, EachClientsSummaryCountsOnlyItsOwnFrames) {
   const fs::path dir = fresh_dir("serve_summary");
   ClusterOptions o(kCity, "walk:10", kView);
-  o.occlusion_gate = "off";
-  o.client = {"--no-images"};
-  o.node0 = o.node1 = {"--serve", "--sessions", "2"};
+  o.occlusion = "frustum";
+  o.client = {"--images", "off"};
+  o.node0 = o.node1 = {"--serve", "2"};
   Cluster c(dir / "first", o);
   const int p0 = c.start_node0(), p1 = c.start_node1();
   ASSERT_TRUE(p0 && p1) << c.logs();
   c.start_client();
   ASSERT_EQ(c.client().wait(120s), 0) << c.logs();
   for (Proc* n : {&c.node0(), &c.node1()}) ASSERT_TRUE(wait_log(*n, "render client 1 done; waiting")) << c.logs();
-  const Outcome second = run_to_end(client_argv(o, p0, p1, dir / "second", {"--no-images"}), dir / "second.log", 120s);
+  const Outcome second = run_to_end(client_argv(o, p0, p1, dir / "second", {"--images", "off"}), dir / "second.log", 120s);
   ASSERT_EQ(second.code, 0) << second.log << c.logs();
   const ClusterRun r = c.finish();
   const std::regex summary(R"((\d+) HC frames, .*\); (\d+) frames without occlusion)");

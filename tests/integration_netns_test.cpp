@@ -28,7 +28,7 @@ std::set<std::string> namespaces() {
 
 std::vector<std::string> cluster_args(const fs::path& out, const std::string& frames) {
   return {"/bin/bash", std::string(OCC_SOURCE_DIR) + "/scripts/cluster.sh", "--netns", "--scene", "city:4x4:2:5:1",
-          "--path", "walk", "--frames", frames, "--width", "96", "--height", "64", "--no-images", "--link", "1:50",
+          "--path", "walk", "--frames", frames, "--width", "96", "--height", "64", "--images", "off", "--link", "1:50",
           "--out", out.string()};
 }
 

@@ -212,8 +212,8 @@ void restarted_node_rejoins(int k, bool keyed = false) {
     const std::string node0 = "127.0.0.1:" + std::to_string(p0);
     const std::string node1 = "127.0.0.1:" + read_file(dir / "n1.port").substr(0, read_file(dir / "n1.port").find('\n'));
     // A node 1 with another key at node 0, whose link to node 1 is down: refused by the key.
-    const Outcome impostor = run_to_end({bin("switch_node"), "--id", "1", "--scene", kCity, "--peer", node0, "--port",
-                                         "0", "--timeout-ms", "20000", "--width", "96", "--height", "72",
+    const Outcome impostor = run_to_end({bin("switch_node"), "--id", "1", "--scene", kCity, "--peer", node0,
+                                         "--timeout-ms", "20000", "--width", "96", "--height", "72",
                                          "--cluster-key-file", wrong},
                                         dir.parent_path() / "impostor.log", 60s);
     EXPECT_NE(impostor.code, 0) << impostor.log;
@@ -314,9 +314,9 @@ TEST(Recovery, LatestCameraModeRestartedNode1RejoinsWithVerifiedFrames) {
   for (size_t i = back + 1; i < m.size(); ++i) ASSERT_EQ(m[i], "switch") << "frame " << i;
   ASSERT_GT(m.size(), back + 2) << "no switch frames after the resync";  // (how many: the rejoiner's timing)
   // The reference on the cameras used: the path as CSV, one row per frame shown.
-  const fs::path csv = dir.parent_path() / "walk.csv", used = dir.parent_path() / "used.csv";
+  const fs::path csv = dir.parent_path() / "path" / "path.csv", used = dir.parent_path() / "used.csv";
   std::vector<std::string> flags = kView;
-  flags.insert(flags.end(), {"--save-path", csv.string(), "--no-images"});
+  flags.insert(flags.end(), {"--images", "off"});
   const Outcome saved = run_reference(dir.parent_path() / "path", kCity, path, flags);
   ASSERT_EQ(saved.code, 0) << saved.log;
   {

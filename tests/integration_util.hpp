@@ -239,7 +239,7 @@ inline Outcome run_reference(const fs::path& out, const std::string& scene, cons
                              const std::vector<std::string>& flags,
                              std::chrono::milliseconds timeout = std::chrono::seconds(300)) {
   fs::create_directories(out);
-  std::vector<std::string> a = {bin("render_client"), "--reference", "--scene", scene, "--path", path, "--out",
+  std::vector<std::string> a = {bin("render_client"), "--scene", scene, "--path", path, "--out",
                                 out.string()};
   a.insert(a.end(), flags.begin(), flags.end());
   return run_to_end(a, out / "reference.log", timeout);

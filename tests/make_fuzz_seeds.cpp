@@ -22,7 +22,7 @@
 #include "common/lod/lod_cache.hpp"
 #include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
-#include "render_client/scene_export.hpp"
+#include "render_client/tools/scene_export.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

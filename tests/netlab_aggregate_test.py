@@ -78,10 +78,10 @@ try:
         with open(runs, "w") as f:
             f.write(RUNS)
         agg.main(["netlab_aggregate.py", runs, out])
-        p = subprocess.run(["gnuplot", "-e", f"csv='{out}'; out='{tmp}'; chunk_delay=5; rates='10 1000'",
+        p = subprocess.run(["gnuplot", "-e", f"csv='{out}'; out='{tmp}'; rates='10 1000'",
                             os.path.join(src, "scripts", "netlab_plots.gp")], capture_output=True, text=True)
         check("gnuplot exit", (p.returncode, p.stderr), (0, ""))
-        for png in ("net_fps.png", "net_latency.png", "net_chunks.png"):
+        for png in ("net_fps.png", "net_latency.png"):
             check(png, os.path.isfile(os.path.join(tmp, png)) and os.path.getsize(os.path.join(tmp, png)) > 1000, True)
 
     for bad in ("0", "x", "-2"):

@@ -112,7 +112,7 @@ TEST(Overview, BadFlagsGiveOneError) {
 TEST(Overview, ReplaysTheClustersVisibleSetsAndQueries) {
   const fs::path dir = fresh_dir("overview_cluster");
   occtest::ClusterOptions o(kScene, "walk:20", {"--width", "160", "--height", "120"});
-  o.client = {"--no-images"};
+  o.client = {"--images", "off"};
   const occtest::ClusterRun r = occtest::run_cluster(dir / "cluster", o);
   ASSERT_EQ(r.rvg_code, 0) << r.logs();
   auto stats = read_csv(dir / "cluster" / "stats.csv");

@@ -37,7 +37,7 @@ std::string error_of(const std::function<void()>& f) {
 TEST(DiffSender, StreamsNewIdsInChunksThenRemovedThenAnEndOfFrameThatVerifies) {
   const VisibleSet prev = set_of(100, {1, 2, 3, 4, 5});
   std::vector<wire::Message> sent;
-  DiffSender out(2, false, [&](const wire::Message& m) { sent.push_back(m); });
+  DiffSender out(2, [&](const wire::Message& m) { sent.push_back(m); });
   out.begin(7, prev);
   for (uint32_t id : {3u, 10u, 11u, 12u, 5u, 13u}) out.visible(id);  // 3 and 5 were visible before
   const VisibleSet cur = set_of(100, {3, 5, 10, 11, 12, 13});
@@ -67,19 +67,18 @@ TEST(DiffSender, StreamsNewIdsInChunksThenRemovedThenAnEndOfFrameThatVerifies) {
   EXPECT_TRUE(rebuilt == cur);
 }
 
-TEST(DiffSender, FullSetsSendEveryVisibleIdAndNothingRemoved) {
-  const VisibleSet prev = set_of(50, {1, 2});
-  std::vector<wire::Message> sent;
-  DiffSender out(100, true, [&](const wire::Message& m) { sent.push_back(m); });
-  out.begin(3, prev);
-  out.visible(2);
-  out.visible(9);
-  const wire::EndOfFrame eof = out.end(set_of(50, {2, 9}));
-  ASSERT_EQ(sent.size(), 1u);
-  EXPECT_EQ(std::get<wire::NodeDiff>(sent[0]).added, (std::vector<uint32_t>{2, 9}));
-  EXPECT_EQ(eof.total_added, 2u);
-  EXPECT_EQ(eof.total_removed, 0u);
-  EXPECT_EQ(eof.visible_count, 2u);
+// What a frame would take with the whole set sent (the run table and stats.csv's full_set_bytes):
+// the encoded NodeDiff chunks of every id.
+TEST(DiffSender, FullSetBytesAreTheEncodedChunksOfTheWholeSet) {
+  for (uint32_t n : {0u, 1u, 99u, 100u, 101u, 2500u}) {
+    for (uint32_t chunk : {1u, 17u, 100u}) {
+      std::vector<uint32_t> ids(n);
+      for (uint32_t i = 0; i < n; ++i) ids[i] = 3 * i;
+      uint64_t bytes = 0;
+      for (const wire::NodeDiff& d : wire::chunk_node_diff(7, ids, {}, chunk)) bytes += wire::encode(d).size();
+      EXPECT_EQ(wire::full_set_wire_bytes(n, chunk), bytes) << n << " ids in chunks of " << chunk;
+    }
+  }
 }
 
 TEST(DiffSender, RandomFramesRebuildOnTheReceiver) {
@@ -87,7 +86,7 @@ TEST(DiffSender, RandomFramesRebuildOnTheReceiver) {
   VisibleSet sender_set(500), receiver_set(500);
   DiffReceiver in;
   std::vector<wire::Message> sent;
-  DiffSender out(17, false, [&](const wire::Message& m) { sent.push_back(m); });
+  DiffSender out(17, [&](const wire::Message& m) { sent.push_back(m); });
   for (uint32_t f = 0; f < 40; ++f) {
     std::vector<uint32_t> found;
     for (uint32_t id = 0; id < 500; ++id)
@@ -108,8 +107,8 @@ TEST(DiffSender, RandomFramesRebuildOnTheReceiver) {
 }
 
 TEST(DiffSender, RefusesChunksOutsideTheWireLimits) {
-  EXPECT_THROW(DiffSender(0, false, [](const wire::Message&) {}), std::invalid_argument);
-  EXPECT_THROW(DiffSender(wire::kMaxDiffIds + 1, false, [](const wire::Message&) {}), std::invalid_argument);
+  EXPECT_THROW(DiffSender(0, [](const wire::Message&) {}), std::invalid_argument);
+  EXPECT_THROW(DiffSender(wire::kMaxDiffIds + 1, [](const wire::Message&) {}), std::invalid_argument);
 }
 
 TEST(ClusterConfig, FlagsAreTypedAndTheHashIsTheFlagWords) {
@@ -117,22 +116,19 @@ TEST(ClusterConfig, FlagsAreTypedAndTheHashIsTheFlagWords) {
   Cli cli("prog", "", "");
   add_cluster_options(cli, c);
   std::vector<std::string> a{"prog", "--camera-mode", "latest", "--front-tracking", "off", "--visible-pixel-lod",
-                             "on", "--pixel-error", "2", "--full-sets"};
+                             "on", "--pixel-error", "2"};
   std::vector<char*> argv;
   for (auto& s : a) argv.push_back(s.data());
   ASSERT_TRUE(cli.parse(int(argv.size()), argv.data()));
   EXPECT_EQ(c.camera_mode, CameraMode::latest);
   EXPECT_FALSE(c.front_tracking);
   EXPECT_TRUE(c.visible_pixel_lod);
-  EXPECT_TRUE(c.full_sets);
-  EXPECT_FALSE(c.tracks_fronts());
   EXPECT_EQ(c.lod_policy(600).viewport_height_px, 600.0);
   EXPECT_EQ(c.lod_policy(600).tau, 2.0);
   // The hash is over the words the flags are spelled with (so it names the same settings on every
   // build), and any changed setting changes it.
   Hasher h;
   h.str("latest");
-  h.u32(1);
   h.f64(2.0);
   h.str("on");
   h.str("off");

@@ -111,7 +111,7 @@ class Window : public ::testing::Test {
 // (The tests stay in this namespace: there the fixture's name hides X11's ::Window.)
 
 TEST_F(Window, DriveRecordScreenshotQuitAndReplay) {
-  const fs::path out = dir_ / "win", rec = dir_ / "rec.csv";
+  const fs::path out = dir_ / "win", rec = out / "path.csv";
   std::vector<std::string> common = {"--scene", kScene, "--camera-mode", "latest", "--timeout-ms", "20000"};
   common.insert(common.end(), kView.begin(), kView.end());
   auto args = [&](std::vector<std::string> a) {
@@ -126,7 +126,7 @@ TEST_F(Window, DriveRecordScreenshotQuitAndReplay) {
           dir_ / "node1.log");
   const int p1 = wait_port(dir_ / "n1.port", n1);
   ASSERT_GT(p1, 0) << n1.log();
-  Proc rvg(args({bin("render_client"), "--window", "--record", rec.string(), "--out", out.string(), "--no-images",
+  Proc rvg(args({bin("render_client"), "--window", "--out", out.string(), "--images", "off",
                  "--connect", "127.0.0.1:" + std::to_string(p0), "--connect", "127.0.0.1:" + std::to_string(p1)}),
            dir_ / "render_client.log");
   ASSERT_TRUE(wait_for([&] { return rvg.log().find("connected to switch node") != std::string::npos || !rvg.running(); }, 60s))
@@ -185,7 +185,7 @@ TEST_F(Window, DriveRecordScreenshotQuitAndReplay) {
   EXPECT_GT(colours.size(), 8u) << "the screenshot is (nearly) one colour";
 
   // Replaying the recording gives the frame the screenshot shows.
-  Proc ref({bin("render_client"), "--reference", "--scene", kScene, "--path", rec.string(), "--out",
+  Proc ref({bin("render_client"), "--scene", kScene, "--path", rec.string(), "--out",
             (dir_ / "replay").string(), kView[0], kView[1], kView[2], kView[3]},
            dir_ / "replay.log");
   ASSERT_EQ(ref.wait(120s), 0) << ref.log();
@@ -228,9 +228,9 @@ TEST_F(Window, DriveRecordScreenshotQuitAndReplay) {
 // The window manager's close button (WM_DELETE_WINDOW) quits cleanly, and a movement key takes
 // over a playing path (reference renderer: same viewer as the cluster).
 TEST_F(Window, MovementKeyTakesOverAPathCloseButtonQuits) {
-  const fs::path rec = dir_ / "rec.csv";
-  Proc ref({bin("render_client"), "--reference", "--window", "--scene", kScene, "--path", "walk:20000", "--record",
-            rec.string(), kView[0], kView[1], kView[2], kView[3]},
+  const fs::path rec = dir_ / "ref" / "path.csv";
+  Proc ref({bin("render_client"), "--window", "--scene", kScene, "--path", "walk:20000", "--out",
+            (dir_ / "ref").string(), "--images", "off", kView[0], kView[1], kView[2], kView[3]},
            dir_ / "reference.log");
   const std::string id = focused_window();
   ASSERT_FALSE(id.empty());

@@ -14,20 +14,20 @@ OcclusionGate::OcclusionGate(const Options& o) : o_(o) {
 }
 
 bool OcclusionGate::measuring_without() const {
-  return o_.policy == Policy::automatic && o_.test_alternate == 0 &&
+  return o_.policy == Policy::automatic &&
          (state_ == State::trial_off || state_ == State::confirm_off);
 }
 
 bool OcclusionGate::decided_occlusion() const {
-  if (o_.policy != Policy::automatic || o_.test_alternate > 0) return occlusion(0);
+  if (o_.policy != Policy::automatic) return occlusion(0);
   return state_ == State::on || state_ == State::trial_off || state_ == State::confirm_on;
 }
 
 bool OcclusionGate::occlusion(uint32_t camera) const {
-  if (o_.test_alternate > 0) return (camera / o_.test_alternate) % 2 == 0;
   switch (o_.policy) {
     case Policy::on: return true;
     case Policy::off: return false;
+    case Policy::alternate: return (camera / std::max(o_.alternate_every, 1u)) % 2 == 0;
     case Policy::automatic: break;
   }
   return state_occlusion();
@@ -38,11 +38,11 @@ bool OcclusionGate::state_occlusion() const {
 }
 
 bool OcclusionGate::wants_frustum_triangles() const {
-  return may_try() || (o_.policy == Policy::automatic && o_.test_alternate == 0 && !steady());
+  return may_try() || (o_.policy == Policy::automatic && !steady());
 }
 
 bool OcclusionGate::may_try() const {
-  return o_.policy == Policy::automatic && o_.test_alternate == 0 && state_ == State::on && n_ >= next_trial_ &&
+  return o_.policy == Policy::automatic && state_ == State::on && n_ >= next_trial_ &&
          on_.size() >= std::min(o_.trial_after, o_.window);
 }
 
@@ -129,7 +129,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
   same_ = occlusion == last_mode_ ? same_ + 1 : 1;
   last_mode_ = occlusion;
   if (!occlusion) ++frames_off_;
-  if (o_.policy != Policy::automatic || o_.test_alternate > 0) return;
+  if (o_.policy != Policy::automatic) return;
   // Only settled frames are measured: the first frames of a mode still carry the other's work
   // (the OR of the first frame with occlusion draws a whole frustum set).
   const bool settled = same_ > o_.settle && measured;
@@ -190,7 +190,7 @@ void OcclusionGate::frame(bool occlusion, double interval_ms, uint64_t drawn_tri
       back_off();
   } else if (state_ == State::off && !occlusion) {
     // A trial waits for a full window of fresh samples without occlusion, its baseline (frames
-    // that were not samples count for the hold but measure nothing: the --two-pass gate's while
+    // that were not samples count for the hold but measure nothing: the two-pass gate's while
     // the occlusion gate measured): against it a clear loss ends the trial early.
     const bool slow = gave_up(med_off);
     if (slow || (n_ >= off_until_ && fresh_ >= o_.window)) {

@@ -35,7 +35,7 @@
 // So a path whose cost falls or rises unevenly (a walk from a full view into a narrow one)
 // does not make the later window look faster; the bracket's means decide only where T is not
 // known or does not vary.
-// The render client's choice between two passes and one for those frustum sets (--two-pass) is a
+// The render client's choice between two passes and one for those frustum sets (--occlusion) is a
 // second gate of this kind, fed the render time: "occlusion" there means two passes.
 // Either way is conservative: the frustum set holds the visible set, so frames never change.
 // GL-free and clock-free: the caller feeds it what each displayed frame measured.
@@ -50,13 +50,13 @@ namespace occ {
 
 class OcclusionGate {
  public:
-  // automatic (above); on: always occlusion (the switch as designed); off: frustum sets only.
-  enum class Policy { automatic, on, off };
+  // automatic (above); on: always occlusion (the switch as designed); off: frustum sets only;
+  // alternate: `alternate_every` cameras each way in turn, starting with occlusion (every method
+  // on one path, and both changes of mode many times).
+  enum class Policy { automatic, on, off, alternate };
   struct Options {
     Policy policy = Policy::automatic;
-    // Tests only (not a user mode): > 0 overrides the policy with `test_alternate` cameras each
-    // way in turn, so that a test sees both changes of mode many times.
-    uint32_t test_alternate = 0;
+    uint32_t alternate_every = 4;  // Policy::alternate: at least 1
     uint32_t window = 8, settle = 3;
     // A trial needs this many settled frames with occlusion measured (at most `window`). With
     // fewer than `window` of them it ends by measuring occlusion again (a trial with it) before
@@ -79,7 +79,7 @@ class OcclusionGate {
     double lose = 1.25;
     uint32_t lose_frames = 3;
     // false: frames start without occlusion, and the first trial of it comes after a full
-    // window without it (A B A; the --two-pass gate: one pass is the baseline that frames of
+    // window without it (A B A; the two-pass gate: one pass is the baseline that frames of
     // frustum sets are measured in, below).
     bool start_on = true;
   };
@@ -99,13 +99,13 @@ class OcclusionGate {
   // it, the drawn triangles stand in). They start trials (how much occlusion culls) and are each
   // frame's cost measure (below).
   // `measured` false: the frame counts (modes, settling) but its interval is not a sample of
-  // its mode (the render client's frustum sets drawn while its --two-pass gate tried the other
+  // its mode (the render client's frustum sets drawn while its two-pass gate tried the other
   // way: not what frames without occlusion cost).
   void frame(bool occlusion, double interval_ms, uint64_t drawn_triangles,
              std::optional<uint64_t> frustum_triangles = std::nullopt, bool measured = true);
   // Whether a window is measuring frames without occlusion against occlusion (a trial without
   // it, or frames without it measured again after a trial with it): the render client's
-  // --two-pass gate holds still meanwhile, one experiment at a time.
+  // two-pass gate holds still meanwhile, one experiment at a time.
   bool measuring_without() const;
   // Whether no trial is in progress (on or off, as last decided).
   bool steady() const { return state_ == State::on || state_ == State::off; }

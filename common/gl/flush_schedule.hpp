@@ -7,13 +7,9 @@
 //   fixed      parts of N triangles (0: no flushes); the default, N = kMaxPart;
 //   automatic  parts of an eighth of each draw call's triangles, at least kMinPart and at most
 //              kMaxPart (part_of), so that small frames are split too. For a process with the
-//              cores to itself (render_client --reference and the baselines); not in the cluster,
+//              cores to itself (the reference renderer and the baselines); not in the cluster,
 //              where every part is one more llvmpipe scene on cores three processes share
 //              (docs/results.md "Flush parts").
-// OCC_FLUSH_TRIANGLES=N pins fixed parts of N (0: no flushes, for paired runs) in a whole process:
-// from_environment() reads it, once a process, and the schedule it returns ignores later
-// requests. A bad value is one error (std::runtime_error naming the variable).
-//
 // Besides the policy, the schedule counts what was submitted since the last flush: a draw path
 // calls begin_call() for each draw call, cuts its indirect draws where fits() says no, and
 // flushes where submitted() says so.
@@ -33,18 +29,11 @@ class FlushSchedule {
     return uint32_t(std::clamp<uint64_t>(call_triangles / kParts, kMinPart, kMaxPart));
   }
 
-  // Fixed parts of kMaxPart, or what OCC_FLUSH_TRIANGLES pins (the variable is read the first
-  // time only: every later call returns the same schedule).
-  static FlushSchedule from_environment();
-
-  // Fixed parts of `part_triangles` (nullopt: automatic); ignored when the environment pinned
-  // the schedule. What is counted since the last flush stays.
-  void request(std::optional<uint32_t> part_triangles) {
-    if (!pinned_) fixed_ = part_triangles;
-  }
-  // The fixed part size (nullopt: automatic), and whether OCC_FLUSH_TRIANGLES pinned it.
+  // Fixed parts of `part_triangles` (nullopt: automatic). What is counted since the last flush
+  // stays.
+  void request(std::optional<uint32_t> part_triangles) { fixed_ = part_triangles; }
+  // The fixed part size (nullopt: automatic).
   std::optional<uint32_t> fixed() const { return fixed_; }
-  bool pinned() const { return pinned_; }
 
   // A draw call of `call_triangles` starts: its part size (the fixed one, or part_of).
   void begin_call(uint64_t call_triangles) { part_ = fixed_ ? *fixed_ : part_of(call_triangles); }
@@ -62,7 +51,6 @@ class FlushSchedule {
 
  private:
   std::optional<uint32_t> fixed_ = kMaxPart;  // none: automatic
-  bool pinned_ = false;                       // OCC_FLUSH_TRIANGLES set: fixed whatever is asked
   uint32_t part_ = kMaxPart;                  // this draw call's part size (0: no flushes)
   uint64_t unflushed_ = 0;                    // submitted since the last glFlush
 };

@@ -32,7 +32,7 @@ SceneRenderer::SceneRenderer(GlContext& ctx, Scene& scene, const Hierarchy& hier
     : gl_(ctx.gl()),
       hierarchy_(hierarchy),
       gpu_(ctx.gl(), scene, hierarchy, lod, upload),
-      flush_(FlushSchedule::from_environment()) {
+      flush_() {
   static_assert(sizeof(IndirectCommand) == 20);
   if (gpu_.pool) pool_generation_ = gpu_.pool->generation();  // bound by SceneGpu
   object_frame_.assign(gpu_.transforms.size(), 0);

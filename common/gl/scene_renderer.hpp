@@ -120,8 +120,7 @@ class SceneRenderer {
   void set_occluder_offset(bool on) { occluder_offset_ = on; }
 
   // When draws are flushed mid-frame (flush_schedule.hpp): fixed parts of
-  // FlushSchedule::kMaxPart at construction, unless OCC_FLUSH_TRIANGLES pinned the process's
-  // schedule (then requests are ignored).
+  // FlushSchedule::kMaxPart at construction.
   FlushSchedule& flush_schedule() { return flush_; }
   void set_flush_triangles(uint32_t n) { flush_.request(n); }
   void set_flush_automatic() { flush_.request(std::nullopt); }
@@ -146,7 +145,7 @@ class SceneRenderer {
   // near to far, then that order (submit), so z-ties resolve identically in every renderer.
   // Without LOD data uploaded, LOD ids fall back to full detail. ItemIds: a leaf at any level
   // writes its item index + 1, an HLOD items().size() + node id + 1 (an item buffer of a tau
-  // frame, render_client --item-buffer; frame_diff --items reads it).
+  // frame, render_client --images items; frame_diff --items reads it).
   DrawStats draw_renderables(const Renderables& r, std::span<const uint32_t> ids, Mode mode);
   // ItemIds rendering of whole nodes, each in colour node id + 1.
   DrawStats draw_nodes_ids(std::span<const uint32_t> node_ids);

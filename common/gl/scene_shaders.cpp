@@ -101,7 +101,7 @@ void main() {
   // Headlight: directional, along the view axis (view-space z), two-sided. One interpolant (the
   // normal) instead of two: a light at the eye also needed the view-space position, and
   // llvmpipe sets up every interpolant per triangle (one fewer measured faster with
-  // render_client --reference).
+  // the reference renderer).
   // Flat: the triangle's own normal, from the screen derivatives of its view-space position
   // (a 2x2 quad's fragments all belong to one triangle, so they span its plane).
 #ifdef FLAT

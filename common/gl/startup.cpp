@@ -17,6 +17,7 @@ void add_view_options(Cli& cli, SceneOptions& scene, int* width, int* height, Gl
   const std::string note = what.empty() ? "" : " (" + what + ")";
   cli.option("width", width, 16, kMaxViewportPx, "viewport width in pixels" + note);
   cli.option("height", height, 16, kMaxViewportPx, "viewport height in pixels" + note);
+  cli.group(CliGroup::expert);
   cli.choice<GlBackend>("gl", backend,
                         {{"auto", GlBackend::Auto}, {"egl", GlBackend::Egl}, {"osmesa", GlBackend::OSMesa}},
                         "GL back end (auto: EGL on a GPU's device, else Mesa's surfaceless EGL, else OSMesa)");

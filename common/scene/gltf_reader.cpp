@@ -464,7 +464,7 @@ class GltfReader {
       const tinygltf::Material& gm = at(m_.materials, index, "material", "materials", where);
       const std::string mw = "material " + std::to_string(index);
       m.name = gm.name.empty() ? mw : gm.name;
-      // render_client --save-scene marks generated scenes' per-object colours this way.
+      // scene_export marks generated scenes' per-object colours this way.
       m.object_color = gm.extras.IsObject() && gm.extras.Has("occswitch_object_colour");
       const std::vector<double>& f = gm.pbrMetallicRoughness.baseColorFactor;
       if (f.size() != 4) fail(mw, "baseColorFactor must have 4 numbers");

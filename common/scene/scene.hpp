@@ -147,7 +147,7 @@ struct Scene {
 };
 
 // Mesh m of a scene read lazily (Scene::mapped, its mesh released) with its arrays read back
-// from the cache file, for the rare user of a whole mesh on the CPU (render_client --save-scene).
+// from the cache file, for the rare user of a whole mesh on the CPU (scene_export).
 // Throws std::runtime_error naming the file for an unreadable file or an index out of range.
 Mesh read_mapped_mesh(const Scene& scene, uint32_t m);
 

@@ -24,19 +24,14 @@
 namespace occ {
 
 void add_scene_options(Cli& cli, SceneOptions& o) {
+  cli.group(CliGroup::scene);
   cli.option("scene", &o.spec, "SPEC",
              "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), plant:M (M million triangles, "
              "unique meshes), layout:NXxNZ:file, bridge[:N], office[:N], pipes[:N] (structures: N spans, bays, "
              "modules), hard:KIND[:N] (hard cases)");
-  cli.option("arity", &o.build.arity, 2, 64, "hierarchy: max children per node");
-  cli.option("leaf-items", &o.build.leaf_items, 1, 1024, "hierarchy: max items per leaf");
-  cli.option("cluster-triangles", &o.build.cluster_triangles, 16, 1 << 24,
-             "hierarchy: meshes above this many triangles are split into spatial clusters");
   cli.option("lod-cache", &o.lod_cache, "DIR",
-             "LOD/HLOD and scene cache folder (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
-  cli.choice<bool>("scene-cache", &o.scene_cache, {{"on", true}, {"off", false}},
-                   "keep plant:M and glTF scenes and their hierarchy in a binary cache in the --lod-cache folder "
-                   "(a glTF's is rebuilt when any of its files changed)");
+             "LOD/HLOD and scene cache folder: plant:M and glTF scenes and their hierarchy are kept there in binary (a "
+             "glTF's rebuilt when any of its files changed) (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
   cli.option("geometry-budget", &o.geometry_budget, "MB|auto|all",
              "GPU memory for geometry: scenes with a scene cache stream their meshes and LODs from it within MB "
              "(plant:M always, a glTF where larger), the least recently drawn evicted; other scenes stream from "
@@ -103,7 +98,7 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   LoadedScene ls;
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
   char buf[768];
-  const bool use_cache = opts.scene_cache && scene_cache_applies(opts.spec);
+  const bool use_cache = scene_cache_applies(opts.spec);
   // Read lazily (the arrays left in the cache, streamed within the budget): a plant always under
   // a budget (its start reads the structure only), a glTF scene where its arrays exceed it (else
   // it is read whole, as fast, and the switch nodes can look for sealed objects in it).

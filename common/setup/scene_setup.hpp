@@ -16,7 +16,6 @@ struct SceneOptions {
   BuildParams build;
   LodParams lod;
   std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod_cache.hpp)
-  bool scene_cache = true;  // --scene-cache on|off: plant:M scenes + hierarchy (scene_cache.hpp)
   std::string geometry_budget = "auto";  // --geometry-budget MB|auto|all (geometry_budget_bytes)
 };
 

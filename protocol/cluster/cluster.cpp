@@ -72,7 +72,6 @@ uint64_t ClusterConfig::hash() const {
   auto on_off = [](bool b) { return b ? "on" : "off"; };
   Hasher h;
   h.str(camera_mode_name(camera_mode));
-  h.u32(full_sets);
   h.f64(pixel_error);
   h.str(on_off(visible_pixel_lod));
   h.str(on_off(front_tracking));
@@ -80,10 +79,11 @@ uint64_t ClusterConfig::hash() const {
 }
 
 void add_cluster_options(Cli& cli, ClusterConfig& c) {
+  cli.group(CliGroup::cluster);
   cli.choice<CameraMode>("camera-mode", &c.camera_mode,
                          {{"lockstep", CameraMode::lockstep}, {"latest", CameraMode::latest}},
                          "lockstep: frame f uses camera f (reproducible); latest: nodes take the newest camera");
-  cli.flag("full-sets", &c.full_sets, "send all of V_f every frame instead of the diff");
+  cli.group(CliGroup::accuracy);
   cli.option("pixel-error", &c.pixel_error, 0.0, 1e6,
              "tau: screen-space error bound in pixels for LOD/HLOD selection (0 = original geometry, conservative)");
   cli.on_off("visible-pixel-lod", &c.visible_pixel_lod,
@@ -93,6 +93,7 @@ void add_cluster_options(Cli& cli, ClusterConfig& c) {
 }
 
 void add_hc_options(Cli& cli, HcChoices& c) {
+  cli.group(CliGroup::expert);
   cli.choice<std::optional<BackendKind>>(
       "backend", &c.backend, backend_words(),
       "how the OR draws depth and HC tests boxes against it: auto = cpu on a software renderer such as llvmpipe at "
@@ -102,38 +103,30 @@ void add_hc_options(Cli& cli, HcChoices& c) {
       "streamed within --geometry-budget); queries = an occlusion query a box; gpu-pyramid = a depth pyramid built "
       "on the GPU first, queries for the rest; cpu-pyramid = the depth read back once a frame into a pyramid, the "
       "rest counted by one draw per batch. Same frames");
-  cli.choice<std::optional<bool>>(
-      "adaptive-queries", &c.adaptive_queries, {{"auto", std::nullopt}, {"on", true}, {"off", false}},
-      "assume nodes whose queries keep coming back visible visible for a while (no query; with a depth pyramid "
-      "(--backend cpu, gpu-pyramid, cpu-pyramid) still tested against it, so one that became occluded leaves V at "
-      "once); auto = off with --backend cpu, on elsewhere (the start-up says which)");
-  const std::tuple<const char*, bool*, const char*> switches[] = {
-      {"occluder-fusion", &c.occluder_fusion,
-       "HC draws (depth only) what each batch found visible before the next batch's queries"},
-      {"sealed", &c.sealed,
-       "HC skips what is sealed inside closed convex opaque solids (the bars inside concrete), found at start-up"},
-  };
-  for (const auto& [name, value, help] : switches) cli.on_off(name, value, help);
-  cli.option("visibility-hold", &c.visibility_hold, 0, 255,
-             "frames a node HC found visible stays in the visible set while in the frustum (hysteresis; 0 = off); "
-             "auto = 0 with --backend cpu, " + std::to_string(kAutoVisibilityHold) + " elsewhere (the start-up says which)");
+  cli.custom("coherence", "N|auto", "auto",
+             "frames a node HC found visible stays in the visible set while in the frustum, and nodes whose queries "
+             "keep coming back visible are assumed visible for a while (no query; with a depth pyramid still tested "
+             "against it); 0 = neither; auto = 0 with --backend cpu, " + std::to_string(kAutoVisibilityHold) +
+                 " elsewhere (the start-up says which)",
+             [&c](const std::string& v) {
+               if (v == "auto") {
+                 c.adaptive_queries = std::nullopt;
+                 c.visibility_hold = std::nullopt;
+                 return;
+               }
+               const int n = int(Cli::whole("coherence", v, 0, 255, " or auto"));
+               c.adaptive_queries = n > 0;
+               c.visibility_hold = n;
+             });
 }
 
 void add_listen_options(Cli& cli, ListenOptions& o) {
+  cli.group(CliGroup::cluster);
   cli.option("listen", &o.listen, "ADDR:PORT", "where to listen (port 0 = pick a free one)");
-  cli.option("port", &o.port, -1, 65535,
-             "listen on this port of the --listen address (0 = pick a free one, -1 = the port in --listen)");
   cli.option("port-file", &o.port_file, "FILE", "write the listening port here (atomically)");
 }
 
-net::Endpoint resolve_listen(ListenOptions& o) {
-  net::Endpoint e = net::parse_endpoint("listen", o.listen);
-  if (o.port >= 0) {
-    e.port = uint16_t(o.port);
-    o.listen = e.host + ":" + std::to_string(o.port);
-  }
-  return e;
-}
+net::Endpoint resolve_listen(const ListenOptions& o) { return net::parse_endpoint("listen", o.listen); }
 
 net::Listener open_listener(const std::string& who, const ListenOptions& o) {
   const net::Endpoint at = net::parse_endpoint("listen", o.listen);
@@ -147,6 +140,7 @@ net::Listener open_listener(const std::string& who, const ListenOptions& o) {
 }
 
 void add_key_option(Cli& cli, std::string* file) {
+  cli.group(CliGroup::cluster);
   cli.option("cluster-key-file", file, "FILE",
              "a secret shared by every process of the cluster (at least 32 bytes, e.g. `openssl rand -hex 32`): "
              "peers must prove it in the handshake (HMAC-SHA256); without it, anyone who can connect may join");

@@ -39,22 +39,20 @@ const char* camera_mode_name(CameraMode m);
 // Settings that must agree on all three processes (they are in hash(), checked in the hello).
 struct ClusterConfig {
   CameraMode camera_mode = CameraMode::lockstep;
-  bool full_sets = false;          // send all of V_f each frame instead of the diff
   double pixel_error = 0;          // tau, the paper's pixels of error (0 = original geometry)
   bool visible_pixel_lod = false;  // stop refining where fewer than tau pixels show (4.7.2)
   bool front_tracking = true;      // HC starts from the fronts (4.6) or the root
 
   bool lod() const { return pixel_error > 0; }  // LODs are loaded/built only when used
-  // Front tracking needs V_{f-1} on every process: not with full sets (each frame replaces it).
-  bool tracks_fronts() const { return front_tracking && !full_sets; }
   LodPolicy lod_policy(int viewport_height_px) const {
     return {pixel_error, double(viewport_height_px), visible_pixel_lod};
   }
   uint64_t hash() const;
 };
 
-// The one HC option set (common/cull/culling.hpp HcChoices), from the command line:
-// --backend, --adaptive-queries, --occluder-fusion, --sealed, --visibility-hold.
+// The one HC option set (common/cull/culling.hpp HcChoices), from the command line: --backend,
+// --coherence (adaptive queries and the visibility hold together; occluder fusion and the sealed
+// solids are always on).
 void add_hc_options(Cli& cli, HcChoices& c);
 
 // The Hello every process sends: who it is and everything that must agree between processes.
@@ -64,19 +62,17 @@ wire::Hello make_hello(wire::Role role, uint8_t node_id, const Viewport& vp, uin
                        const BuildParams& build, const ClusterConfig& config, const std::string& name,
                        const std::string& occlusion_backend);
 
-// --camera-mode, --full-sets, --pixel-error, --visible-pixel-lod, --front-tracking.
+// --camera-mode, --pixel-error, --visible-pixel-lod, --front-tracking.
 void add_cluster_options(Cli& cli, ClusterConfig& c);
 
-// Where a listening process listens: --listen ADDR:PORT, --port N (the port of that address;
-// shorthand for the common --port 0 --port-file F), --port-file FILE. After parsing,
-// resolve_listen() folds --port into the listen string and checks it.
+// Where a listening process listens: --listen ADDR:PORT (port 0: a free one), --port-file FILE.
+// resolve_listen() checks the address after parsing.
 struct ListenOptions {
   std::string listen = "127.0.0.1:0";
-  int port = -1;  // -1: --listen's port
   std::string port_file;
 };
 void add_listen_options(Cli& cli, ListenOptions& o);
-net::Endpoint resolve_listen(ListenOptions& o);
+net::Endpoint resolve_listen(const ListenOptions& o);
 // Opens the listening socket (after resolve_listen), writes --port-file and prints
 // "<who>: listening on ADDR:PORT". Throws naming the address.
 net::Listener open_listener(const std::string& who, const ListenOptions& o);

@@ -30,11 +30,11 @@ struct HcFrame {
 
 class SwitchStep {
  public:
-  // `tracking`: front tracking on this process (config.tracks_fronts(), and a switch, not a
+  // `tracking`: front tracking on this process (config.front_tracking, and a switch, not a
   // single server).
   SwitchStep(const Renderables& r, const LodPolicy& lod, bool tracking);
   SwitchStep(const Renderables& r, const ClusterConfig& c, int viewport_height_px)
-      : SwitchStep(r, c.lod_policy(viewport_height_px), c.tracks_fronts()) {}
+      : SwitchStep(r, c.lod_policy(viewport_height_px), c.front_tracking) {}
 
   bool tracking() const { return tracking_; }
 

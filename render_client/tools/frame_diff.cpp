@@ -6,7 +6,7 @@
 // With --psnr the summary goes on with  mean_fraction=M psnr_db=P  (PSNR over the RGB channels of
 // all frames together: 10 log10(255^2 / MSE); "inf" when identical).
 // With --items it compares the item buffers (items_NNNNN.png and items.txt, render_client
-// --item-buffer) of a full-detail reference and of a tau frame instead (item_diff.hpp): per
+// --images items) of a full-detail reference and of a tau frame instead (item_diff.hpp): per
 // frame the items missing, the largest displacement and the pixels beyond tau, and a summary
 //   frames=N objects_missing=M max_displacement=D beyond_tau_fraction=F max_frame_beyond_tau_fraction=G
 //   objects_missing_thick=K max_thick_displacement=T thin_fraction=S
@@ -77,7 +77,7 @@ int run_items(const std::vector<std::string>& dirs, const ItemsOptions& o) {
     if (entry.is_regular_file() && is_frame_file(entry.path().filename().string(), "items_"))
       names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
-  if (names.empty()) throw std::runtime_error(dirs[0] + ": no items_NNNNN.png files (render_client --item-buffer)");
+  if (names.empty()) throw std::runtime_error(dirs[0] + ": no items_NNNNN.png files (render_client --images items)");
   uint64_t missing = 0, missing_thick = 0, beyond = 0, pixels = 0;
   double worst = 0, worst_fraction = 0, worst_thick = 0;
   uint64_t thin = 0;
@@ -144,7 +144,7 @@ int run(int argc, char** argv) {
   bool psnr = false, items = false;
   cli.flag("psnr", &psnr, "also print the mean differing fraction and the PSNR (dB) of all frames");
   ItemsOptions io;
-  cli.flag("items", &items, "compare the item buffers (render_client --item-buffer): DIR_A the full-detail "
+  cli.flag("items", &items, "compare the item buffers (render_client --images items): DIR_A the full-detail "
                             "reference, DIR_B the tau frames");
   cli.option("tau", &io.tau, 0.0, 1e6, "--items: the pixel error the frames were drawn with (pixels beyond it count)");
   cli.option("slack", &io.slack, 0.0, 1e6, "--items --check: displacement allowed beyond tau (rasterisation)");

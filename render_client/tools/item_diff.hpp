@@ -1,5 +1,5 @@
 // The tau > 0 error bound a user can check (frame_diff --items): an item buffer of the
-// full-detail reference against one of a tau frame, both written by render_client --item-buffer.
+// full-detail reference against one of a tau frame, both written by render_client --images items.
 //
 // Item buffers (DIR/items_NNNNN.png, RGBA8 read as a little-endian u32 per pixel, the frames'
 // sizes): 0 = nothing drawn; 1..I = item index + 1 (an item = object x mesh cluster, drawn at full

@@ -56,7 +56,7 @@ struct ServerOptions {
   int width = 512, height = 512;
   GlBackend gl = GlBackend::Auto;
   ListenOptions listen;
-  int diff_chunk_ids = 100, timeout_ms = 30000;
+  int timeout_ms = 30000;
   std::optional<net::ClusterKey> key;  // --cluster-key-file
 };
 
@@ -81,7 +81,7 @@ int serve(const ServerOptions& o) {
   VisibleSet visible(uint32_t(h.size()));
   // The switch's step without LODs or fronts: one server does every frame from the root.
   const SwitchStep step(*g.renderables, LodPolicy{}, false);
-  DiffSender out(uint32_t(o.diff_chunk_ids), false, [&](const wire::Message& m) {
+  DiffSender out(wire::kDefaultDiffChunkIds, [&](const wire::Message& m) {
     if (auto err = rvg.send(m)) throw std::runtime_error("sending to the render client: " + *err);
   });
   DepthPyramid pyramid;
@@ -145,7 +145,6 @@ int main(int argc, char** argv) {
                  "pyramid and culls the hierarchy on the CPU; a render_client with one --connect displays.");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl, "must match the render client");
     occ::add_listen_options(cli, o.listen);
-    cli.option("diff-chunk", &o.diff_chunk_ids, 1, 100000, "node ids per diff message");
     cli.option("timeout-ms", &o.timeout_ms, 100, 3600000, "longest wait for the client or a camera");
     std::string key_file;
     occ::add_key_option(cli, &key_file);

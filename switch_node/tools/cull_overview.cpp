@@ -44,7 +44,7 @@ struct Options {
   double reach = 0.3;  // overview: frames at most this fraction of the scene diagonal around the focus
   double cut = -1;  // section cut height above the eye (< 0: auto)
   GlBackend gl = GlBackend::Auto;
-  bool front_tracking = true;  // as the switch nodes' flags
+  ClusterConfig config;  // the switch nodes' flags (lockstep only)
   HcChoices hc;
 };
 
@@ -64,10 +64,9 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
   const Hierarchy& h = ls.hierarchy;
   const Enclosures sealed = find_enclosures("cull_overview", ls.scene, h);
   auto ctx = start_gl("cull_overview", o.gl, o.width, o.height);
-  SceneRenderer renderer(*ctx, ls.scene, h);
-  const Renderables renderables(h, nullptr);
-  ClusterConfig config;
-  config.front_tracking = o.front_tracking;
+  SceneRenderer renderer(*ctx, ls.scene, h, ls.lod.get());
+  const Renderables renderables(h, ls.lod.get());
+  const ClusterConfig& config = o.config;
   const Viewport vp{o.width, o.height};
   // The nodes' back end, chosen as theirs; the CPU's triangles, if it needs them, once for both
   // cull frames, as each does its OR and HC before the other starts.
@@ -99,15 +98,17 @@ std::vector<uint32_t> replay_visible_set(const LoadedScene& ls, const std::vecto
                                  step.error());
     }
     next.assign(1, to_wire(f, path[f], vp));
-    DiffSender out(wire::kDefaultDiffChunkIds, config.full_sets, [&](const wire::Message& m) { next.push_back(m); });
+    DiffSender out(wire::kDefaultDiffChunkIds, [&](const wire::Message& m) { next.push_back(m); });
     HcFrame hc = node.hc(f, path[f], out);
     out.send(hc.eof);
     stream.swap(next);
     last_stats = hc.stats;
     last_stats.queries = hc.eof.queries;  // the boxes the back end tested
   }
+  // The hierarchy nodes V draws (at tau > 0 interior nodes' HLODs among them).
   const VisibleSet& visible = nodes[last % 2]->visible();
-  std::vector<uint32_t> v(visible.ids().begin(), visible.ids().end());
+  std::vector<uint32_t> v;
+  for (uint32_t id : visible.ids()) v.push_back(renderables.node_of(id));
   std::sort(v.begin(), v.end());
   return v;
 }
@@ -387,7 +388,9 @@ void draw_legend(Image& img, const Image& ids, uint32_t frame, const uint32_t co
 
 int run(const Options& o) {
   if (o.out.empty()) throw InputError("--out FILE.png is required");
-  LoadedScene ls = load_and_build(o.scene, "cull_overview");
+  if (o.config.camera_mode != CameraMode::lockstep)
+    throw InputError("--camera-mode latest: cull_overview replays the switch in lockstep (frame f, camera f)");
+  LoadedScene ls = load_and_build(o.scene, "cull_overview", o.config.lod());
   const Hierarchy& h = ls.hierarchy;
   const Aabb bounds = ls.scene.bounds();
   const std::vector<Camera> path = load_camera_path(o.path, bounds, {o.width, o.height});
@@ -415,7 +418,13 @@ int run(const Options& o) {
     leaves.push_back(id);
     category[id] = outside[id] ? kFrustum : kOccluded;
   }
-  for (uint32_t id : visible) category[id] = kVisible;
+  // A leaf shows when V holds it or (an HLOD) an ancestor; ids are breadth-first.
+  std::vector<uint8_t> drawn(h.size(), 0);
+  for (uint32_t id : visible) drawn[id] = 1;
+  for (uint32_t id = 0; id < h.size(); ++id)
+    if (h.node(id).parent != kNoNode && drawn[h.node(id).parent]) drawn[id] = 1;
+  for (uint32_t id : leaves)
+    if (drawn[id]) category[id] = kVisible;
   for (uint32_t id : leaves) ++counts[category[id]];
 
   // The overview: the leaves below the section cut, shaded and as an id buffer.
@@ -458,14 +467,19 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   return occ::run_main([&] {
     occ::Options o;
-    occ::Cli cli("cull_overview", "--scene S --path P --frame F --out FILE.png [options]",
+    occ::Cli cli("cull_overview", "--scene S --path P --frame F --out FILE.png [switch_node's options]",
                  "Replays the occlusion switch's culling (lockstep, one process) up to frame F and draws an\n"
                  "overview from up and behind camera F: visible nodes yellow, frustum-culled violet,\n"
-                 "occlusion-culled orange, with the camera's frustum and a legend.");
+                 "occlusion-culled orange, with the camera's frustum and a legend. It takes the switch\n"
+                 "nodes' scene, accuracy and culling options, so their command line replays as it ran.");
+    cli.group(occ::CliGroup::scene);
     cli.option("path", &o.path, "P", "camera path: file.csv, orbit:N, walk:N or fly:N");
     cli.option("frame", &o.frame, 0, 10000000, "the frame to show");
-    cli.option("out", &o.out, "FILE.png", "the overview image");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl, "the cluster's, for culling");
+    occ::add_cluster_options(cli, o.config);
+    occ::add_hc_options(cli, o.hc);
+    cli.group(occ::CliGroup::output);
+    cli.option("out", &o.out, "FILE.png", "the overview image");
     cli.option("view-width", &o.view_width, 16, occ::kMaxViewportPx, "overview image width");
     cli.option("view-height", &o.view_height, 16, occ::kMaxViewportPx, "overview image height");
     cli.option("pitch", &o.pitch_deg, 10.0, 89.0, "overview: degrees above the horizon");
@@ -474,8 +488,6 @@ int main(int argc, char** argv) {
     cli.option("cut", &o.cut, -1.0, 1e9,
                "overview: leave out leaves starting this far above the eye (-1: auto, cut at a ceiling "
                "right above the eye)");
-    cli.on_off("front-tracking", &o.front_tracking, "as the switch nodes' --front-tracking");
-    occ::add_hc_options(cli, o.hc);
     if (!cli.parse(argc, argv)) return 0;
     return occ::run(o);
   });

@@ -1,4 +1,4 @@
-#include "render_client/scene_export.hpp"
+#include "render_client/tools/scene_export.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -80,7 +80,7 @@ void save_gltf(const Scene& scene, const std::string& gltf_path) {
   b.write(bin.data(), std::streamsize(bin.size()));
   if (!b) throw InputError(bin_path.string() + ": cannot write the glTF buffer");
   std::ofstream g(gltf_path);
-  g << "{\"asset\":{\"version\":\"2.0\",\"generator\":\"occswitch render_client --save-scene\"},"
+  g << "{\"asset\":{\"version\":\"2.0\",\"generator\":\"occswitch scene_export\"},"
     << "\"scene\":0,\"scenes\":[{\"nodes\":[" << roots.str() << "]}],\"nodes\":[" << nodes.str()
     // Generated scenes have no materials: per-object colours, both sides drawn. Material 0 says
     // so (an occswitch extra; other readers see a white double-sided material).
