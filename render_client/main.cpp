@@ -48,16 +48,16 @@ void occlusion_option(occ::Cli& cli, occ::ClientOptions& o) {
       });
 }
 
-// --images png|items|off.
+// --images png|items|png+items|off.
 void images_option(occ::Cli& cli, occ::ClientOptions& o) {
-  cli.custom("images", "png|items|off", "png",
-             "with --out: png = DIR/frame_%05d.png a frame; items = also DIR/items_%05d.png, each pixel the id of the "
-             "item or HLOD that drew it (frame_diff --items); off = DIR/stats.csv only (benchmarks)",
+  cli.custom("images", "png|items|png+items|off", "png",
+             "with --out: png = DIR/frame_%05d.png a frame; items = DIR/items_%05d.png instead, each pixel the id of "
+             "the item or HLOD that drew it (frame_diff --items); png+items = both; off = neither (benchmarks)",
              [&o](const std::string& v) {
-               if (v != "png" && v != "items" && v != "off")
-                 throw occ::InputError("--images '" + v + "': expected png, items or off");
-               o.no_images = v == "off";
-               o.item_buffer = v == "items";
+               if (v != "png" && v != "items" && v != "png+items" && v != "off")
+                 throw occ::InputError("--images '" + v + "': expected png, items, png+items or off");
+               o.no_images = v == "off" || v == "items";
+               o.item_buffer = v == "items" || v == "png+items";
              });
 }
 

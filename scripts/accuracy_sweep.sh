@@ -42,7 +42,7 @@ common=("${view[@]}" --lod-cache "$out/lod-cache" "${extra[@]}")
 t_start=$SECONDS
 
 echo "accuracy: reference (full detail) on $scene, $path, ${width}x${height}" >&2
-"$BIN/render_client" --scene "$scene" --path "$path" --out "$out/reference" "${view[@]}" --images items \
+"$BIN/render_client" --scene "$scene" --path "$path" --out "$out/reference" "${view[@]}" --images png+items \
   >"$out/reference.log" 2>&1 || { echo "error: reference failed (see $out/reference.log)" >&2; exit 1; }
 
 # mean and median of a stats.csv column (skipping frame 0 and 1: no occluders yet)
@@ -68,7 +68,7 @@ for cfg in "${configs[@]}"; do
   echo "accuracy: $name ($((SECONDS - t_start)) s)" >&2
   "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --out "$out/$name-time" --images off "${args[@]}" \
     >"$out/$name-time.out" 2>&1 || { echo "error: cluster run $name failed (see $out/$name-time/)" >&2; exit 1; }
-  "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --out "$out/$name" --images items "${args[@]}" \
+  "$here/scripts/cluster.sh" --scene "$scene" --path "$path" --out "$out/$name" --images png+items "${args[@]}" \
     >"$out/$name.out" 2>&1 || { echo "error: cluster run $name failed (see $out/$name/)" >&2; exit 1; }
   s="$out/$name-time/stats.csv"
   read -r fmean fmed <<<"$(col "$s" frame_interval_ms)"

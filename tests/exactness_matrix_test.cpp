@@ -128,7 +128,7 @@ TEST(Sealed, TheSwitchDiffersFromBruteForceOnlyWhereBruteForceShowsASealedBar) {
     f.insert(f.end(), view.begin(), view.end());
     return f;
   };
-  const Outcome none = run_reference(dir / "none", spec, path, with({"--cull", "none", "--images", "items"}));
+  const Outcome none = run_reference(dir / "none", spec, path, with({"--cull", "none", "--images", "png+items"}));
   ASSERT_EQ(none.code, 0) << none.log;
   occ::Scene scene = occ::load_scene(spec);
   const occ::Hierarchy h = occ::Hierarchy::build(scene, {});

@@ -32,7 +32,7 @@ std::string field(const std::string& log, const std::string& key) {
 void expect_promise(const Case& c) {
   const fs::path dir = fresh_dir("tau_" + c.name);
   std::vector<std::string> ref_flags = kView;
-  ref_flags.insert(ref_flags.end(), {"--images", "items", "--images", "off"});
+  ref_flags.insert(ref_flags.end(), {"--images", "items"});
   const Outcome ref = run_reference(dir / "reference", c.scene, c.path, ref_flags);
   ASSERT_EQ(ref.code, 0) << ref.log;
   for (double tau : kTaus) {
@@ -40,7 +40,7 @@ void expect_promise(const Case& c) {
     std::snprintf(t, sizeof t, "%g", tau);
     ClusterOptions o(c.scene, c.path, kView);
     o.all = {"--pixel-error", t, "--lod-cache", (dir / "cache").string()};
-    o.client = {"--images", "items", "--images", "off"};
+    o.client = {"--images", "items"};
     const fs::path out = dir / (std::string("tau") + t);
     const ClusterRun r = run_cluster(out, o);
     ASSERT_EQ(r.rvg_code, 0) << r.logs();
