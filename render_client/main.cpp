@@ -10,6 +10,7 @@
 #include "common/gl/startup.hpp"
 #include "common/memory.hpp"
 #include "render_client/options.hpp"
+#include "render_client/web_server.hpp"
 
 namespace {
 
@@ -86,13 +87,22 @@ int main(int argc, char** argv) {
     cli.flag("window", &o.window,
              "show the frames in an X11 window ($DISPLAY) and let the user drive: W/A/S/D/Q/E move, arrows or "
              "drag look, Shift faster, wheel speed, F walk/fly, R reset, P screenshot to --out, O culling overlay (occlusion-culled boxes tinted), Esc quits");
-    cli.option("record", &o.record, "FILE.csv", "--window: write every camera shown as a --path CSV (replays the flight)");
+    cli.option("web", &o.web, "[ADDR:]PORT",
+               "serve a page that shows the frames and lets the user drive as --window does (mouse, wheel, keys, "
+               "touch): http://ADDR:PORT/ (ADDR default 127.0.0.1; PORT 0: a free one); the drive and view-only URLs, "
+               "with their tokens, are printed at start");
+    cli.option("web-tls", &o.web_tls, "CERT.pem:KEY.pem|self-signed",
+               "--web over https/wss with this PEM pair, or a fresh self-signed one for localhost");
+    cli.option("record", &o.record, "FILE.csv", "--window/--web: write every camera shown as a --path CSV (replays the flight)");
     cli.option("save-path", &o.save_path, "FILE.csv", "write the camera path (e.g. a generated walk:N) as a --path CSV");
     if (!cli.parse(argc, argv)) return 0;
-    if (!o.save_path.empty() && o.window) throw occ::InputError("--save-path: with --window, use --record");
-    if (o.path.empty()) o.path = o.window ? "interactive" : "walk:60";
-    if (o.path == "interactive" && !o.window) throw occ::InputError("--path interactive needs --window");
-    if (!o.record.empty() && !o.window) throw occ::InputError("--record needs --window");
+    if (o.window && !o.web.empty()) throw occ::InputError("--web: not with --window (one display)");
+    if (!o.web_tls.empty() && o.web.empty()) throw occ::InputError("--web-tls needs --web");
+    if (!o.web.empty()) occ::parse_web_options(o.web, o.web_tls);  // a bad --web fails before the scene loads
+    if (!o.save_path.empty() && o.viewer()) throw occ::InputError("--save-path: with --window or --web, use --record");
+    if (o.path.empty()) o.path = o.viewer() ? "interactive" : "walk:60";
+    if (o.path == "interactive" && !o.viewer()) throw occ::InputError("--path interactive needs --window or --web");
+    if (!o.record.empty() && !o.viewer()) throw occ::InputError("--record needs --window or --web");
     if (o.path != "interactive") {  // a bad --path fails now, not after the scene has loaded
       occ::Aabb unit;
       unit.grow(glm::dvec3(0.0));

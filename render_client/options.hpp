@@ -41,8 +41,11 @@ struct ClientOptions {
   OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;        // --two-pass (on/off/automatic)
   uint32_t test_alternate = 0;  // tests only (OCC_TEST_ALTERNATE, main.cpp): both gates alternate
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
-  // --window (viewer.hpp)
+  // --window or --web (viewer.hpp)
   bool window = false;
+  std::string web;      // --web [ADDR:]PORT (web_server.hpp); empty: off
+  std::string web_tls;  // --web-tls CERT.pem:KEY.pem|self-signed
+  bool viewer() const { return window || !web.empty(); }  // a user watches and drives
   std::string record;  // every camera shown, as a path CSV
   std::string save_path;  // --save-path: the path (generated or read) as CSV (also for bench.sh's OSG rows)
 };
