@@ -83,7 +83,8 @@ class Session : public WebWatcher, public std::enable_shared_from_this<Session<S
   }
 
   void on_request(beast::error_code ec) {
-    if (ec == http::error::end_of_stream) return;
+    // A connection closed or idle before its first byte (a browser's spare one) is no bad request.
+    if (ec == http::error::end_of_stream || (ec == beast::error::timeout && !parser_->got_some())) return;
     if (ec) return log("bad HTTP request (" + ec.message() + "): connection closed");
     const auto& req = parser_->get();
     const auto [path, token] = split_target(std::string_view(req.target().data(), req.target().size()));
@@ -169,6 +170,8 @@ class Session : public WebWatcher, public std::enable_shared_from_this<Session<S
     }
     if (ec) {
       closed_ = true;
+      if (ec == websocket::error::message_too_big)
+        return log("input message longer than " + std::to_string(kMaxInputBytes) + " bytes: WebSocket closed");
       return log("WebSocket closed: " + ec.message());
     }
     const std::string text = beast::buffers_to_string(rbuf_.data());
