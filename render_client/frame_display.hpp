@@ -35,6 +35,7 @@ struct ShownFrame {
   Camera camera;           // the camera it was rendered with
   uint32_t index = 0;      // its number among the frames shown (--record's row)
   uint32_t input_seq = 0;  // the newest input event its camera includes (WindowEvent::seq; 0 none)
+  bool steering = false;   // a drag or a movement key was in progress when it was shown
 };
 
 class FrameDisplay {

@@ -132,7 +132,7 @@ void Viewer::show(const Camera& cam, Image img, const HudStats& hud) {
     while (show_times_ms_.size() > 2 && show_times_ms_.front() < t - 1000) show_times_ms_.erase(show_times_ms_.begin());
     pending_ = std::make_shared<const Image>(std::move(img));
     pending_frame_ = {hud_line(hud), hud, fps(), frame_ms, cam, pending_index_,
-                      hud.camera < camera_seq_.size() ? camera_seq_[hud.camera] : 0};
+                      hud.camera < camera_seq_.size() ? camera_seq_[hud.camera] : 0, dragging_ || nav_->moving()};
   }
   const char c = 1;
   [[maybe_unused]] ssize_t w = ::write(wake_[1], &c, 1);

@@ -48,7 +48,9 @@ class WebDisplay : public FrameDisplay {
   void show(const Image& img, const ShownFrame& f) override {
     const std::string camera = camera_csv_fields(f.camera);
     const bool still = camera == last_camera_;
-    if (still && last_was_png_) return;  // the lossless frame of this camera went out already
+    // Nothing new: the lossless frame of this camera went out already, or the user is between
+    // two moves of a drag (or of a held key).
+    if (still && (last_was_png_ || f.steering)) return;
     FrameEncoder& enc = still ? *png_ : *jpeg_;
     const auto t0 = std::chrono::steady_clock::now();
     const std::vector<uint8_t> bytes = enc.encode(img);

@@ -4,8 +4,9 @@
 // Each frame is one binary WebSocket message: a little-endian u32 N, N bytes of JSON (format,
 // frame index, the camera as a --path CSV row, the HUD's numbers, the newest input it includes),
 // then the image. While the camera changes from one frame to the next the image is JPEG; the
-// first frame whose camera equals the one before is sent as PNG (lossless: pixel for pixel the
-// rendered frame), and later frames with that same camera are not sent at all.
+// first frame whose camera equals the one before while the user steers nothing (no drag, no
+// movement key held) is sent as PNG (lossless: pixel for pixel the rendered frame). Other frames
+// with the camera of the frame before are not sent at all.
 #pragma once
 #include <memory>
 
