@@ -97,7 +97,47 @@ class WebDisplay : public FrameDisplay {
   std::unique_ptr<WebServer> server_;  // last: stopped first
 };
 
+WinKey win_key(WebKey k) {
+  switch (k) {
+    case WebKey::w: return WinKey::w;
+    case WebKey::a: return WinKey::a;
+    case WebKey::s: return WinKey::s;
+    case WebKey::d: return WinKey::d;
+    case WebKey::q: return WinKey::q;
+    case WebKey::e: return WinKey::e;
+    case WebKey::f: return WinKey::f;
+    case WebKey::r: return WinKey::r;
+    case WebKey::p: return WinKey::p;
+    case WebKey::o: return WinKey::o;
+    case WebKey::up: return WinKey::up;
+    case WebKey::down: return WinKey::down;
+    case WebKey::left: return WinKey::left;
+    case WebKey::right: return WinKey::right;
+    case WebKey::shift: return WinKey::shift;
+    case WebKey::none: break;
+  }
+  return WinKey::other;
+}
+
 }  // namespace
+
+WindowEvent to_window_event(const WebInput& in) {
+  using T = WindowEvent::Type;
+  using K = WebInput::Kind;
+  WindowEvent ev{T::focus_out};
+  switch (in.kind) {
+    case K::key_down: ev = {T::key_down, win_key(in.key)}; break;
+    case K::key_up: ev = {T::key_up, win_key(in.key)}; break;
+    case K::button_down: ev = {T::button_down, WinKey::other, in.button, in.x, in.y}; break;
+    case K::button_up: ev = {T::button_up, WinKey::other, in.button, in.x, in.y}; break;
+    case K::motion: ev = {T::motion, WinKey::other, 0, in.x, in.y}; break;
+    case K::wheel: ev = {T::button_down, WinKey::other, in.notches > 0 ? 4 : 5}; break;
+    case K::blur: break;
+    case K::quit: ev = {T::close}; break;
+  }
+  ev.seq = in.seq;
+  return ev;
+}
 
 std::string web_frame_header(const ShownFrame& f, const char* format, int width, int height, double encode_ms) {
   const HudStats& h = f.stats;

@@ -10,6 +10,7 @@
 #pragma once
 #include <memory>
 
+#include "common/web_input.hpp"
 #include "render_client/frame_display.hpp"
 #include "render_client/options.hpp"
 
@@ -17,6 +18,10 @@ namespace occ {
 
 // Starts the server (throws InputError naming --web or --web-tls) and prints its URLs.
 std::unique_ptr<FrameDisplay> make_web_display(const ClientOptions& o);
+
+// The window event the viewer handles for a page's input (a wheel of N notches: one event of
+// button 4 or 5, repeated N times by the caller; blur: focus_out; quit: close), with its seq.
+WindowEvent to_window_event(const WebInput& in);
 
 // The JSON header of a frame message (web_display.hpp) for `f`, image `format`, encode time.
 std::string web_frame_header(const ShownFrame& f, const char* format, int width, int height, double encode_ms);

@@ -17,7 +17,7 @@
 #include <memory>
 #include <string>
 
-#include "render_client/web_input.hpp"
+#include "common/web_input.hpp"
 
 namespace occ {
 

@@ -17,7 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/camera_path.hpp"
-#include "render_client/web_input.hpp"
+#include "common/web_input.hpp"
 #include "common/error.hpp"
 #include "common/fuzz/fuzz_targets.hpp"
 #include "common/image.hpp"
@@ -191,12 +191,12 @@ void camera_paths(const fs::path& dir) {
 // One input message a file, as the page sends them (format_web_input), every kind.
 void web_inputs(const fs::path& dir) {
   using K = WebInput::Kind;
-  const WebInput inputs[] = {{1, K::key_down, WinKey::w},
-                             {2, K::key_up, WinKey::shift},
-                             {3, K::button_down, WinKey::other, 1, 120, 64},
-                             {4, K::motion, WinKey::other, 0, -35, 99999},
-                             {5, K::button_up, WinKey::other, 3, 0, 0},
-                             {6, K::wheel, WinKey::other, 0, 0, 0, -2},
+  const WebInput inputs[] = {{1, K::key_down, WebKey::w},
+                             {2, K::key_up, WebKey::shift},
+                             {3, K::button_down, WebKey::none, 1, 120, 64},
+                             {4, K::motion, WebKey::none, 0, -35, 99999},
+                             {5, K::button_up, WebKey::none, 3, 0, 0},
+                             {6, K::wheel, WebKey::none, 0, 0, 0, -2},
                              {7, K::blur},
                              {2147483647, K::quit}};
   for (const WebInput& in : inputs) write_text(dir / ("input_" + std::to_string(in.seq % 100) + ".txt"), format_web_input(in));

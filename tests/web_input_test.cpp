@@ -1,8 +1,9 @@
-// The input messages of render_client --web's page (render_client/web_input.hpp): what each kind
+// The input messages of render_client --web's page (common/web_input.hpp): what each kind
 // reads as, the window event it becomes, and the messages that are refused with a reason.
 #include <gtest/gtest.h>
 
-#include "render_client/web_input.hpp"
+#include "common/web_input.hpp"
+#include "render_client/web_display.hpp"
 
 using namespace occ;
 
@@ -21,10 +22,10 @@ std::string refused(const std::string& msg) {
 }
 
 TEST(WebInput, EveryKindReadsAsItsEvent) {
-  EXPECT_EQ(ok("7 kd w"), (WebInput{7, WebInput::Kind::key_down, WinKey::w}));
-  EXPECT_EQ(ok("8 ku shift").key, WinKey::shift);
-  EXPECT_EQ(ok("9 bd 1 10 -20"), (WebInput{9, WebInput::Kind::button_down, WinKey::other, 1, 10, -20}));
-  EXPECT_EQ(ok("10 mv 300 400"), (WebInput{10, WebInput::Kind::motion, WinKey::other, 0, 300, 400}));
+  EXPECT_EQ(ok("7 kd w"), (WebInput{7, WebInput::Kind::key_down, WebKey::w}));
+  EXPECT_EQ(ok("8 ku shift").key, WebKey::shift);
+  EXPECT_EQ(ok("9 bd 1 10 -20"), (WebInput{9, WebInput::Kind::button_down, WebKey::none, 1, 10, -20}));
+  EXPECT_EQ(ok("10 mv 300 400"), (WebInput{10, WebInput::Kind::motion, WebKey::none, 0, 300, 400}));
   EXPECT_EQ(ok("11 wh -3").notches, -3);
   EXPECT_EQ(ok("12 blur").kind, WebInput::Kind::blur);
   EXPECT_EQ(ok("13 quit").kind, WebInput::Kind::quit);
@@ -45,6 +46,7 @@ TEST(WebInput, WindowEventsCarryTheSequenceNumber) {
   EXPECT_EQ(to_window_event(ok("7 wh -1")).button, 5);
   EXPECT_EQ(to_window_event(ok("8 blur")).type, WindowEvent::Type::focus_out);
   EXPECT_EQ(to_window_event(ok("9 quit")).type, WindowEvent::Type::close);
+  EXPECT_EQ(to_window_event(ok("10 kd left")).key, WinKey::left);
 }
 
 TEST(WebInput, BadMessagesAreRefusedNamingTheWord) {

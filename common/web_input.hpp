@@ -1,6 +1,6 @@
 // The input messages a browser page sends to render_client --web over its WebSocket, and their
-// parser: no GL, no sockets, so the fuzz harness (common/fuzz) and the unit tests call it with
-// bytes. One text message is one event, ASCII words separated by single spaces:
+// parser: no GL, no sockets, no window, so the fuzz harness (common/fuzz) and the unit tests call
+// it with bytes (render_client/web_display.hpp turns them into the viewer's window events). One text message is one event, ASCII words separated by single spaces:
 //   SEQ kd KEY | SEQ ku KEY        key down / up; KEY: w a s d q e f r p o up down left right shift
 //   SEQ bd B X Y | SEQ bu B X Y    button B (1 left, 2 middle, 3 right) down / up at pixel X, Y
 //   SEQ mv X Y                     pointer (mouse or one finger) at X, Y
@@ -15,17 +15,18 @@
 #include <string_view>
 #include <variant>
 
-#include "render_client/window.hpp"
 
 namespace occ {
 
 inline constexpr size_t kMaxInputBytes = 64;
 
+enum class WebKey { none, w, a, s, d, q, e, f, r, p, o, up, down, left, right, shift };
+
 struct WebInput {
   enum class Kind { key_down, key_up, button_down, button_up, motion, wheel, blur, quit };
   uint32_t seq = 0;
   Kind kind = Kind::blur;
-  WinKey key = WinKey::other;  // key_down, key_up: never other
+  WebKey key = WebKey::none;   // key_down, key_up: never none
   int button = 0;              // button_down, button_up: 1..3
   int x = 0, y = 0;            // buttons, motion
   int notches = 0;             // wheel
@@ -38,8 +39,4 @@ struct WebInput {
 std::variant<WebInput, std::string> parse_web_input(std::string_view msg);
 // The message parse_web_input reads back as `in` (in must be in range).
 std::string format_web_input(const WebInput& in);
-// The window event the viewer handles for `in` (wheel: button 4 or 5, one event a notch is the
-// caller's loop; blur: focus_out; quit: close). Its seq is the input's.
-WindowEvent to_window_event(const WebInput& in);
-
 }  // namespace occ

@@ -1,4 +1,4 @@
-#include "render_client/web_input.hpp"
+#include "common/web_input.hpp"
 
 #include <charconv>
 #include <vector>
@@ -9,14 +9,14 @@ namespace {
 
 struct KeyName {
   const char* name;
-  WinKey key;
+  WebKey key;
 };
-constexpr KeyName kKeys[] = {{"w", WinKey::w},       {"a", WinKey::a},         {"s", WinKey::s},
-                             {"d", WinKey::d},       {"q", WinKey::q},         {"e", WinKey::e},
-                             {"f", WinKey::f},       {"r", WinKey::r},         {"p", WinKey::p},
-                             {"o", WinKey::o},         {"up", WinKey::up},
-                             {"down", WinKey::down}, {"left", WinKey::left},   {"right", WinKey::right},
-                             {"shift", WinKey::shift}};
+constexpr KeyName kKeys[] = {{"w", WebKey::w},       {"a", WebKey::a},         {"s", WebKey::s},
+                             {"d", WebKey::d},       {"q", WebKey::q},         {"e", WebKey::e},
+                             {"f", WebKey::f},       {"r", WebKey::r},         {"p", WebKey::p},
+                             {"o", WebKey::o},         {"up", WebKey::up},
+                             {"down", WebKey::down}, {"left", WebKey::left},   {"right", WebKey::right},
+                             {"shift", WebKey::shift}};
 
 struct Kind {
   const char* name;
@@ -74,7 +74,7 @@ std::variant<WebInput, std::string> parse_web_input(std::string_view msg) {
   if (in.kind == K::key_down || in.kind == K::key_up) {
     for (const KeyName& k : kKeys)
       if (w[2] == k.name) in.key = k.key;
-    if (in.key == WinKey::other) return bad("key", w[2]);
+    if (in.key == WebKey::none) return bad("key", w[2]);
   } else if (in.kind == K::wheel) {
     if (!integer(w[2], -100, 100, &v) || v == 0) return bad("wheel notches", w[2]);
     in.notches = int(v);
@@ -109,24 +109,6 @@ std::string format_web_input(const WebInput& in) {
     num(in.y);
   }
   return s;
-}
-
-WindowEvent to_window_event(const WebInput& in) {
-  using T = WindowEvent::Type;
-  using K = WebInput::Kind;
-  WindowEvent ev{T::focus_out};
-  switch (in.kind) {
-    case K::key_down: ev = {T::key_down, in.key}; break;
-    case K::key_up: ev = {T::key_up, in.key}; break;
-    case K::button_down: ev = {T::button_down, WinKey::other, in.button, in.x, in.y}; break;
-    case K::button_up: ev = {T::button_up, WinKey::other, in.button, in.x, in.y}; break;
-    case K::motion: ev = {T::motion, WinKey::other, 0, in.x, in.y}; break;
-    case K::wheel: ev = {T::button_down, WinKey::other, in.notches > 0 ? 4 : 5}; break;
-    case K::blur: break;
-    case K::quit: ev = {T::close}; break;
-  }
-  ev.seq = in.seq;
-  return ev;
 }
 
 }  // namespace occ
