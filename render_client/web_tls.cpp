@@ -6,6 +6,7 @@
 #include <openssl/x509v3.h>
 
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -83,6 +84,8 @@ ssl::context make_tls_context(const std::string& spec) {
   }
   const size_t colon = spec.find(':');
   const std::string cert = spec.substr(0, colon), key = spec.substr(colon + 1);
+  for (const std::string& f : {cert, key})
+    if (!std::ifstream(f)) throw InputError("--web-tls '" + spec + "': cannot read '" + f + "'");
   boost::system::error_code ec;
   ctx.use_certificate_chain_file(cert, ec);
   if (ec) throw InputError("--web-tls '" + spec + "': certificate '" + cert + "': " + ec.message());

@@ -8,7 +8,8 @@
 //   - once the camera is still a PNG arrives that equals, pixel for pixel (frame_diff), what
 //     render_client --reference renders for the camera the page reports;
 //   - the view-only page gets the frames but its drag moves nothing;
-//   - the stop button ends the cluster, every process with status 0.
+//   - the stop button ends the cluster, every process with status 0;
+//   - the reference renderer serves the page over https/wss with --web-tls self-signed.
 // Usage: node browser_test.js SOURCE_DIR BIN_DIR. Exit 0 pass, 1 fail, 77 skipped (no chromium).
 "use strict";
 const fs = require("fs");
@@ -173,6 +174,33 @@ async function main() {
   const diff = spawnSync(path.join(bin, "frame_diff"), [path.join(tmp, "ref"), path.join(tmp, "web")], { encoding: "utf8" });
   check(diff.status === 0 && /frames=1 differing_pixels=0 /.test(diff.stdout),
         "the still frame equals the reference pixel for pixel (" + diff.stdout.trim().split("\n").pop() + ")");
+  await overTls();
+}
+
+// The reference renderer with --web-tls self-signed: the page and its frames over https/wss.
+async function overTls() {
+  cluster = null;
+  clusterExit = null;  // until() watches the cluster: it has ended
+  let err = "";
+  const ref = spawn(path.join(bin, "render_client"), ["--reference", "--scene", SCENE, ...VIEW, "--web", "0",
+                    "--web-tls", "self-signed"], { stdio: ["ignore", "ignore", "pipe"] });
+  ref.stderr.on("data", d => { err += d; });
+  let status = null;
+  ref.on("exit", c => { status = c; });
+  try {
+    const url = await until("the https URL", () => (err.match(/\(drive\): (https:\S+)/) || [])[1], 120000);
+    check(/self-signed certificate for localhost, SHA-256 [0-9A-F:]{95}/.test(err), "the certificate's fingerprint is printed");
+    browser = await puppeteer.launch({ executablePath: CHROMIUM, headless: true, acceptInsecureCerts: true,
+                                       args: ["--no-sandbox", "--disable-gpu"] });
+    const page = await browser.newPage();
+    check((await page.goto(url)).status() === 200, "the page over https");
+    await until("a still frame over wss", async () => (await occ(page)).stills >= 1);
+    await page.evaluate(() => document.getElementById("stop").click());
+    await until("the reference renderer to exit", () => status !== null, 60000);
+    check(status === 0, "the stop button ends the reference renderer with status 0 (" + status + ")");
+  } finally {
+    if (status === null) ref.kill();
+  }
 }
 
 main().then(() => {
