@@ -43,8 +43,8 @@ int main(int argc, char** argv) {
                  "node doing HC, verifies it, renders it and writes frames and statistics. With --reference\n"
                  "it renders the whole scene itself (no culling or frustum culling only): the ground truth.");
     cli.option("path", &o.path, "P",
-               "camera path: file.csv, orbit:N, walk:N or fly:N (default walk:60), or interactive (--window; "
-               "its default)");
+               "camera path: file.csv, orbit:N, walk:N or fly:N (default walk:60), or interactive (--window, --web; "
+               "their default)");
     cli.option("out", &o.out, "DIR", "write DIR/frame_%05d.png and DIR/stats.csv");
     cli.flag("no-images", &o.no_images, "write stats only (benchmarks)");
     cli.flag("item-buffer", &o.item_buffer,

@@ -75,7 +75,7 @@ async function run(browser, [w, h], n) {
   const pages = [];
   for (let i = 0; i < n; ++i) {
     const p = await browser.newPage();
-    await p.setViewport({ width: w, height: h + 44 });
+    await p.setViewport({ width: w, height: h + 48 });
     await p.goto(i === 0 ? drive : view);
     pages.push(p);
   }
