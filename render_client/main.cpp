@@ -91,8 +91,9 @@ int main(int argc, char** argv) {
                "serve a page that shows the frames and lets the user drive as --window does (mouse, wheel, keys, "
                "touch): http://ADDR:PORT/ (ADDR default 127.0.0.1; PORT 0: a free one); the drive and view-only URLs, "
                "with their tokens, are printed at start");
-    cli.option("web-tls", &o.web_tls, "CERT.pem:KEY.pem|self-signed",
-               "--web over https/wss with this PEM pair, or a fresh self-signed one for localhost");
+    cli.option("web-tls", &o.web_tls, "CERT:KEY",
+               "--web over https/wss: CERT.pem:KEY.pem (a PEM certificate chain and its key), or self-signed (a fresh "
+               "pair for localhost made at start, its fingerprint printed)");
     cli.option("record", &o.record, "FILE.csv", "--window/--web: write every camera shown as a --path CSV (replays the flight)");
     cli.option("save-path", &o.save_path, "FILE.csv", "write the camera path (e.g. a generated walk:N) as a --path CSV");
     if (!cli.parse(argc, argv)) return 0;

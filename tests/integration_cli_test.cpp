@@ -42,6 +42,13 @@ TEST(Cli, RenderClientBadInputGetsOneNamedError) {
   expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--path", (dir / "nan.csv").string()}, "nan"),
                    {"nan.csv", "line 2", "eye_z"});
   expect_one_error(run({ref, "--scene", "city:2x2:1:2:1"}, "noconnect"), {"--connect"});
+  expect_one_error(run({ref, "--reference", "--web", "host:nope"}, "web"), {"--web 'host:nope'"});
+  expect_one_error(run({ref, "--reference", "--web-tls", "self-signed"}, "webtls"), {"--web-tls needs --web"});
+  expect_one_error(run({ref, "--reference", "--web", "0", "--window"}, "webwin"), {"--web", "--window"});
+  expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--web", "0", "--web-tls",
+                        "/nonexistent/c.pem:/nonexistent/k.pem"}, "webcert"), {"--web-tls", "/nonexistent/c.pem"});
+  expect_one_error(run({ref, "--reference", "--scene", "city:2x2:1:2:1", "--web", "10.255.255.1:0"}, "webbind"),
+                   {"--web '10.255.255.1:0'", "cannot listen"});
   expect_one_error(run({ref, "--reference", "--scene", "city:0x2"}, "badcity"), {"city:0x2"});
   // Retired modes are unknown values now; the tests' hook takes a count only.
   expect_one_error(run({ref, "--occlusion-gate", "selected"}, "gate_selected"), {"--occlusion-gate 'selected'"});
