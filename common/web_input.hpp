@@ -1,6 +1,7 @@
 // The input messages a browser page sends to render_client --web over its WebSocket, and their
 // parser: no GL, no sockets, no window, so the fuzz harness (common/fuzz) and the unit tests call
-// it with bytes (render_client/web_display.hpp turns them into the viewer's window events). One text message is one event, ASCII words separated by single spaces:
+// it with bytes (render_client/web_display.hpp turns them into the viewer's window events).
+// One text message is one event, ASCII words separated by single spaces:
 //   SEQ kd KEY | SEQ ku KEY        key down / up; KEY: w a s d q e f r p o up down left right shift
 //   SEQ bd B X Y | SEQ bu B X Y    button B (1 left, 2 middle, 3 right) down / up at pixel X, Y
 //   SEQ mv X Y                     pointer (mouse or one finger) at X, Y

@@ -89,7 +89,8 @@ void Viewer::start(const Aabb& bounds, const Viewport& vp) {
   if (!interactive_) path_ = load_camera_path(o_.path, bounds, vp);
   const Camera home = interactive_ ? load_camera_path("walk:1", bounds, vp)[0] : path_[0];
   nav_ = std::make_unique<Navigator>(home, bounds);
-  std::cerr << "render_client: " << (o_.web.empty() ? "window open" : "web viewer ready") << " (" << (interactive_ ? "you drive" : "playing the path; any movement key takes over")
+  std::cerr << "render_client: " << (o_.web.empty() ? "window open" : "web viewer ready") << " ("
+            << (interactive_ ? "you drive" : "playing the path; any movement key takes over")
             << "): W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset, "
                "P screenshot, O culling overlay, "
             << (o_.web.empty() ? "Esc quits\n" : "the page's stop button quits\n");

@@ -6,6 +6,8 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <iostream>
 #include <mutex>
 #include <stdexcept>
 
@@ -53,7 +55,13 @@ class WebDisplay : public FrameDisplay {
     if (still && (last_was_png_ || f.steering)) return;
     FrameEncoder& enc = still ? *png_ : *jpeg_;
     const auto t0 = std::chrono::steady_clock::now();
-    const std::vector<uint8_t> bytes = enc.encode(img);
+    std::vector<uint8_t> bytes;
+    try {
+      bytes = enc.encode(img);
+    } catch (const std::exception& e) {  // the frame is dropped, the next one tried
+      std::cerr << "render_client: web: frame " << f.index << " not sent: " << e.what() << "\n";
+      return;
+    }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const std::string header = web_frame_header(f, enc.format(), img.width, img.height, ms);
     auto message = std::make_shared<std::string>();
