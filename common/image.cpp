@@ -17,20 +17,6 @@ void write_png(const std::string& path, const Image& img) {
     throw std::runtime_error(path + ": cannot write PNG");
 }
 
-std::vector<uint8_t> encode_png(const Image& img) {
-  if (img.width <= 0 || img.height <= 0 || img.rgba.size() != size_t(img.width) * img.height * 4)
-    throw std::runtime_error("cannot encode PNG: image is " + std::to_string(img.width) + "x" +
-                             std::to_string(img.height) + " with " + std::to_string(img.rgba.size()) + " bytes");
-  std::vector<uint8_t> out;
-  auto append = [](void* ctx, void* data, int size) {
-    auto* v = static_cast<std::vector<uint8_t>*>(ctx);
-    v->insert(v->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
-  };
-  if (!stbi_write_png_to_func(append, &out, img.width, img.height, 4, img.rgba.data(), img.width * 4))
-    throw std::runtime_error("cannot encode PNG");
-  return out;
-}
-
 Image read_png(const std::string& path) {
   int w = 0, h = 0, channels = 0;
   std::unique_ptr<stbi_uc, void (*)(void*)> data(stbi_load(path.c_str(), &w, &h, &channels, 4),

@@ -15,8 +15,5 @@ struct Image {
 // Throws std::runtime_error naming the file on failure.
 void write_png(const std::string& path, const Image& img);
 Image read_png(const std::string& path);
-// The PNG file's bytes, in memory (lossless: read_png of them gives img back). Throws
-// std::runtime_error for an image whose size does not match its pixels.
-std::vector<uint8_t> encode_png(const Image& img);
 
 }  // namespace occ

@@ -1,6 +1,6 @@
 // Frame encoders for render_client --web: RGBA frames to the bytes a browser decodes. JPEG
-// (TurboJPEG, lossy, for frames while the camera moves) and PNG (lossless, the frame once the
-// camera is still). An encoder is used by one thread at a time.
+// (TurboJPEG, lossy, for frames while the camera moves) and PNG (zlib, lossless, the frame once
+// the camera is still). An encoder is used by one thread at a time.
 #pragma once
 #include <cstdint>
 #include <memory>

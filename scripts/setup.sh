@@ -17,7 +17,7 @@ PKGS=(
   gnuplot-nox                                              # plots in benchmarks
   iproute2 python3                                         # netlab / scripts
   libx11-dev                                               # render_client --window (Xlib)
-  libturbojpeg0-dev                                        # render_client --web: JPEG frames
+  libturbojpeg0-dev zlib1g-dev                             # render_client --web: JPEG frames, PNG stills
   chromium nodejs                                          # the --web browser test (headless; puppeteer-core below)
   xvfb xdotool                                             # window tests (virtual X server, key presses)
   ffmpeg                                                   # scripts/video.sh (frames -> MP4)
