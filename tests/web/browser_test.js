@@ -4,7 +4,8 @@
 //   - a wrong or missing token gets 403 and not the page;
 //   - a bad HTTP request, an oversized and a malformed WebSocket message each close only their
 //     connection, with a log line, and the frames go on;
-//   - a mouse drag on the drive page moves the camera and JPEG frames arrive, with a latency;
+//   - a mouse drag on the drive page moves the camera and JPEG frames arrive, with a latency; a
+//     held key and a touch drag move it too;
 //   - once the camera is still a PNG arrives that equals, pixel for pixel (frame_diff), what
 //     render_client --reference renders for the camera the page reports;
 //   - the view-only page gets the frames but its drag moves nothing;
@@ -105,6 +106,7 @@ async function main() {
   browser = await puppeteer.launch({ executablePath: CHROMIUM, headless: true,
                                      args: ["--no-sandbox", "--disable-gpu", "--window-size=400,300"] });
   const page = await browser.newPage();
+  await page.setViewport({ width: 400, height: 300, hasTouch: true });
 
   // No token, a wrong one: 403 and not the page.
   for (const u of [base, base + "?token=0123456789abcdef0123456789abcdef"]) {
@@ -135,6 +137,22 @@ async function main() {
   });
   check((await occ(page)).closed === null, "the drive page stays connected after the bad connections");
   check(moved.latencies.every(x => x > 0), "the page measures the input-to-frame latency (" + moved.latencies.map(Math.round).join(", ") + " ms)");
+
+  // A held key and a touch drag steer too.
+  const moves = async (what, act) => {  // from a still frame, so nothing else is moving it
+    const c0 = (await until("a still frame", async () => { const o = await occ(page); return o.last.format === "png" && o; })).last.camera;
+    await act();
+    await until(what + " to move the camera", async () => (await occ(page)).last.camera !== c0);
+    console.log("ok: " + what + " moves the camera");
+  };
+  await moves("a held W key", async () => { await page.keyboard.down("w"); await sleep(300); await page.keyboard.up("w"); });
+  await moves("a touch drag", async () => {
+    const box = await (await page.$("#view")).boundingBox();
+    const x = box.x + box.width / 2, y = box.y + box.height / 2;
+    await page.touchscreen.touchStart(x, y);
+    for (let i = 1; i <= 6; ++i) { await page.touchscreen.touchMove(x, y + 5 * i); await sleep(30); }
+    await page.touchscreen.touchEnd();
+  });
   const still = await until("the still frame after the drag", () => page.evaluate(n => {
     const s = occ.lastStill;
     if (!s || s.header.frame <= n || occ.last !== s.header) return null;
