@@ -1,7 +1,8 @@
 # render_client --web: the input messages' parser and the frames' encoders and header (unit), and
 # the page in a real browser (headless Debian chromium driven by puppeteer-core from
 # tests/web/node_modules, scripts/setup.sh): it drives a cluster started by scripts/cluster.sh
-# --web and compares the still frame with the reference renderer. Skipped (exit 77) only where /usr/bin/chromium is absent.
+# --web and compares the still frame with the reference renderer. Skipped (exit 77) only where
+# /usr/bin/chromium is absent.
 occ_test(web_input_test unit LIBS occ_web SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/web_input_test.cpp)
 occ_test(web_frames_test unit LIBS occ_web SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/web_frames_test.cpp)
 find_program(OCC_NODE node)
