@@ -146,18 +146,20 @@ std::vector<Camera> load_camera_path(const std::string& spec, const Aabb& bounds
   return from_csv(spec, bounds, vp);
 }
 
+std::string camera_csv_fields(const Camera& c) {
+  std::ostringstream out;
+  out << std::setprecision(17);
+  const glm::dvec3 t = c.eye + c.forward(), u = c.up();
+  out << c.eye.x << ',' << c.eye.y << ',' << c.eye.z << ',' << t.x << ',' << t.y << ',' << t.z << ',' << u.x << ','
+      << u.y << ',' << u.z << ',' << glm::degrees(c.fovy_rad) << ',' << c.near_dist << ',' << c.far_dist;
+  return out.str();
+}
+
 void save_camera_path(const std::string& file, const std::vector<Camera>& path) {
   std::ofstream out(file);
   if (!out) throw InputError(file + ": cannot write camera path");
   out << "frame,eye_x,eye_y,eye_z,target_x,target_y,target_z,up_x,up_y,up_z,fovy_deg,near,far\n";
-  out << std::setprecision(17);
-  for (size_t i = 0; i < path.size(); ++i) {
-    const Camera& c = path[i];
-    glm::dvec3 t = c.eye + c.forward(), u = c.up();
-    out << i << ',' << c.eye.x << ',' << c.eye.y << ',' << c.eye.z << ',' << t.x << ',' << t.y << ','
-        << t.z << ',' << u.x << ',' << u.y << ',' << u.z << ',' << glm::degrees(c.fovy_rad) << ','
-        << c.near_dist << ',' << c.far_dist << '\n';
-  }
+  for (size_t i = 0; i < path.size(); ++i) out << i << ',' << camera_csv_fields(path[i]) << '\n';
   if (!out) throw InputError(file + ": write failed");
 }
 

@@ -24,5 +24,9 @@ void auto_near_far(Camera& cam, const Aabb& bounds);
 
 // Writes a path as CSV (with header and near/far columns) so a generated path can be replayed.
 void save_camera_path(const std::string& file, const std::vector<Camera>& path);
+// One camera as save_camera_path writes its row, without the frame number:
+// "eye_x,...,fovy_deg,near,far" (17 significant digits: a path of it replays the camera, eye,
+// fov, near and far exactly, its orientation to a few units in the last place of a double).
+std::string camera_csv_fields(const Camera& c);
 
 }  // namespace occ

@@ -52,14 +52,14 @@ class Client {
     }
     links_.close(code != 0);
     summary();
-    if (viewer_) viewer_->finish();  // writes --record
+    if (viewer_) viewer_->finish();  // writes OUT/path.csv
     return code;
   }
 
  private:
   // The scene, GL, the camera path (or the viewer), the drawer; then the switch nodes.
   void start() {
-    if (o_.window) viewer_ = std::make_unique<Viewer>(o_);  // no display: fail before loading the scene
+    if (o_.viewer()) viewer_ = std::make_unique<Viewer>(o_);  // no display: fail before loading the scene
     g_ = start_scene_gl("render_client", o_.scene, o_.config.lod(), o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
       if (viewer_)
         viewer_->start(ls.scene.bounds(), {o_.width, o_.height});  // path_ grows with next_camera()
@@ -195,7 +195,8 @@ class Client {
                  : mode == Mode::frustum ? "degraded: frustum culling"
                  : f.served && !f.served->wcam.occlusion
                      ? (f.drawn.two_pass ? "switch, no occlusion (culled here)" : "switch, no occlusion (does not pay here)")
-                     : mode_name(mode)};
+                     : mode_name(mode),
+                 f.row.camera};
     if (viewer_->overlay()) {
       hud.occluded = long(drawer_->draw_overlay(f.cam, shown_ids));
       image = g_.ctx->read_rgba();
@@ -275,7 +276,7 @@ class Client {
   }
 
   const ClientOptions& o_;
-  std::unique_ptr<Viewer> viewer_;  // --window
+  std::unique_ptr<Viewer> viewer_;  // --window, --web
   SceneGl g_;
   std::optional<FrameDrawer> drawer_;  // after g_: its GL objects go before the context
   std::vector<Camera> path_;

@@ -13,6 +13,7 @@
 #include "common/gl/startup.hpp"
 #include "common/memory.hpp"
 #include "render_client/options.hpp"
+#include "render_client/web_server.hpp"
 
 namespace {
 
@@ -73,8 +74,8 @@ int main(int argc, char** argv) {
                  "it renders the scene itself (the reference renderer: --cull says how): the ground truth.");
     cli.group(occ::CliGroup::scene);
     cli.option("path", &o.path, "P",
-               "camera path: file.csv, orbit:N, walk:N or fly:N (default walk:60), or interactive (--window; "
-               "its default)");
+               "camera path: file.csv, orbit:N, walk:N or fly:N (default walk:60), or interactive (--window, --web; "
+               "their default)");
     occ::add_view_options(cli, o.scene, &o.width, &o.height, &o.gl);
     cli.group(occ::CliGroup::output);
     cli.option("out", &o.out, "DIR",
@@ -108,6 +109,14 @@ int main(int argc, char** argv) {
     cli.flag("exact", &o.exact, "reference renderer: also count exactly visible nodes (item buffer)");
     cli.group(occ::CliGroup::expert);
     occlusion_option(cli, o);
+    cli.group(occ::CliGroup::output);
+    cli.option("web", &o.web, "[ADDR:]PORT",
+               "serve a page that shows the frames and lets the user drive as --window does (mouse, wheel, keys, "
+               "touch): http://ADDR:PORT/ (ADDR default 127.0.0.1; PORT 0: a free one); the drive and view-only URLs, "
+               "with their tokens, are printed at start");
+    cli.option("web-tls", &o.web_tls, "CERT:KEY",
+               "--web over https/wss: CERT.pem:KEY.pem (a PEM certificate chain and its key), or self-signed (a fresh "
+               "pair for localhost made at start, its fingerprint printed)");
     cli.group(occ::CliGroup::cluster);
     cli.option("lookahead", &o.lookahead, 1, 64,
                "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
@@ -119,8 +128,11 @@ int main(int argc, char** argv) {
       if (ec) throw occ::InputError("--out '" + o.out + "': cannot create the folder: " + ec.message());
       o.record = (std::filesystem::path(o.out) / "path.csv").string();
     }
-    if (o.path.empty()) o.path = o.window ? "interactive" : "walk:60";
-    if (o.path == "interactive" && !o.window) throw occ::InputError("--path interactive needs --window");
+    if (o.window && !o.web.empty()) throw occ::InputError("--web: not with --window (one display)");
+    if (!o.web_tls.empty() && o.web.empty()) throw occ::InputError("--web-tls needs --web");
+    if (!o.web.empty()) occ::parse_web_options(o.web, o.web_tls);  // a bad --web fails before the scene loads
+    if (o.path.empty()) o.path = o.viewer() ? "interactive" : "walk:60";
+    if (o.path == "interactive" && !o.viewer()) throw occ::InputError("--path interactive needs --window or --web");
     if (o.path != "interactive") {  // a bad --path fails now, not after the scene has loaded
       occ::Aabb unit;
       unit.grow(glm::dvec3(0.0));

@@ -40,10 +40,13 @@ struct ClientOptions {
   OcclusionGate::Policy two_pass = OcclusionGate::Policy::automatic;
   uint32_t alternate_every = 4;  // Policy::alternate (--occlusion alternate:N)
   std::optional<net::ClusterKey> key;  // --cluster-key-file (docs/security.md)
-  // --window (viewer.hpp)
+  // --window or --web (viewer.hpp)
   bool window = false;
-  // OUT/path.csv with --out (main.cpp): every camera shown (--window), or the path (generated or
-  // read), as a path CSV
+  std::string web;      // --web [ADDR:]PORT (web_server.hpp); empty: off
+  std::string web_tls;  // --web-tls CERT.pem:KEY.pem|self-signed
+  bool viewer() const { return window || !web.empty(); }  // a user watches and drives
+  // OUT/path.csv with --out (main.cpp): every camera shown (--window, --web), or the path
+  // (generated or read), as a path CSV
   std::string record;
 };
 

@@ -184,7 +184,7 @@ class ReferenceRun {
       if (f % 10 == 9 || f + 1 == path_.size()) progress("render_client: frame %u/%zu", f + 1, path_.size());
     }
     progress_done();
-    if (viewer_) viewer_->finish();  // writes --record
+    if (viewer_) viewer_->finish();  // writes OUT/path.csv
     summary();
     return 0;
   }
@@ -193,13 +193,13 @@ class ReferenceRun {
   // The scene, GL and the camera path (or the viewer); the baselines' queriers, the leaves.
   void start() {
     const Viewport vp{o_.width, o_.height};
-    if (o_.window) viewer_ = std::make_unique<Viewer>(o_);  // path_ grows with next_camera()
+    if (o_.viewer()) viewer_ = std::make_unique<Viewer>(o_);  // path_ grows with next_camera()
     g_ = start_scene_gl("render_client", o_.scene, false, o_.gl, o_.width, o_.height, [&](const LoadedScene& ls) {
       if (viewer_)
         viewer_->start(ls.scene.bounds(), vp);
       else
         path_ = load_camera_path(o_.path, ls.scene.bounds(), vp);
-      if (!o_.record.empty()) save_camera_path(o_.record, path_);
+      if (!o_.record.empty() && !viewer_) save_camera_path(o_.record, path_);
     });
     // One process with the machine to itself: parts sized to the frame keep llvmpipe's rasteriser
     // thread busy while the rest is binned (the cluster's processes keep fixed parts: set_flush_automatic).
@@ -250,7 +250,7 @@ class ReferenceRun {
     if (out_->writes_images() || viewer_) image = g_.ctx->read_rgba();
     if (out_->writes_images()) out_->write_frame(f, image);
     if (viewer_)
-      viewer_->show(cam, std::move(image), {row.render_ms, st.nodes_drawn, all_leaves_.size(), st.triangles, 0.0, -1, ""});
+      viewer_->show(cam, std::move(image), {row.render_ms, st.nodes_drawn, all_leaves_.size(), st.triangles, 0.0, -1, "", f});
     if (exact_) row.exact = exact_->measure(cam, std::move(st.drawn), image);
     if (o_.item_buffer) {  // full detail: every item in the frustum, in colour item index + 1
       g_.renderer->begin_id_frame(cam);
@@ -299,7 +299,7 @@ class ReferenceRun {
 
   const ClientOptions& o_;
   std::vector<Camera> path_;
-  std::unique_ptr<Viewer> viewer_;  // --window
+  std::unique_ptr<Viewer> viewer_;  // --window, --web
   SceneGl g_;
   std::optional<BoxQuerier> querier_;
   std::optional<ChcRenderer> chc_;

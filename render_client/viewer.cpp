@@ -13,6 +13,7 @@
 #include "common/camera_path.hpp"
 #include "common/error.hpp"
 #include "common/progress.hpp"
+#include "render_client/web_display.hpp"
 
 namespace occ {
 
@@ -47,14 +48,29 @@ std::string screenshot_name(uint32_t index) {
   return buf;
 }
 
+// The X11 window as a display.
+class WindowDisplay : public FrameDisplay {
+ public:
+  explicit WindowDisplay(std::unique_ptr<X11Window> w) : w_(std::move(w)) {}
+  void show(const Image& img, const ShownFrame& f) override { w_->show(img, f.hud); }
+  std::vector<WindowEvent> poll(int timeout_ms, int wake_fd) override { return w_->poll(timeout_ms, wake_fd); }
+
+ private:
+  std::unique_ptr<X11Window> w_;
+};
+
 }  // namespace
 
 Viewer::Viewer(const ClientOptions& o) : o_(o) {
   if (!o.record.empty()) {
     std::ofstream probe(o.record);
-    if (!probe) throw InputError("--record '" + o.record + "': cannot write the file");
+    if (!probe) throw InputError("--out: cannot write " + o.record);
   }
-  win_ = X11Window::open("occswitch \xE2\x80\x94 " + scene_title(o.scene.spec), o.width, o.height);
+  if (!o.web.empty())
+    display_ = make_web_display(o);
+  else
+    display_ = std::make_unique<WindowDisplay>(
+        X11Window::open("occswitch \xE2\x80\x94 " + scene_title(o.scene.spec), o.width, o.height));
   if (::pipe2(wake_, O_NONBLOCK | O_CLOEXEC) != 0) throw std::runtime_error("--window: pipe failed");
 }
 
@@ -73,9 +89,11 @@ void Viewer::start(const Aabb& bounds, const Viewport& vp) {
   if (!interactive_) path_ = load_camera_path(o_.path, bounds, vp);
   const Camera home = interactive_ ? load_camera_path("walk:1", bounds, vp)[0] : path_[0];
   nav_ = std::make_unique<Navigator>(home, bounds);
-  std::cerr << "render_client: window open (" << (interactive_ ? "you drive" : "playing the path; any movement key takes over")
+  std::cerr << "render_client: " << (o_.web.empty() ? "window open" : "web viewer ready") << " ("
+            << (interactive_ ? "you drive" : "playing the path; any movement key takes over")
             << "): W/A/S/D/Q/E move, arrows or drag look, Shift faster, wheel speed, F walk/fly, R reset, "
-               "P screenshot, O culling overlay, Esc quits\n";
+               "P screenshot, O culling overlay, "
+            << (o_.web.empty() ? "Esc quits\n" : "the page's stop button quits\n");
   thread_ = std::thread([this] { run_window(); });
 }
 
@@ -83,6 +101,8 @@ bool Viewer::next_camera(std::vector<Camera>& cameras) {
   std::unique_lock<std::mutex> lock(mu_);
   if (quit_) return false;
   const size_t n = cameras.size();
+  camera_seq_.resize(n + 1);
+  camera_seq_[n] = input_seq_;
   if (!interactive_ && !taken_over_) {
     if (n >= path_.size()) return false;
     cameras.push_back(path_[n]);
@@ -97,6 +117,7 @@ bool Viewer::next_camera(std::vector<Camera>& cameras) {
     changed_.wait_for(lock, std::chrono::milliseconds(100), [&] { return quit_ || nav_->changes() != sent_changes_; });
   if (quit_) return false;
   sent_changes_ = nav_->changes();
+  camera_seq_[n] = input_seq_;  // what the camera includes: events handled until now
   cameras.push_back(nav_->camera());
   return true;
 }
@@ -107,10 +128,12 @@ void Viewer::show(const Camera& cam, Image img, const HudStats& hud) {
     pending_index_ = uint32_t(recorded_.size());
     recorded_.push_back(cam);
     const double t = now_ms();
+    const double frame_ms = show_times_ms_.empty() ? 0.0 : t - show_times_ms_.back();
     show_times_ms_.push_back(t);
     while (show_times_ms_.size() > 2 && show_times_ms_.front() < t - 1000) show_times_ms_.erase(show_times_ms_.begin());
     pending_ = std::make_shared<const Image>(std::move(img));
-    pending_hud_ = hud_line(hud);
+    pending_frame_ = {hud_line(hud), hud, fps(), frame_ms, cam, pending_index_,
+                      hud.camera < camera_seq_.size() ? camera_seq_[hud.camera] : 0, dragging_ || nav_->moving()};
   }
   const char c = 1;
   [[maybe_unused]] ssize_t w = ::write(wake_[1], &c, 1);
@@ -126,10 +149,14 @@ bool Viewer::overlay() const {
   return overlay_;
 }
 
+double Viewer::fps() const {
+  return show_times_ms_.size() > 1
+             ? 1000.0 * double(show_times_ms_.size() - 1) / (show_times_ms_.back() - show_times_ms_.front())
+             : 0.0;
+}
+
 std::string Viewer::hud_line(const HudStats& h) const {
-  const double fps = show_times_ms_.size() > 1
-                         ? 1000.0 * double(show_times_ms_.size() - 1) / (show_times_ms_.back() - show_times_ms_.front())
-                         : 0.0;
+  const double fps = this->fps();
   const double culled = h.leaves ? 100.0 * (1.0 - double(h.visible) / double(h.leaves)) : 0.0;
   char buf[256];
   std::snprintf(buf, sizeof buf, "%.1f fps  %.0f ms  |V| %zu  culled %.1f%%  %.2fM tri  tau %g  %s%s", fps,
@@ -144,6 +171,7 @@ std::string Viewer::hud_line(const HudStats& h) const {
 
 void Viewer::handle(const WindowEvent& ev) {
   using T = WindowEvent::Type;
+  if (ev.seq) input_seq_ = ev.seq;
   auto take_over = [&] {
     if (!interactive_ && !taken_over_) {
       taken_over_ = true;
@@ -224,9 +252,9 @@ void Viewer::run_window() {
       if (stop_) return;
       moving = nav_->moving();
     }
-    std::vector<WindowEvent> events = win_->poll(moving ? 15 : 200, wake_[0]);
+    std::vector<WindowEvent> events = display_->poll(moving ? 15 : 200, wake_[0]);
     std::shared_ptr<const Image> to_show, shot;
-    std::string hud;
+    ShownFrame frame;
     uint32_t shot_index = 0;
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -238,7 +266,7 @@ void Viewer::run_window() {
       last = t;
       if (pending_) {
         to_show = std::move(pending_);
-        hud = pending_hud_;
+        frame = pending_frame_;
         displayed_ = to_show;
         displayed_index_ = pending_index_;
       }
@@ -249,7 +277,7 @@ void Viewer::run_window() {
       }
       if (nav_->changes() != before || quit_ != was_quit) changed_.notify_all();
     }
-    if (to_show) win_->show(*to_show, hud);
+    if (to_show) display_->show(*to_show, frame);
     if (shot) {
       const std::string dir = o_.out.empty() ? "." : o_.out;
       const std::string file = dir + "/" + screenshot_name(shot_index);
@@ -279,7 +307,7 @@ void Viewer::finish() {
   if (thread_.joinable()) thread_.join();
   if (!o_.record.empty()) {
     if (recorded_.empty()) {
-      std::cerr << "render_client: no frame shown, --record '" << o_.record << "' left empty\n";
+      std::cerr << "render_client: no frame shown, " << o_.record << " left empty\n";
     } else {
       save_camera_path(o_.record, recorded_);
       std::cerr << "render_client: recorded " << recorded_.size() << " cameras to " << o_.record

@@ -1,5 +1,6 @@
-// render_client --window: the window (window.hpp) on a thread of its own, the user's camera
-// (navigator.hpp), path playback with take-over, screenshots and --record. The renderer thread
+// render_client --window or --web: the display (frame_display.hpp: the X11 window of window.hpp, or
+// the web pages of web_display.hpp) on a thread of its own, the user's camera
+// (navigator.hpp), path playback with take-over, screenshots and OUT/path.csv. The renderer thread
 // (client.cpp or reference.cpp) only asks for the next camera and hands over finished frames, so
 // the window keeps handling events while a frame is in flight.
 //
@@ -24,27 +25,14 @@
 #include "common/image.hpp"
 #include "render_client/navigator.hpp"
 #include "render_client/options.hpp"
-#include "render_client/window.hpp"
+#include "render_client/frame_display.hpp"
 
 namespace occ {
-
-// What the HUD line shows besides fps (the viewer measures that).
-struct HudStats {
-  double latency_ms = 0;   // camera sent -> frame shown (reference: render time)
-  size_t visible = 0;      // |V|: leaves drawn
-  size_t leaves = 0;       // leaves in the scene (culled % = 1 - visible / leaves)
-  uint64_t triangles = 0;
-  double tau = 0;          // pixel error
-  long occluded = -1;      // culling overlay on: leaves tinted (in the frustum, occlusion-culled); -1 off
-  // Cluster: how this frame was culled (client.cpp: switch, resync, single, frustum); shown in
-  // front of the line unless it is the normal "switch". Empty for the reference renderer.
-  std::string mode;
-};
 
 class Viewer {
  public:
   // Opens the window titled "occswitch — SCENE" (throws naming the display when there is none)
-  // and checks --record is writable: call before the scene loads.
+  // or starts the web server (--web), and checks OUT/path.csv is writable: call before the scene loads.
   explicit Viewer(const ClientOptions& o);
   ~Viewer();  // finish() if not done (errors are printed, not thrown)
   Viewer(const Viewer&) = delete;
@@ -62,16 +50,17 @@ class Viewer {
   bool quit() const;
   // The culling overlay is on (O): tint the occlusion-culled boxes into the image given to show().
   bool overlay() const;
-  // Stops the window thread and writes --record. Throws InputError when the file cannot be written.
+  // Stops the window thread and writes OUT/path.csv. Throws InputError when the file cannot be written.
   void finish();
 
  private:
   void run_window();
   void handle(const WindowEvent& ev);
   std::string hud_line(const HudStats& h) const;
+  double fps() const;  // frames shown in the last second
 
   const ClientOptions& o_;
-  std::unique_ptr<X11Window> win_;
+  std::unique_ptr<FrameDisplay> display_;
   std::unique_ptr<Navigator> nav_;
   std::vector<Camera> path_;
   bool interactive_ = false;
@@ -85,8 +74,10 @@ class Viewer {
   int drag_x_ = 0, drag_y_ = 0;
   uint64_t sent_changes_ = ~uint64_t(0);
   std::vector<Camera> recorded_;  // every camera shown, in order
-  std::shared_ptr<const Image> pending_;  // to show next (with pending_hud_)
-  std::string pending_hud_;
+  std::shared_ptr<const Image> pending_;  // to show next (with pending_frame_)
+  ShownFrame pending_frame_;
+  uint32_t input_seq_ = 0;             // the newest input event handled (WindowEvent::seq)
+  std::vector<uint32_t> camera_seq_;   // per camera number: input_seq_ when it was taken
   uint32_t pending_index_ = 0;
   std::shared_ptr<const Image> displayed_;
   uint32_t displayed_index_ = 0;

@@ -5,6 +5,7 @@
 // Xlib is loaded when the first window opens (x11_lib.hpp): render_client starts without it.
 // Every call must come from one thread (the viewer's window thread, viewer.hpp).
 #pragma once
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@ struct WindowEvent {
   WinKey key = WinKey::other;  // key_down, key_up
   int button = 0;              // button_down, button_up: 1 left, 2 middle, 3 right, 4/5 wheel
   int x = 0, y = 0;            // pointer position (buttons, motion)
+  uint32_t seq = 0;            // --web: the page's input number (web_input.hpp); 0 from X
 };
 
 class X11Window {

@@ -38,6 +38,8 @@
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv copies the flight (OUT/path.csv,
 # every camera shown) there as a path.
+# --web [ADDR:]PORT (and --web-tls CERT.pem:KEY.pem|self-signed) is the same in a browser: the
+# render client serves the page; its URLs, with their tokens, are in render_client.log.
 # --node-raster-threads N (default 0): llvmpipe's rasteriser threads in each switch node
 # (LP_NUM_THREADS for the nodes only). 0 rasterises on the node's own thread: its work is many
 # small passes it waits for (OR flushes, HC box tests), and three processes already fill this
@@ -71,7 +73,7 @@ source "$(dirname "$0")/lib.sh"
 MAX_SECONDS=${OCC_MAX_SECONDS:-900}
 exec 3>&2  # this script's own stderr, for its traps (occ_trap_say)
 
-scene="" path="" frames=60 out="out/cluster" link="" netns=0 window=0 record="" key_file="" node_threads=0 client_threads=auto restart_nodes=3
+scene="" path="" frames=60 out="out/cluster" link="" netns=0 viewer=0 record="" key_file="" node_threads=0 client_threads=auto restart_nodes=3
 pin_nodes=auto host_cpus=""
 common=() rvg_only=() node_only=()
 while [ $# -gt 0 ]; do
@@ -85,7 +87,9 @@ while [ $# -gt 0 ]; do
     --restart-nodes) occ_need_value "$@"; restart_nodes=$2; shift 2 ;;
     --pin-nodes) occ_need_value "$@"; pin_nodes=$2; shift 2 ;;
     --host-cpus) occ_need_value "$@"; host_cpus=$2; shift 2 ;;
-    --window) window=1; rvg_only+=("$1"); shift ;;
+    --window) viewer=1; rvg_only+=("$1"); shift ;;
+    --web) occ_need_value "$@"; viewer=1; rvg_only+=("$1" "$2"); shift 2 ;;
+    --web-tls) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --record) occ_need_value "$@"; record=$2; shift 2 ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;
@@ -123,7 +127,7 @@ fi
 [ ${#pin[@]} = 0 ] || echo "cluster: both switch nodes on CPU $cpu_last, the render client on any of $cpu_count with $client_threads rasteriser threads (--pin-nodes $pin_nodes)" >&2
 supervise=1  # --on-node-failure exit: a node's death ends the client, so it ends the run
 [[ " ${rvg_only[*]} " == *" --on-node-failure exit "* ]] && supervise=0
-if [ $window = 1 ]; then
+if [ $viewer = 1 ]; then
   [ -n "$path" ] || path=interactive
   [[ " ${common[*]} " == *" --camera-mode "* ]] || common+=(--camera-mode latest)
   MAX_SECONDS=${OCC_MAX_SECONDS:-31536000}

@@ -1,20 +1,20 @@
 #!/usr/bin/env bash
 # Long fuzzing runs of every parser of input from elsewhere, under ASan+UBSan (libFuzzer, clang):
-# the glTF/GLB loader, the camera-path CSV reader, the scene and LOD cache readers
-# (common/fuzz/) and the wire decoder (protocol/fuzz/). Builds them into build-fuzz/ (clang,
+# the glTF/GLB loader, the camera-path CSV reader, the scene and LOD cache readers, the input
+# messages of render_client --web's page (common/fuzz/) and the wire decoder (protocol/fuzz/). Builds them into build-fuzz/ (clang,
 # -DOCC_LIBFUZZER=ON) and runs each from its checked-in seeds (tests/fuzz/NAME, with
 # common/fuzz/NAME.dict where there is one) into a scratch corpus, then prints one table: inputs
 # run, seconds, inputs/s, coverage (edges, features), corpus size, crashes. A crash stops with exit
 # 1 and names the input libFuzzer saved (OUT/crash-*); reproduce it with build-fuzz/bin/NAME_fuzz FILE.
 # The test suite runs a short fixed-seed pass of the same harnesses (fuzz_parsers_test).
 #
-#   scripts/fuzz.sh [--runs N] [--targets gltf,camera_path,scene_cache,lod_cache,wire] [--out DIR]
+#   scripts/fuzz.sh [--runs N] [--targets gltf,camera_path,scene_cache,lod_cache,web_input,wire] [--out DIR]
 #
 # --runs N: inputs per target (default 1000000); --out DIR (default out/fuzz): logs, corpora and
 # table.txt.
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
-runs=1000000 targets=gltf,camera_path,scene_cache,lod_cache,wire out=out/fuzz
+runs=1000000 targets=gltf,camera_path,scene_cache,lod_cache,web_input,wire out=out/fuzz
 while [ $# -gt 0 ]; do
   case "$1" in
     --runs|--targets|--out) occ_set "$@"; shift 2 ;;
@@ -27,7 +27,7 @@ command -v clang++ >/dev/null || occ_die "clang++ not found (Debian: apt-get ins
 cd "$here"
 IFS=, read -ra names <<<"$targets"
 for n in "${names[@]}"; do
-  case "$n" in gltf|camera_path|scene_cache|lod_cache|wire) ;; *) occ_die "--targets: unknown target '$n'" ;; esac
+  case "$n" in gltf|camera_path|scene_cache|lod_cache|web_input|wire) ;; *) occ_die "--targets: unknown target '$n'" ;; esac
 done
 
 if [ ! -f build-fuzz/CMakeCache.txt ]; then

@@ -17,6 +17,8 @@ PKGS=(
   gnuplot-nox                                              # plots in benchmarks
   iproute2 python3                                         # netlab / scripts
   libx11-dev                                               # render_client --window (Xlib)
+  libturbojpeg0-dev zlib1g-dev                             # render_client --web: JPEG frames, PNG stills
+  chromium nodejs                                          # the --web browser test (headless; puppeteer-core below)
   xvfb xdotool                                             # window tests (virtual X server, key presses)
   ffmpeg                                                   # scripts/video.sh (frames -> MP4)
   openmpi-bin                                              # mpirun: scripts/cluster_rank.sh under a job launcher (tests)
@@ -30,15 +32,29 @@ for p in "${PKGS[@]}"; do
   fi
 done
 
+# npm comes with Debian's nodejs from package npm, inside nodejs elsewhere (NodeSource).
+command -v npm >/dev/null || dpkg-query -W -f='${Status}' npm 2>/dev/null | grep -q "install ok installed" ||
+  missing+=(npm)
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#PKGS[@]} packages present"
-  exit 0
+else
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-echo "setup: installing ${missing[*]}"
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# puppeteer-core for the browser test (tests/web/package.json pins it; package-lock.json the
+# rest), into tests/web/node_modules (ignored by git). It drives /usr/bin/chromium: no browser
+# download.
+web="$(cd "$(dirname "$0")/.." && pwd)/tests/web"
+want=$(sed -n 's/.*"puppeteer-core": "\(.*\)".*/\1/p' "$web/package.json")
+have=$(sed -n 's/^  "version": "\(.*\)".*/\1/p' "$web/node_modules/puppeteer-core/package.json" 2>/dev/null || true)
+if [ "$have" != "$want" ]; then
+  echo "setup: npm ci puppeteer-core@$want into tests/web/node_modules"
+  (cd "$web" && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund --omit=dev --silent)
+fi
 echo "setup: done"

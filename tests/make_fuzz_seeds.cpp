@@ -5,6 +5,7 @@
 //   camera_path/  orbit.csv (save_camera_path), by_hand.csv (11 columns, comments, CRLF)
 //   scene_cache/  walls.scene (the fixture), features.scene (features.gltf: materials, images)
 //   lod_cache/    walls.lod (the fixture's LODs)
+//   web_input/    input_N.txt: one render_client --web input message each, every kind (format_web_input)
 // Usage: make_fuzz_seeds DIR (the checked-in seeds are in tests/fuzz/). Run it again when a cache
 // format version changes: the seeds test (tests/fuzz_parsers_test.cpp) fails on stale seeds.
 #include <unistd.h>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/camera_path.hpp"
+#include "common/web_input.hpp"
 #include "common/error.hpp"
 #include "common/fuzz/fuzz_targets.hpp"
 #include "common/image.hpp"
@@ -186,6 +188,20 @@ void camera_paths(const fs::path& dir) {
              "2,1,1.7,-7,-10,1.7,0,0,1,0,90,0.01,100\r\n");
 }
 
+// One input message a file, as the page sends them (format_web_input), every kind.
+void web_inputs(const fs::path& dir) {
+  using K = WebInput::Kind;
+  const WebInput inputs[] = {{1, K::key_down, WebKey::w},
+                             {2, K::key_up, WebKey::shift},
+                             {3, K::button_down, WebKey::none, 1, 120, 64},
+                             {4, K::motion, WebKey::none, 0, -35, 99999},
+                             {5, K::button_up, WebKey::none, 3, 0, 0},
+                             {6, K::wheel, WebKey::none, 0, 0, 0, -2},
+                             {7, K::blur},
+                             {2147483647, K::quit}};
+  for (const WebInput& in : inputs) write_text(dir / ("input_" + std::to_string(in.seq % 100) + ".txt"), format_web_input(in));
+}
+
 void caches(const fs::path& root, const fs::path& gltf_dir) {
   const Fixture& f = fixture();
   auto must = [](const std::optional<std::string>& err) {
@@ -213,12 +229,13 @@ int main(int argc, char** argv) {
   try {
     const fs::path root = argv[1];
     const fs::path tmp = fs::temp_directory_path() / ("occ_seeds." + std::to_string(::getpid()));
-    for (const char* d : {"gltf", "camera_path", "scene_cache", "lod_cache"}) fs::create_directories(root / d);
+    for (const char* d : {"gltf", "camera_path", "scene_cache", "lod_cache", "web_input"}) fs::create_directories(root / d);
     fs::create_directories(tmp);
     walls_gltf(root / "gltf", tmp);
     features_gltf(root / "gltf", tmp);
     camera_paths(root / "camera_path");
     caches(root, root / "gltf");
+    web_inputs(root / "web_input");
     fs::remove_all(tmp);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

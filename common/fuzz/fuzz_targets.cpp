@@ -20,6 +20,7 @@
 #include "common/mapped_file.hpp"
 #include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
+#include "common/web_input.hpp"
 
 namespace occ::fuzz {
 
@@ -238,8 +239,35 @@ Verdict lod_cache(std::span<const uint8_t> input) {
   });
 }
 
-constexpr Target kTargets[] = {
-    {"gltf", gltf}, {"camera_path", camera_path}, {"scene_cache", scene_cache}, {"lod_cache", lod_cache}};
+// One WebSocket input message of render_client --web, parsed in memory (no file: the page's
+// bytes reach the parser as they are). What is accepted is in range and reads back the same
+// from its formatted form.
+Verdict web_input(std::span<const uint8_t> input) {
+  const std::string_view msg(reinterpret_cast<const char*>(input.data()), input.size());
+  auto parsed = parse_web_input(msg);
+  if (const auto* why = std::get_if<std::string>(&parsed)) {
+    if (why->empty() || why->find('\n') != std::string::npos) fail("web input rejected without a one-line reason");
+    return Verdict::Rejected;
+  }
+  const WebInput& in = std::get<WebInput>(parsed);
+  using K = WebInput::Kind;
+  const bool key = in.kind == K::key_down || in.kind == K::key_up;
+  const bool button = in.kind == K::button_down || in.kind == K::button_up;
+  if (in.seq == 0 || in.seq > 0x7fffffffu || (key && in.key == WebKey::none) || (button && (in.button < 1 || in.button > 3)) ||
+      std::abs(in.x) > 100000 || std::abs(in.y) > 100000 || std::abs(in.notches) > 100 ||
+      (in.kind == K::wheel && in.notches == 0))
+    fail("web input accepted out of range", std::string(msg));
+  const auto again = parse_web_input(format_web_input(in));
+  if (!std::holds_alternative<WebInput>(again) || std::get<WebInput>(again) != in)
+    fail("web input does not read back from its formatted form", std::string(msg));
+  return Verdict::Accepted;
+}
+
+constexpr Target kTargets[] = {{"gltf", gltf},
+                               {"camera_path", camera_path},
+                               {"scene_cache", scene_cache},
+                               {"lod_cache", lod_cache},
+                               {"web_input", web_input}};
 
 }  // namespace
 
