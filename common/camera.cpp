@@ -62,6 +62,9 @@ Frustum Camera::frustum() const {
   fr.planes[3] = make(-up_v + ty * fw, eye);
   fr.planes[4] = make(fw, eye + fw * near_dist);
   fr.planes[5] = make(-fw, eye + fw * far_dist);
+  fr.cuts = sections.planes;
+  fr.cut_count = sections.count;
+  fr.eye = eye;
   return fr;
 }
 

@@ -11,6 +11,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "common/math.hpp"
+#include "common/section.hpp"
 
 namespace occ {
 
@@ -28,6 +29,7 @@ struct Camera {
   double aspect = 1.0;
   double near_dist = 0.1;
   double far_dist = 1000.0;
+  Sections sections;  // what the view keeps of the scene (section.hpp); none: all of it
 
   static Camera look_at(const glm::dvec3& eye, const glm::dvec3& target, const glm::dvec3& up,
                         double fovy_deg, double aspect, double near_dist, double far_dist);
@@ -45,7 +47,8 @@ struct Camera {
   glm::dmat4 view_rotation() const;
   // Reverse-Z projection for glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE): near -> 1, far -> 0.
   glm::dmat4 projection() const;
-  // World-space frustum planes computed directly from the camera (double, no matrix inversion).
+  // World-space frustum planes computed directly from the camera (double, no matrix inversion),
+  // with the section planes as its cuts.
   Frustum frustum() const;
 
   // nullopt when valid, else a reason ("near <= 0", "non-finite eye", ...).

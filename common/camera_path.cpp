@@ -1,5 +1,6 @@
 #include "common/camera_path.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -91,11 +92,13 @@ std::vector<Camera> from_csv(const std::string& file, const Aabb& b, const Viewp
     std::vector<std::string> f;
     std::stringstream ss(row);
     for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
-    if (f.size() != 11 && f.size() != 13)
-      throw InputError(file + ": line " + std::to_string(line) + ": expected 11 or 13 columns, got " +
-                       std::to_string(f.size()));
-    double v[13];
-    for (size_t i = 0; i < f.size(); ++i) v[i] = parse_field(file, line, kColumns[i], f[i]);
+    const size_t max_columns = 13 + 4 * Sections::kMax;
+    if (f.size() != 11 && (f.size() < 13 || f.size() > max_columns || (f.size() - 13) % 4 != 0))
+      throw InputError(file + ": line " + std::to_string(line) + ": expected 11 or 13 columns, or 13 and 4 a section plane "
+                       "(at most " + std::to_string(Sections::kMax) + "), got " + std::to_string(f.size()));
+    double v[13 + 4 * Sections::kMax];
+    static const char* kPlane[] = {"section_a", "section_b", "section_c", "section_d"};
+    for (size_t i = 0; i < f.size(); ++i) v[i] = parse_field(file, line, i < 13 ? kColumns[i] : kPlane[(i - 13) % 4], f[i]);
     auto where = file + ": line " + std::to_string(line) + ": ";
     if (v[0] != double(path.size()))
       throw InputError(where + "frame " + f[0] + " out of order (expected " + std::to_string(path.size()) + ")");
@@ -105,9 +108,11 @@ std::vector<Camera> from_csv(const std::string& file, const Aabb& b, const Viewp
       throw InputError(where + "up is zero or parallel to the view direction");
     if (!(v[10] > 0 && v[10] < 180)) throw InputError(where + "fovy_deg must be in (0, 180)");
     Camera c = Camera::look_at(eye, target, up, v[10], double(vp.width) / vp.height, 0.1, 1.0);
-    if (f.size() == 13) {
+    if (f.size() >= 13) {
       c.near_dist = v[11];
       c.far_dist = v[12];
+      for (size_t k = 13; k < f.size(); k += 4)
+        c.sections.add({v[k], v[k + 1], v[k + 2], v[k + 3]}, where + "section " + std::to_string((k - 13) / 4));
     } else {
       auto_near_far(c, b);
     }
@@ -152,13 +157,21 @@ std::string camera_csv_fields(const Camera& c) {
   const glm::dvec3 t = c.eye + c.forward(), u = c.up();
   out << c.eye.x << ',' << c.eye.y << ',' << c.eye.z << ',' << t.x << ',' << t.y << ',' << t.z << ',' << u.x << ','
       << u.y << ',' << u.z << ',' << glm::degrees(c.fovy_rad) << ',' << c.near_dist << ',' << c.far_dist;
+  for (int k = 0; k < c.sections.count; ++k) {
+    const Plane& p = c.sections.planes[size_t(k)];
+    out << ',' << p.n.x << ',' << p.n.y << ',' << p.n.z << ',' << p.d;
+  }
   return out.str();
 }
 
 void save_camera_path(const std::string& file, const std::vector<Camera>& path) {
   std::ofstream out(file);
   if (!out) throw InputError(file + ": cannot write camera path");
-  out << "frame,eye_x,eye_y,eye_z,target_x,target_y,target_z,up_x,up_y,up_z,fovy_deg,near,far\n";
+  int planes = 0;
+  for (const Camera& c : path) planes = std::max(planes, int(c.sections.count));
+  out << "frame,eye_x,eye_y,eye_z,target_x,target_y,target_z,up_x,up_y,up_z,fovy_deg,near,far";
+  for (int k = 0; k < planes; ++k) out << ",section" << k << "_a,section" << k << "_b,section" << k << "_c,section" << k << "_d";
+  out << '\n';
   for (size_t i = 0; i < path.size(); ++i) out << i << ',' << camera_csv_fields(path[i]) << '\n';
   if (!out) throw InputError(file + ": write failed");
 }

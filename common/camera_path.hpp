@@ -1,6 +1,8 @@
 // Camera paths: a CSV file or a path generated from the scene bounds.
-//   CSV: frame,eye_x,eye_y,eye_z,target_x,target_y,target_z,up_x,up_y,up_z,fovy_deg[,near,far]
-//        optional header line starting with "frame"; '#' comment lines; frames 0,1,2,... in order.
+//   CSV: frame,eye_x,eye_y,eye_z,target_x,target_y,target_z,up_x,up_y,up_z,fovy_deg[,near,far[,A,B,C,D...]]
+//        optional header line starting with "frame"; '#' comment lines; frames 0,1,2,... in order;
+//        after near and far, up to six section planes of that camera, four columns each
+//        (section.hpp: keeps A*x + B*y + C*z + D >= 0), so that a path can move a cut.
 //   orbit:N  circle around the scene, looking at its centre
 //   walk:N   a walk through the scene at eye height along its longest horizontal axis (the hard
 //            case for occlusion: walls and buildings right in front of the eye)
@@ -25,7 +27,7 @@ void auto_near_far(Camera& cam, const Aabb& bounds);
 // Writes a path as CSV (with header and near/far columns) so a generated path can be replayed.
 void save_camera_path(const std::string& file, const std::vector<Camera>& path);
 // One camera as save_camera_path writes its row, without the frame number:
-// "eye_x,...,fovy_deg,near,far" (17 significant digits: a path of it replays the camera, eye,
+// "eye_x,...,fovy_deg,near,far[,A,B,C,D...]" (17 significant digits: a path of it replays the camera, eye,
 // fov, near and far exactly, its orientation to a few units in the last place of a double).
 std::string camera_csv_fields(const Camera& c);
 

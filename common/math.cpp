@@ -23,6 +23,15 @@ Containment Frustum::classify(const Aabb& box) const {
                  pl.n.z >= 0 ? box.min.z : box.max.z};
     if (pl.distance(n) < 0) intersects = true;
   }
+  for (int i = 0; i < cut_count; ++i) {
+    const Plane& pl = cuts[size_t(i)];
+    glm::dvec3 p{pl.n.x >= 0 ? box.max.x : box.min.x, pl.n.y >= 0 ? box.max.y : box.min.y,
+                 pl.n.z >= 0 ? box.max.z : box.min.z};
+    if (pl.distance(p) < -cut_margin(pl, p, eye)) return Containment::Outside;
+    glm::dvec3 n{pl.n.x >= 0 ? box.min.x : box.max.x, pl.n.y >= 0 ? box.min.y : box.max.y,
+                 pl.n.z >= 0 ? box.min.z : box.max.z};
+    if (pl.distance(n) <= cut_margin(pl, n, eye)) intersects = true;
+  }
   return intersects ? Containment::Intersects : Containment::Inside;
 }
 

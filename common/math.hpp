@@ -2,6 +2,8 @@
 // large: scenes far from the origin). Pure math, no GL.
 #pragma once
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <glm/glm.hpp>
@@ -49,9 +51,23 @@ struct Plane {
 
 enum class Containment { Outside, Intersects, Inside };
 
+// How far below 0 a section plane's distance to `p` must be, seen from `eye`, before the plane
+// surely removes p: the error bound of the float clip distance the renderer computes for it,
+// relative to the distances involved (common/section.hpp).
+inline double cut_margin(const Plane& pl, const glm::dvec3& p, const glm::dvec3& eye) {
+  constexpr double kRelative = 1e-5;
+  const glm::dvec3 v = p - eye;
+  return kRelative * (1.0 + std::abs(pl.distance(eye)) + std::sqrt(glm::dot(v, v)));
+}
+
 // Six inward-facing planes: left, right, bottom, top, near, far.
 struct Frustum {
   std::array<Plane, 6> planes;
+  // Section planes (Camera::sections): a box one of them removes beyond cut_margin is Outside,
+  // one any of them cuts is at most Intersects.
+  std::array<Plane, 6> cuts{};
+  uint8_t cut_count = 0;
+  glm::dvec3 eye{0.0};
 
   // p/n-vertex test (culling lecture): for each plane, the p-vertex is the box corner farthest
   // along the normal. If it is behind the plane, the whole box is outside. If the n-vertex

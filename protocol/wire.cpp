@@ -7,6 +7,7 @@
 #include <cmath>
 #include <concepts>
 #include <stdexcept>
+#include <tuple>
 #include <type_traits>
 
 #include "common/hash.hpp"
@@ -125,7 +126,8 @@ class Reader {
 // ---- sizes ----
 
 constexpr uint32_t kHelloFixedBytes = 81;  // with name_bytes and backend_bytes, no text
-constexpr uint32_t kCameraBytes = 101;
+constexpr uint32_t kCameraBytes = 101;  // without its section count and planes
+constexpr uint32_t kSectionBytes = 32;
 constexpr uint32_t kNodeDiffFixedBytes = 12;
 constexpr uint32_t kEndOfFrameBytes = 68;
 constexpr uint32_t kByeFixedBytes = 2;
@@ -179,7 +181,7 @@ struct Bounds {
 Bounds payload_bounds(Type t) {
   switch (t) {
     case Type::hello: return {kHelloFixedBytes, kHelloFixedBytes + uint32_t(kMaxNameBytes + kMaxBackendBytes)};
-    case Type::camera: return {kCameraBytes, kCameraBytes};
+    case Type::camera: return {kCameraBytes + 1, kCameraBytes + 1 + 6 * kSectionBytes};
     case Type::node_diff: return {kNodeDiffFixedBytes, kMaxPayloadBytes};
     case Type::end_of_frame: return {kEndOfFrameBytes, kEndOfFrameBytes};
     case Type::bye: return {kByeFixedBytes, kByeFixedBytes + uint32_t(kMaxReasonBytes)};
@@ -294,6 +296,14 @@ std::optional<std::string> check(const Camera& m) {
   if (!(m.aspect > 0)) return "aspect " + num(m.aspect) + " <= 0";
   if (!(m.near_dist > 0)) return "near " + num(m.near_dist) + " <= 0";
   if (m.occlusion > 1) return "occlusion " + num(m.occlusion) + " is not 0 or 1";
+  if (m.section_count > 6) return "section_count " + num(m.section_count) + " > 6";
+  for (int i = 0; i < m.section_count; ++i) {
+    const double* s = m.sections[i];
+    for (int k = 0; k < 4; ++k)
+      if (!std::isfinite(s[k])) return "section " + num(i) + ": non-finite coefficient (" + num(s[k]) + ")";
+    const double n = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    if (!(std::abs(n - 1.0) <= 1e-6)) return "section " + num(i) + ": normal not unit length (" + num(n) + ")";
+  }
   if (!(m.far_dist > m.near_dist))
     return "far " + num(m.far_dist) + " <= near " + num(m.near_dist);
   return viewport_error(m.viewport_width_px, m.viewport_height_px, 1);
@@ -338,7 +348,11 @@ void put(Writer& w, const Hello& m) {
   w.str(m.occlusion_backend);
 }
 
-void put(Writer& w, const Camera& m) { camera_fields(w, m); }
+void put(Writer& w, const Camera& m) {
+  camera_fields(w, m);
+  w.u8(m.section_count);
+  for (int i = 0; i < m.section_count && i < 6; ++i) w(m.sections[i]);
+}
 
 void put(Writer& w, const NodeDiff& m) {
   w.u32(m.frame);
@@ -395,6 +409,18 @@ Result<Message> get_fields(Reader& r, void (*fields)(Reader&, M&)) {
   return Message{m};
 }
 
+Result<Message> get_camera(Reader& r) {
+  Camera m;
+  camera_fields(r, m);
+  m.section_count = r.u8();
+  if (m.section_count > 6) return Error{"section_count " + num(m.section_count) + " > 6"};
+  if (r.remaining() != size_t(m.section_count) * kSectionBytes)
+    return Error{"section_count " + num(m.section_count) + " needs " + num(m.section_count * kSectionBytes) +
+                 " bytes of planes, payload has " + num(r.remaining())};
+  for (int i = 0; i < m.section_count; ++i) r(m.sections[i]);
+  return Message{m};
+}
+
 Result<Message> get_node_diff(Reader& r) {
   NodeDiff m;
   m.frame = r.u32();
@@ -446,6 +472,19 @@ std::string_view role_name(Role r) {
 
 Type type_of(const Message& m) { return static_cast<Type>(m.index() + 1); }
 
+bool Camera::operator==(const Camera& o) const {
+  auto fixed = [](const Camera& c) {
+    return std::tie(c.frame, c.eye[0], c.eye[1], c.eye[2], c.orientation[0], c.orientation[1], c.orientation[2],
+                    c.orientation[3], c.fovy_rad, c.aspect, c.near_dist, c.far_dist, c.viewport_width_px,
+                    c.viewport_height_px, c.occlusion, c.section_count);
+  };
+  if (fixed(*this) != fixed(o)) return false;
+  for (int i = 0; i < section_count && i < 6; ++i)
+    for (int k = 0; k < 4; ++k)
+      if (sections[i][k] != o.sections[i][k]) return false;
+  return true;
+}
+
 std::optional<std::string> invalid_reason(const Message& m) {
   auto e = std::visit([](const auto& msg) { return check(msg); }, m);
   if (e) return std::string(type_name(type_of(m))) + ": " + *e;
@@ -482,7 +521,7 @@ Result<Message> decode_payload(Type type, std::span<const uint8_t> payload) {
   Result<Message> m = [&]() -> Result<Message> {
     switch (type) {
       case Type::hello: return get_hello(r);
-      case Type::camera: return get_fields<Camera>(r, camera_fields);
+      case Type::camera: return get_camera(r);
       case Type::node_diff: return get_node_diff(r);
       case Type::end_of_frame: return get_fields<EndOfFrame>(r, end_of_frame_fields);
       case Type::bye: return get_bye(r);

@@ -34,7 +34,7 @@
 //                                  (the render client's run table); empty for the other roles.
 //                                  Lower-case ASCII letters, digits and '-' only
 //
-// Camera (101) — camera -> world rotation, camera looks down -Z, +Y up
+// Camera (102 + 32 * section_count) — camera -> world rotation, camera looks down -Z, +Y up
 //     0  u32  frame
 //     4  f64  eye x, y, z
 //    28  f64  orientation w, x, y, z   unit quaternion (|q| within 1e-6 of 1)
@@ -48,6 +48,9 @@
 //                                      HC's queries); 0: its HC node sends the frustum set (no OR,
 //                                      no queries). The render client's OcclusionGate chooses
 //                                      (common/cull/occlusion_gate.hpp)
+//   101  u8   section_count            0..6 section planes (common/section.hpp)
+//   102  f64  sections [section_count][4]  A, B, C, D of each: keeps A*x + B*y + C*z + D >= 0
+//                                      (world coordinates; (A, B, C) a unit normal within 1e-6)
 //
 // NodeDiff (12 + 4 * (added_count + removed_count)) — one chunk of δ(f,f-1) and δ(f-1,f)
 //     0  u32  frame
@@ -124,10 +127,10 @@
 namespace occ::wire {
 
 constexpr uint32_t kMagic = 0x5753434F;  // "OCSW" in little-endian byte order
-constexpr uint16_t kProtocolVersion = 8;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
+constexpr uint16_t kProtocolVersion = 9;  // 2: EndOfFrame carries CPU times; 3: cluster key (auth, proof); 4: Resync;
                                           // 5: Camera.occlusion; 6: Camera.occlusion 2 (selected occluders);
                                           // 7: Camera.occlusion 0 or 1 again (selected occluders retired);
-                                          // 8: Hello.occlusion_backend
+                                          // 8: Hello.occlusion_backend; 9: Camera.sections
 constexpr size_t kHeaderBytes = 6;
 constexpr uint32_t kMaxPayloadBytes = 1u << 20;
 constexpr size_t kMaxNameBytes = 64;
@@ -180,7 +183,9 @@ struct Camera {
   uint32_t viewport_width_px = 1;
   uint32_t viewport_height_px = 1;
   uint8_t occlusion = 1;  // 0 or 1
-  bool operator==(const Camera&) const = default;
+  uint8_t section_count = 0;
+  double sections[6][4] = {};  // the first section_count are sent
+  bool operator==(const Camera& o) const;
 };
 
 struct NodeDiff {

@@ -580,6 +580,7 @@ void CpuOccluders::begin(const Camera& cam) {
   raster_.set_projection(proj[2][2], proj[3][2]);
   clip_from_world_ = proj * cam.view_rotation() * glm::translate(glm::dmat4(1.0), -cam.eye);
   eye_ = cam.eye;
+  sections_ = cam.sections;
   pixel_per_distance_ = 2.0 * std::tan(cam.fovy_rad * 0.5) / double(raster_.height());
   // The eye to the near rectangle's corners, with slack (as BoxQuerier's).
   const double ty = std::tan(cam.fovy_rad * 0.5), tx = ty * cam.aspect;
@@ -592,6 +593,8 @@ void CpuOccluders::draw_leaf(uint32_t node, uint32_t level) {
   for (uint32_t i = n.first_item; i < n.first_item + n.item_count; ++i) {
     const ItemRef& r = items_[i];
     if (!r.occludes) continue;
+    // An item a section plane cuts is left out whole: GL draws less of it, never more.
+    if (!sections_.empty() && !sections_.keeps_all(h_->items()[i].box, eye_)) continue;
     const MeshCopy& m = meshes_[r.mesh];
     if (size_t(r.first_index) + r.index_count > m.indices.size()) continue;
     raster_.draw(clip_from_world_ * r.transform, m.positions,

@@ -119,7 +119,8 @@ class CpuOccluders {
 
   void begin(const Camera& cam);  // clears the depth; the frame's camera
   // Draws the items of leaf `node` at full detail (level 0). Other renderables (a leaf's coarser
-  // level, an interior node's HLOD: not on the CPU) and MASK or BLEND items are left out.
+  // level, an interior node's HLOD: not on the CPU), MASK or BLEND items and items a section
+  // plane of the camera cuts are left out.
   void draw_leaf(uint32_t node, uint32_t level);
   // Whether leaf `node` at full detail may show in front of the depth drawn so far
   // (DepthRaster::shows): false only where every item is opaque and none of its triangles shows.
@@ -150,6 +151,7 @@ class CpuOccluders {
   std::vector<ItemRef> items_;
   glm::dmat4 clip_from_world_{1.0};
   glm::dvec3 eye_{0.0};
+  Sections sections_;  // the frame camera's
   double pixel_per_distance_ = 0;  // a pixel's height at unit distance from the eye
   double near_reach_ = 0;          // the eye to the near rectangle's corners, with slack
   DepthRaster raster_;

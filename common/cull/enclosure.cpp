@@ -231,6 +231,7 @@ bool Enclosures::hides(uint32_t id, const Camera& cam, double viewport_height_px
   if (!sealed(id)) return false;
   const Node& n = nodes_[id];
   if (visible_without_query(n.solids, cam)) return false;  // the near plane may cut a solid
+  if (!cam.sections.keeps_all(n.solids, cam.eye)) return false;  // a section plane may cut one open
   double far2 = 0;
   for (int i = 0; i < 8; ++i) {
     const glm::dvec3 c(i & 1 ? n.solids.max.x : n.solids.min.x, i & 2 ? n.solids.max.y : n.solids.min.y,

@@ -14,7 +14,8 @@
 // a fragment the solid leaves a nearer one, if (1) the solid is drawn there unclipped: the near
 // plane does not cut it (visible_without_query(solid box) is false) and (2) the item's projection
 // stays inside the solid's by more than the rasteriser's snapping: the margin seen from the eye
-// spans at least kMinMarginPixels pixels. And if the solid itself is not drawn (culled: outside
+// spans at least kMinMarginPixels pixels, and (3) no section plane of the camera cuts a solid
+// (common/section.hpp: the cut opens it). And if the solid itself is not drawn (culled: outside
 // the frustum or occluded), whatever hides it hides what it seals. With LODs (tau > 0) an
 // interior node drawn as its HLOD may not seal its items; they are then within that node's error
 // bound, as everything the HLOD stands for.

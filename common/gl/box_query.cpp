@@ -20,12 +20,14 @@ const char* const kBoxVertexShader = R"(#version 450 core
 uniform mat4 u_view_projection;
 uniform vec3 u_min;
 uniform vec3 u_max;
+out float gl_ClipDistance[6];  // boxes are never clipped by section planes (conservative)
 const int kCorners[36] = int[36](0, 3, 1, 0, 2, 3,  4, 7, 6, 4, 5, 7,  0, 5, 4, 0, 1, 5,
                                  2, 7, 3, 2, 6, 7,  0, 6, 2, 0, 4, 6,  1, 7, 5, 1, 3, 7);
 void main() {
   int c = kCorners[gl_VertexID];
   bvec3 upper = bvec3((c & 1) != 0, (c & 2) != 0, (c & 4) != 0);
   gl_Position = u_view_projection * vec4(mix(u_min, u_max, upper), 1.0);
+  for (int i = 0; i < 6; ++i) gl_ClipDistance[i] = 1.0;
 }
 )";
 
@@ -43,6 +45,7 @@ uniform mat4 u_view_projection;
 uniform int u_first;
 layout(std430, binding = 2) readonly buffer Boxes { vec4 boxes[]; };  // min, max per box
 flat out int v_box;
+out float gl_ClipDistance[6];  // boxes are never clipped by section planes (conservative)
 const int kCorners[36] = int[36](0, 3, 1, 0, 2, 3,  4, 7, 6, 4, 5, 7,  0, 5, 4, 0, 1, 5,
                                  2, 7, 3, 2, 6, 7,  0, 6, 2, 0, 4, 6,  1, 7, 5, 1, 3, 7);
 void main() {
@@ -51,6 +54,7 @@ void main() {
   bvec3 upper = bvec3((c & 1) != 0, (c & 2) != 0, (c & 4) != 0);
   v_box = b;
   gl_Position = u_view_projection * vec4(mix(boxes[2 * b].xyz, boxes[2 * b + 1].xyz, upper), 1.0);
+  for (int i = 0; i < 6; ++i) gl_ClipDistance[i] = 1.0;
 }
 )";
 

@@ -99,6 +99,7 @@ namespace occ {
   X(GETTEXTUREIMAGE, GetTextureImage)                         \
   X(PROGRAMUNIFORM1I, ProgramUniform1i)                       \
   X(PROGRAMUNIFORM2I, ProgramUniform2i)                       \
+  X(PROGRAMUNIFORM4FV, ProgramUniform4fv)                     \
   X(DISPATCHCOMPUTE, DispatchCompute)                         \
   X(MEMORYBARRIER, MemoryBarrier)                             \
   X(BINDIMAGETEXTURE, BindImageTexture)                       \

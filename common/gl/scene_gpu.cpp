@@ -367,6 +367,7 @@ void SceneGpu::compile_variants(const Scene& scene, const Hierarchy& hierarchy, 
         Program& p = programs[m][bits];
         p.id = link_scene_program(gl_, DrawMode(m), bits);
         p.projection_loc = gl_.GetUniformLocation(p.id, "u_projection");
+        p.sections_loc = gl_.GetUniformLocation(p.id, "u_sections");
         variants += std::string(first ? " " : ", ") + variant_name(bits);
         first = false;
       }

@@ -85,6 +85,7 @@ class SceneGpu {
   struct Program {
     GLuint id = 0;
     GLint projection_loc = -1;
+    GLint sections_loc = -1;
   };
 
   // Uploads `scene` (its clusters as `hierarchy`'s items) and, with `lod`, its leaf LODs and

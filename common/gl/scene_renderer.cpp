@@ -63,9 +63,28 @@ void SceneRenderer::begin(const Camera& cam, const float clear_rgba[4]) {
   defer_blended_ = false;
   blended_.clear();
   const glm::mat4 projection(cam.projection());
+  // Section planes in view space: n.x + d at x = eye + R^T p is (R n).p + (n.eye + d), in double.
+  glm::vec4 sections[Sections::kMax];
+  for (int i = 0; i < Sections::kMax; ++i) {
+    if (i >= cam.sections.count) {
+      sections[i] = glm::vec4(0, 0, 0, 1);  // keeps everything (and is disabled)
+      continue;
+    }
+    const Plane& pl = cam.sections.planes[size_t(i)];
+    sections[i] = glm::vec4(glm::vec3(glm::dmat3(view_rotation_) * pl.n), float(pl.distance(cam.eye)));
+  }
   for (auto& mode : gpu_.programs)
     for (const SceneGpu::Program& p : mode)
-      if (p.id) gl_.ProgramUniformMatrix4fv(p.id, p.projection_loc, 1, GL_FALSE, glm::value_ptr(projection));
+      if (p.id) {
+        gl_.ProgramUniformMatrix4fv(p.id, p.projection_loc, 1, GL_FALSE, glm::value_ptr(projection));
+        if (p.sections_loc >= 0) gl_.ProgramUniform4fv(p.id, p.sections_loc, Sections::kMax, glm::value_ptr(sections[0]));
+      }
+  for (int i = 0; i < Sections::kMax; ++i) {
+    if (i < cam.sections.count)
+      gl_.Enable(GLenum(GL_CLIP_DISTANCE0 + i));
+    else
+      gl_.Disable(GLenum(GL_CLIP_DISTANCE0 + i));
+  }
   if (++frame_ == 0) {  // stamps wrapped: forget them all
     std::fill(object_frame_.begin(), object_frame_.end(), 0);
     frame_ = 1;

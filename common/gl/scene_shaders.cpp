@@ -24,6 +24,10 @@ layout(location = 12) in vec2 in_uv;              // per vertex
 invariant out vec2 v_uv;
 #endif
 uniform mat4 u_projection;
+// Section planes in view space (common/section.hpp): kept where dot(xyz, p) + w >= 0; the
+// renderer enables GL_CLIP_DISTANCE0.. for the planes in use.
+uniform vec4 u_sections[6];
+out float gl_ClipDistance[6];
 invariant gl_Position;
 #if (defined(SHADED) || defined(MASK)) && defined(VERTEX_COLOR)
 invariant out vec4 v_color;  // rgb: base colour (Shaded), a: alpha
@@ -44,6 +48,7 @@ out vec3 v_normal;
 void main() {
   vec4 p = in_model_view * vec4(in_position, 1.0);
   gl_Position = u_projection * p;
+  for (int i = 0; i < 6; ++i) gl_ClipDistance[i] = dot(u_sections[i].xyz, p.xyz) + u_sections[i].w;
 #if defined(SHADED) || defined(MASK)
   float alpha = in_alpha_cutoff.x * in_vertex_color.a;
 #endif

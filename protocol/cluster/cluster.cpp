@@ -1,5 +1,6 @@
 #include "protocol/cluster/cluster.hpp"
 
+#include <algorithm>
 #include <iostream>
 #include <tuple>
 #include <utility>
@@ -26,6 +27,12 @@ wire::Camera to_wire(uint32_t number, const Camera& c, const Viewport& vp, uint8
   w.viewport_width_px = uint32_t(vp.width);
   w.viewport_height_px = uint32_t(vp.height);
   w.occlusion = occlusion;
+  w.section_count = c.sections.count;
+  for (int i = 0; i < c.sections.count; ++i) {
+    const Plane& p = c.sections.planes[size_t(i)];
+    const double abcd[4] = {p.n.x, p.n.y, p.n.z, p.d};
+    std::copy(abcd, abcd + 4, w.sections[i]);
+  }
   return w;
 }
 
@@ -37,6 +44,10 @@ Camera from_wire(const wire::Camera& w) {
   c.aspect = w.aspect;
   c.near_dist = w.near_dist;
   c.far_dist = w.far_dist;
+  for (int i = 0; i < w.section_count && i < Sections::kMax; ++i) {  // unit normals (wire.hpp checks)
+    c.sections.planes[size_t(i)] = Plane{{w.sections[i][0], w.sections[i][1], w.sections[i][2]}, w.sections[i][3]};
+    c.sections.count = uint8_t(i + 1);
+  }
   return c;
 }
 
