@@ -172,6 +172,18 @@ void compute_normals(Mesh& mesh) {
   }
 }
 
+void repair_normals(Mesh& mesh) {
+  bool bad = false;
+  for (const glm::vec3& n : mesh.normals) bad |= !(glm::dot(n, n) > 1e-12f);
+  if (!bad) return;
+  Mesh computed;
+  computed.positions = mesh.positions;
+  computed.indices = mesh.indices;
+  compute_normals(computed);
+  for (size_t v = 0; v < mesh.normals.size(); ++v)
+    if (!(glm::dot(mesh.normals[v], mesh.normals[v]) > 1e-12f)) mesh.normals[v] = computed.normals[v];
+}
+
 namespace {
 
 // Removes, in place and keeping the others' order, the triangles (a, b, c) for which

@@ -8,6 +8,7 @@
 #include "common/scene/hierarchy.hpp"
 #include "common/lod/lod.hpp"
 #include "common/scene/scene.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace occ {
 
@@ -17,6 +18,7 @@ struct SceneOptions {
   LodParams lod;
   std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod_cache.hpp)
   bool scene_cache = true;  // --scene-cache on|off: plant:M scenes + hierarchy (scene_cache.hpp)
+  UpAxis up = UpAxis::Y;    // --up y|z: the axis the scene's data points up (apply_up_axis)
   std::string geometry_budget = "auto";  // --geometry-budget MB|auto|all (geometry_budget_bytes)
 };
 
