@@ -9,7 +9,6 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "common/hash.hpp"
 
@@ -268,19 +267,58 @@ bool corners_alike(const Mesh& m, uint32_t u, uint32_t v) {
 }  // namespace
 
 uint64_t drop_repeated_triangles(Mesh& mesh, bool either_winding) {
-  std::unordered_map<std::array<uint32_t, 9>, std::array<uint32_t, 3>, KeyBitsHash> first;
-  first.reserve(mesh.indices.size() / 3);
-  return remove_triangles_if(mesh, [&](uint32_t a, uint32_t b, uint32_t c) {
+  // The key of the triangle at indices[3t..3t+3), in the winding that compares.
+  auto key_of = [&](size_t t) {
+    const uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
     TriangleKey key = triangle_key(mesh, a, b, c);
     if (either_winding) {
       TriangleKey reversed = triangle_key(mesh, a, c, b);
       if (reversed.bits < key.bits) key = reversed;
     }
-    const auto [at, fresh] = first.try_emplace(key.bits, key.vertices);
-    bool repeat = !fresh;
-    for (int k = 0; k < 3 && repeat; ++k) repeat = corners_alike(mesh, at->second[k], key.vertices[k]);
-    return repeat;
-  });
+    return key;
+  };
+  // An open-addressing table of the first triangle of each key, by its place among the kept
+  // triangles (kept triangles never move again) beside the high half of its key's hash: 8 bytes
+  // a slot, a key recomputed to compare only where the hashes agree.
+  const size_t tris = mesh.indices.size() / 3;
+  size_t slots = 16;
+  while (slots < 2 * tris) slots *= 2;
+  constexpr uint64_t kEmpty = ~uint64_t(0);
+  std::vector<uint64_t> table(slots, kEmpty);
+  size_t kept = 0;
+  // Keys and hashes a batch at a time, their slots prefetched: the table is far larger than the
+  // caches, and the loads of a batch overlap.
+  constexpr size_t kBatch = 32;
+  TriangleKey keys[kBatch];
+  uint64_t hashes[kBatch];
+  for (size_t t = 0; t < tris; ++t) {
+    if (t % kBatch == 0)
+      for (size_t i = 0; i < kBatch && t + i < tris; ++i) {
+        keys[i] = key_of(t + i);
+        hashes[i] = KeyBitsHash{}(keys[i].bits);
+        __builtin_prefetch(&table[hashes[i] & (slots - 1)]);
+      }
+    const TriangleKey& key = keys[t % kBatch];
+    bool repeat = false;
+    const uint64_t h = hashes[t % kBatch], tag = h >> 32 << 32;
+    for (size_t s = h & (slots - 1);; s = (s + 1) & (slots - 1)) {
+      if (table[s] == kEmpty) {
+        table[s] = tag | kept;
+        break;
+      }
+      if ((table[s] >> 32 << 32) != tag) continue;
+      const TriangleKey first = key_of(table[s] & 0xffffffffu);
+      if (first.bits != key.bits) continue;
+      repeat = true;
+      for (int k = 0; k < 3 && repeat; ++k) repeat = corners_alike(mesh, first.vertices[k], key.vertices[k]);
+      break;
+    }
+    if (repeat) continue;
+    std::copy_n(mesh.indices.begin() + std::ptrdiff_t(3 * t), 3, mesh.indices.begin() + std::ptrdiff_t(3 * kept));
+    ++kept;
+  }
+  mesh.indices.resize(3 * kept);
+  return tris - kept;
 }
 
 namespace {
