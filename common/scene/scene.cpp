@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 
 #include "common/hash.hpp"
@@ -362,6 +363,31 @@ void remap_vertices(Mesh& m, const std::vector<unsigned int>& remap, size_t kept
   apply(m.colors);
 }
 
+// meshopt_optimizeVertexCache on each range of triangles, with the range's vertices renumbered
+// 0..k-1 in their order (the same order as the mesh's numbers, so the same result as on the whole
+// mesh's numbers) for the call: its cost is then the range's, not the mesh's vertex count (a
+// scan of millions of triangles in thousands of clusters).
+void optimize_clusters_for_vertex_cache(Mesh& m, const std::vector<std::pair<size_t, size_t>>& ranges) {
+  constexpr uint32_t kNone = 0xffffffffu;
+  std::vector<uint32_t> local(m.positions.size(), kNone), used, tmp;
+  for (auto [b, e] : ranges) {
+    const std::span<uint32_t> idx(m.indices.data() + 3 * b, 3 * (e - b));
+    used.clear();
+    for (uint32_t v : idx)
+      if (local[v] == kNone) {
+        local[v] = 0;
+        used.push_back(v);
+      }
+    std::sort(used.begin(), used.end());
+    for (size_t k = 0; k < used.size(); ++k) local[used[k]] = uint32_t(k);
+    tmp.resize(idx.size());
+    for (size_t i = 0; i < idx.size(); ++i) tmp[i] = local[idx[i]];
+    meshopt_optimizeVertexCache(tmp.data(), tmp.data(), tmp.size(), used.size());
+    for (size_t i = 0; i < idx.size(); ++i) idx[i] = used[tmp[i]];
+    for (uint32_t v : used) local[v] = kNone;
+  }
+}
+
 }  // namespace
 
 // Merges vertices equal in every attribute (position, normal, uv, colour), keeping first-use
@@ -411,9 +437,10 @@ void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
     // Each cluster's triangles in vertex cache order (meshoptimizer): llvmpipe shades a vertex
     // again whenever its index misses a small direct-mapped cache of recent indices, and the
     // order above (or a file's own) may reuse vertices far apart.
-    for (auto [b, e] : ranges)
-      meshopt_optimizeVertexCache(m.indices.data() + 3 * b, m.indices.data() + 3 * b, 3 * (e - b),
-                                  m.positions.size());
+    if (ranges.size() == 1)
+      meshopt_optimizeVertexCache(m.indices.data(), m.indices.data(), m.indices.size(), m.positions.size());
+    else
+      optimize_clusters_for_vertex_cache(m, ranges);
     // Then the vertices renumbered in the order the triangles first use them (meshoptimizer's
     // vertex fetch order): a cache keyed by the index finds neighbouring triangles' vertices at
     // neighbouring numbers instead of colliding. Same triangles, same order, same vertex values:

@@ -107,10 +107,11 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   char buf[768];
   const bool use_cache = opts.scene_cache && scene_cache_applies(opts.spec);
   // Read lazily (the arrays left in the cache, streamed within the budget): a plant always under
-  // a budget (its start reads the structure only), a glTF scene where its arrays exceed it (else
-  // it is read whole, as fast, and the switch nodes can look for sealed objects in it).
+  // a budget (its start reads the structure only), a glTF or model file's scene where its arrays
+  // exceed it (else it is read whole, as fast, and the switch nodes can look for sealed objects in it).
   const uint64_t budget = geometry_budget_bytes(opts);
-  const uint64_t lazy_above = budget == 0 ? UINT64_MAX : is_gltf_path(opts.spec) ? budget : 0;
+  const bool file = use_cache && opts.spec.rfind("plant:", 0) != 0;
+  const uint64_t lazy_above = budget == 0 ? UINT64_MAX : file ? budget : 0;
   const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
   const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build, opts.up) : 0;
   std::optional<CachedScene> cached;

@@ -39,7 +39,7 @@ struct LoadedScene {
 };
 
 // With a budget (geometry_budget_bytes > 0) a scene that has a scene cache is read lazily (a
-// plant:M always, a glTF scene where its arrays are larger than the budget): its
+// plant:M always, a glTF or model file's scene where its arrays are larger than the budget): its
 // meshes' and LODs' arrays stay in the mapped caches (Scene::mapped, LodData::mapped) and are
 // streamed to the GPU as frames need them; a cache built now is written first, then read so.
 // Loads/generates the scene and builds the hierarchy, or reads both from the scene cache
