@@ -3,12 +3,13 @@
 // came from and big models can be generated rather than shipped.
 //
 // All three bake each object's transform into its vertices (computed in double, then rounded to
-// float: what a reader of the file gets), as none of the formats has a node tree. OBJ keeps one
-// `o` group per object, in object order, with a material per scene material (Kd = base colour,
-// d = its alpha; a mesh without material gets none, so it reads back with the per-object colour);
-// PLY and STL are one mesh. Normals are written where every mesh has its own (no mesh is flat),
-// else none (the file reads back flat). PLY vertex colours (optional) are the base colours of
-// the materials as bytes. Throws std::runtime_error when a file cannot be written.
+// float: what a reader of the file gets; a mirroring transform's triangles turned to keep their
+// front faces), as none of the formats has a node tree. OBJ keeps one `o` group per object, in
+// object order, with a material per scene material (Kd = base colour, d = its alpha; a mesh
+// without material, or with a per-object colour, gets none, so it reads back with the per-object
+// colour); PLY and STL are one mesh. Normals are written where every mesh has its own (no mesh is
+// flat), else none (the file reads back flat). PLY vertex colours (optional, and only where every
+// mesh has a material of its own colour) are the base colours of the materials as bytes. Throws std::runtime_error when a file cannot be written.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -34,9 +35,23 @@ struct ToWorld {
     const glm::dvec3 n = normal * glm::dvec3(m.normals[v]);
     return {glm::vec3(p), glm::vec3(glm::length(n) > 0 ? glm::normalize(n) : n)};
   }
+  // The object's corner k of a triangle whose corners are c: mirrored objects' corners 1 and 2
+  // swapped (the front face kept).
+  uint32_t corner(const uint32_t* c, int k) const { return mirrored && k ? c[3 - k] : c[k]; }
   glm::dmat4 t;
   glm::dmat3 normal;
+  bool mirrored = glm::determinant(glm::dmat3(t)) < 0;
 };
+
+// Whether every object's mesh has a material with its own colour (not kNoMaterial, not the
+// per-object colour).
+inline bool every_mesh_has_its_colour(const occ::Scene& s) {
+  for (const occ::Object& o : s.objects) {
+    const occ::Material* m = s.material_of(o.mesh);
+    if (!m || m->object_color) return false;
+  }
+  return true;
+}
 
 inline bool every_mesh_has_normals(const occ::Scene& s) {
   for (const occ::Mesh& m : s.meshes)
@@ -66,6 +81,7 @@ class File {
 
 inline void write_ply(const occ::Scene& s, const std::string& path, bool binary, bool colours) {
   const bool normals = every_mesh_has_normals(s);
+  colours = colours && every_mesh_has_its_colour(s);
   uint64_t nv = 0, nf = 0;
   for (const occ::Object& o : s.objects) {
     nv += s.meshes[o.mesh].positions.size();
@@ -107,9 +123,11 @@ inline void write_ply(const occ::Scene& s, const std::string& path, bool binary,
   uint32_t base = 0;
   for (const occ::Object& o : s.objects) {
     const occ::Mesh& m = s.meshes[o.mesh];
+    const ToWorld world(o);
     for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-      const int32_t idx[3] = {int32_t(base + m.indices[t]), int32_t(base + m.indices[t + 1]),
-                              int32_t(base + m.indices[t + 2])};
+      const uint32_t* c = &m.indices[t];
+      const int32_t idx[3] = {int32_t(base + world.corner(c, 0)), int32_t(base + world.corner(c, 1)),
+                              int32_t(base + world.corner(c, 2))};
       if (binary) {
         const uint8_t three = 3;
         std::fwrite(&three, 1, 1, f.get());
@@ -142,7 +160,8 @@ inline void write_obj(const occ::Scene& s, const std::string& path) {
     const occ::Object& o = s.objects[oi];
     const occ::Mesh& m = s.meshes[o.mesh];
     std::fprintf(f.get(), "o object%zu\n", oi);
-    if (m.material != occ::kNoMaterial) std::fprintf(f.get(), "usemtl m%u\n", m.material);
+    const occ::Material* mat = s.material_of(o.mesh);
+    if (mat && !mat->object_color) std::fprintf(f.get(), "usemtl m%u\n", m.material);
     const ToWorld world(o);
     for (uint32_t v = 0; v < m.positions.size(); ++v) {
       const WorldVertex w = world(m, v);
@@ -150,7 +169,8 @@ inline void write_obj(const occ::Scene& s, const std::string& path) {
       if (normals) std::fprintf(f.get(), "vn %.9g %.9g %.9g\n", w.n.x, w.n.y, w.n.z);
     }
     for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-      const uint64_t a = base + m.indices[t], b = base + m.indices[t + 1], c = base + m.indices[t + 2];
+      const uint32_t* k = &m.indices[t];
+      const uint64_t a = base + world.corner(k, 0), b = base + world.corner(k, 1), c = base + world.corner(k, 2);
       if (normals)
         std::fprintf(f.get(), "f %llu//%llu %llu//%llu %llu//%llu\n", (unsigned long long)a, (unsigned long long)a,
                      (unsigned long long)b, (unsigned long long)b, (unsigned long long)c, (unsigned long long)c);
@@ -174,7 +194,7 @@ inline void write_stl(const occ::Scene& s, const std::string& path) {
     const ToWorld world(o);
     for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
       glm::vec3 p[3];
-      for (int k = 0; k < 3; ++k) p[k] = world(m, m.indices[t + k]).p;
+      for (int k = 0; k < 3; ++k) p[k] = world(m, world.corner(&m.indices[t], k)).p;
       const glm::vec3 c = glm::cross(p[1] - p[0], p[2] - p[0]);
       const glm::vec3 nrm = glm::length(c) > 0 ? glm::normalize(c) : glm::vec3(0);
       std::fwrite(&nrm, 4, 3, f.get());

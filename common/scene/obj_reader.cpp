@@ -149,7 +149,6 @@ class ObjReader {
       if (!(m.base_color[k] >= 0.0f && m.base_color[k] <= 1.0f))
         fail("material '" + om.name + "'", "Kd and d must be numbers in [0, 1]");
     if (m.base_color.a < 1.0f) m.alpha_mode = AlphaMode::Blend;
-    m.unlit = om.illum == 0;
     if (!om.diffuse_texname.empty()) {
       std::string rel = om.diffuse_texname;
       std::replace(rel.begin(), rel.end(), '\\', '/');

@@ -12,7 +12,7 @@ namespace occ {
 // mesh per material it uses. Polygons are split into triangles; lines and points are counted and
 // reported, not drawn. Materials: Kd (diffuse) as the base colour, d (dissolve) as its alpha
 // (below 1: BLEND), map_Kd decoded to RGBA8 (texture coordinates flipped to glTF's top-left
-// origin), illum 0 unlit; single-sided, as OBJ says nothing of sides (as Assimp reads it). Faces
+// origin); lit (illum is not read: tinyobjloader gives 0 where the MTL has none); single-sided, as OBJ says nothing of sides (as Assimp reads it). Faces
 // without a material get the per-object colour of generated scenes (kNoMaterial, double-sided).
 // A mesh without normals is shaded flat (Mesh::flat). Zero-area and repeated triangles are left
 // out as glTF's are. Scene::files lists the OBJ, its MTL files and textures.
