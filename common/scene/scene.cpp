@@ -363,10 +363,14 @@ void remap_vertices(Mesh& m, const std::vector<unsigned int>& remap, size_t kept
   apply(m.colors);
 }
 
+// Meshes of more vertices than this have their clusters ordered for the vertex cache by
+// optimize_clusters_for_vertex_cache.
+constexpr size_t kLocalVertexCacheAbove = size_t(1) << 16;
+
 // meshopt_optimizeVertexCache on each range of triangles, with the range's vertices renumbered
-// 0..k-1 in their order (the same order as the mesh's numbers, so the same result as on the whole
-// mesh's numbers) for the call: its cost is then the range's, not the mesh's vertex count (a
-// scan of millions of triangles in thousands of clusters).
+// 0..k-1 in their order for the call: its cost is then the range's, not the mesh's vertex count
+// (a scan of millions of triangles in thousands of clusters). The order it gives may differ from
+// a call with the mesh's numbers (the scene cache's version 7 marks the change).
 void optimize_clusters_for_vertex_cache(Mesh& m, const std::vector<std::pair<size_t, size_t>>& ranges) {
   constexpr uint32_t kNone = 0xffffffffu;
   std::vector<uint32_t> local(m.positions.size(), kNone), used, tmp;
@@ -437,10 +441,14 @@ void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
     // Each cluster's triangles in vertex cache order (meshoptimizer): llvmpipe shades a vertex
     // again whenever its index misses a small direct-mapped cache of recent indices, and the
     // order above (or a file's own) may reuse vertices far apart.
-    if (ranges.size() == 1)
-      meshopt_optimizeVertexCache(m.indices.data(), m.indices.data(), m.indices.size(), m.positions.size());
-    else
+    // A big mesh's clusters one at a time with their own vertex numbers (the call's cost grows
+    // with the vertex count it is given, once per cluster).
+    if (m.positions.size() > kLocalVertexCacheAbove)
       optimize_clusters_for_vertex_cache(m, ranges);
+    else
+      for (auto [b, e] : ranges)
+        meshopt_optimizeVertexCache(m.indices.data() + 3 * b, m.indices.data() + 3 * b, 3 * (e - b),
+                                    m.positions.size());
     // Then the vertices renumbered in the order the triangles first use them (meshoptimizer's
     // vertex fetch order): a cache keyed by the index finds neighbouring triangles' vertices at
     // neighbouring numbers instead of colliding. Same triangles, same order, same vertex values:

@@ -18,9 +18,9 @@ namespace occ {
 
 namespace {
 
-constexpr uint32_t kSceneCacheVersion = 6;  // 2: welded vertices, vertex cache order; 3: fetch order;
+constexpr uint32_t kSceneCacheVersion = 7;  // 2: welded vertices, vertex cache order; 3: fetch order;
                                             // 4: the structure ahead of the arrays; 5: repeated triangles;
-                                            // 6: flat meshes
+                                            // 6: flat meshes; 7: big meshes' clusters ordered one by one
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
 constexpr size_t kHead = CacheHeader::kSize;
 
