@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "common/error.hpp"
+#include "common/image.hpp"
 #include "common/scene/model_reader.hpp"
 #include "common/scene/ply_reader.hpp"
 #include "common/scene/scene_io.hpp"
@@ -183,6 +184,35 @@ TEST_F(ModelFiles, ObjObjectsMaterialsAndBlendFromAssimp) {
   EXPECT_EQ(r.bounds().max, s.bounds().max);
   ASSERT_EQ(r.files.size(), 2u);  // the OBJ and its MTL
   EXPECT_EQ(r.files[1].path.substr(r.files[1].path.size() - 9), "cubes.mtl");
+}
+
+// An OBJ material's map_Kd: decoded, sampled with the file's texture coordinates flipped to
+// glTF's top-left origin, and listed among the scene's files (its cache goes stale with it).
+TEST_F(ModelFiles, ObjTextureIsDecodedAndItsCoordinatesFlipped) {
+  Image img;
+  img.width = 2;
+  img.height = 1;
+  img.rgba = {255, 0, 0, 255, 0, 0, 255, 255};
+  write_png((dir_ / "red_blue.png").string(), img);
+  write("t.mtl", "newmtl painted\nKd 1 1 1\nmap_Kd red_blue.png\n");
+  const std::string obj = write("t.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0.25\nvt 1 0.25\nvt 0 1\n"
+                                         "usemtl painted\nf 1/1 2/2 3/3\n");
+  const Scene s = load_model(obj);
+  ASSERT_EQ(s.meshes.size(), 1u);
+  const Material* m = s.material_of(0);
+  ASSERT_NE(m, nullptr);
+  ASSERT_EQ(m->base_color_texture, 0);
+  ASSERT_EQ(s.images.size(), 1u);
+  EXPECT_EQ(s.images[0].rgba, img.rgba);
+  ASSERT_EQ(s.meshes[0].uvs.size(), s.meshes[0].positions.size());
+  for (const glm::vec2& uv : s.meshes[0].uvs) EXPECT_TRUE(uv.y == 0.75f || uv.y == 0.0f) << uv.y;
+  ASSERT_EQ(s.files.size(), 3u);  // the OBJ, its MTL, the PNG
+  EXPECT_EQ(s.files[2].path, (dir_ / "red_blue.png").string());
+  const std::string missing = write("u.obj", "mtllib u.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl x\nf 1/1 2/1 3/1\n");
+  write("u.mtl", "newmtl x\nmap_Kd nowhere.png\n");
+  const std::string e = error_of(missing);
+  EXPECT_NE(e.find("cannot load texture"), std::string::npos) << e;
+  EXPECT_EQ(e.rfind(missing + ": ", 0), 0u) << e;
 }
 
 TEST_F(ModelFiles, StlAndOffWithoutMaterialsGetTheObjectColour) {

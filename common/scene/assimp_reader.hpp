@@ -1,5 +1,6 @@
-// Model files read through Assimp (Debian's libassimp: OBJ, STL, FBX, COLLADA, 3DS, OFF, PLY and
-// the rest of what it reads) as Scenes. Every failure throws InputError naming the file and, where
+// Model files read through Assimp (Debian's libassimp: STL, FBX, COLLADA, 3DS, OFF and the rest of
+// what it reads; load_model gives it neither PLY nor OBJ, which have faster readers, but it reads
+// them too, as write_model's side-by-side measurement does) as Scenes. Every failure throws InputError naming the file and, where
 // known, the mesh, node or material at fault.
 #pragma once
 #include <string>

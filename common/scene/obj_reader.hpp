@@ -1,6 +1,5 @@
 // Wavefront OBJ files (+ their MTL materials) as Scenes, through tinyobjloader (Debian's
-// libtinyobjloader: several times faster than Assimp's OBJ reader and a fraction of its memory on
-// big files, docs/formats.md). Every failure throws InputError naming the file and what is wrong.
+// libtinyobjloader: faster and leaner than Assimp's OBJ reader on big files, docs/formats.md). Every failure throws InputError naming the file and what is wrong.
 #pragma once
 #include <string>
 
