@@ -158,7 +158,7 @@ TEST_F(ModelFiles, EveryTruncatedPlyIsAnError) {
   }
 }
 
-TEST_F(ModelFiles, ObjObjectsMaterialsAndBlendFromAssimp) {
+TEST_F(ModelFiles, ObjObjectsMaterialsAndBlend) {
   Scene s = two_cubes();
   Material glass;
   glass.base_color = {0.1f, 0.2f, 0.3f, 0.5f};
@@ -261,13 +261,15 @@ TEST_F(ModelFiles, ColladaNodeTreeTransformsAndInstancing) {
   EXPECT_TRUE(near(p[4], {10, 1, 0})) << p[4].x << " " << p[4].y;  // child: (1,0,0) turned to (0,1,0), + 10
 }
 
-TEST_F(ModelFiles, BadFilesOfAssimpFormatsNameTheFile) {
+TEST_F(ModelFiles, BadObjFbxDaeStlFilesNameTheFile) {
   for (const auto& [name, bytes] : std::vector<std::pair<std::string, std::string>>{
            {"junk.obj", "this is not\x01\x02 an obj\n"},
            {"junk.fbx", "Kaydara FBX Binary  \x00\x1a\x00 junk"},
            {"junk.dae", "<COLLADA><library"},
            {"empty.stl", ""},
-           {"points.obj", "v 0 0 0\nv 1 0 0\np 1\np 2\n"}}) {
+           {"points.obj", "v 0 0 0\nv 1 0 0\np 1\np 2\n"},
+           {"cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4"},
+           {"range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"}}) {
     const std::string path = write(name, bytes);
     const std::string e = error_of(path);
     EXPECT_EQ(e.rfind(path + ": ", 0), 0u) << name << ": " << e;

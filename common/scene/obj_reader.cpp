@@ -198,6 +198,11 @@ Scene load_obj(const std::string& path) {
     err += e.what();
   }
   if (!ok || !err.empty()) throw InputError(path + ": invalid OBJ: " + one_line(err.empty() ? "parse failed" : err));
+  // tinyobjloader drops a face of fewer than three vertices with a warning: a line cut short (a
+  // truncated file) or a broken one, never a scene without it.
+  if (warn.find("Degenerated face") != std::string::npos)
+    throw InputError(path + ": a face of fewer than three vertices (a line cut short: truncated file?): " +
+                     one_line(warn));
   if (!warn.empty()) std::cerr << path << ": warning: " << one_line(warn) << "\n";
   ObjReader r(path, attrib, std::move(materials));
   r.read(shapes);
