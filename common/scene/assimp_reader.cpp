@@ -76,7 +76,7 @@ class AssimpReader {
         const Built& b = mesh(mi);
         scene_.zero_area_triangles += b.zero_area;
         scene_.repeated_triangles += b.repeated;
-        if (b.mesh >= 0) scene_.objects.push_back(Object{uint32_t(b.mesh), world, name});
+        for (uint32_t m : b.meshes) scene_.objects.push_back(Object{m, world, name});
       }
       for (unsigned c = node->mNumChildren; c-- > 0;) stack.emplace_back(node->mChildren[c], world);
     }
@@ -91,7 +91,7 @@ class AssimpReader {
   }
 
   struct Built {
-    int64_t mesh = -1;
+    std::vector<uint32_t> meshes;
     uint64_t zero_area = 0, repeated = 0;
   };
 
@@ -157,7 +157,7 @@ class AssimpReader {
       }
     }
     const ModelMeshCounts c = add_model_mesh(scene_, std::move(m), am.HasNormals());
-    return {c.mesh, c.zero_area, c.repeated};
+    return {c.meshes, c.zero_area, c.repeated};
   }
 
   uint32_t material(unsigned index, bool vertex_colours, const std::string& where) {

@@ -22,6 +22,6 @@ Scene load_model(const std::string& path);
 
 // Bump whenever load_model's output for the same files changes: it keys the scene caches of model
 // files (scene_cache.hpp), which are otherwise reused while their files are unchanged.
-constexpr uint32_t kModelReaderVersion = 1;
+constexpr uint32_t kModelReaderVersion = 2;  // 2: big meshes in spatial parts
 
 }  // namespace occ

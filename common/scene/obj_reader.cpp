@@ -134,7 +134,7 @@ class ObjReader {
     const ModelMeshCounts c = add_model_mesh(scene_, std::move(m), normals);
     scene_.zero_area_triangles += c.zero_area;
     scene_.repeated_triangles += c.repeated;
-    if (c.mesh >= 0) scene_.objects.push_back(Object{uint32_t(c.mesh), glm::dmat4(1.0), name});
+    for (uint32_t k : c.meshes) scene_.objects.push_back(Object{k, glm::dmat4(1.0), name});
   }
 
   uint32_t material(int index, const std::string& where) {

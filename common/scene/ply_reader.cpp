@@ -366,8 +366,8 @@ Scene load_ply(const std::string& path) {
   if (m.indices.empty()) throw InputError(path + ": no faces to draw (point clouds are not supported)");
   m.material = colours ? vertex_colour_material(s) : kNoMaterial;
   const ModelMeshCounts dropped = add_model_mesh(s, std::move(m), normals);
-  if (dropped.mesh < 0) throw InputError(path + ": no faces to draw (every face has zero area)");
-  s.objects.push_back(Object{uint32_t(dropped.mesh), glm::dmat4(1.0), s.meshes.back().name});
+  if (dropped.meshes.empty()) throw InputError(path + ": no faces to draw (every face has zero area)");
+  for (uint32_t k : dropped.meshes) s.objects.push_back(Object{k, glm::dmat4(1.0), s.meshes[k].name});
   s.zero_area_triangles = dropped.zero_area;
   s.repeated_triangles = dropped.repeated;
   s.source = path;
