@@ -4,12 +4,15 @@
 // the file and what is wrong, never half a scene); the scene cache of a model file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <tuple>
 #include <filesystem>
 #include <fstream>
 
 #include "common/error.hpp"
 #include "common/image.hpp"
+#include "common/scene/model_mesh.hpp"
 #include "common/scene/model_reader.hpp"
 #include "common/scene/ply_reader.hpp"
 #include "common/scene/scene_io.hpp"
@@ -140,6 +143,39 @@ TEST_F(ModelFiles, BadPlyFilesNameTheFileAndThePlace) {
     EXPECT_NE(e.find(c.fragment), std::string::npos) << "expected '" << c.fragment << "' in: " << e;
   }
   EXPECT_NE(error_of((dir_ / "missing.ply").string()).find("missing"), std::string::npos);
+}
+
+// A mesh above kMaxModelMeshTriangles comes as spatial parts within it: the same triangles and
+// bounds, each part a mesh and an object of its own (the geometry budget streams meshes).
+TEST_F(ModelFiles, BigMeshComesInSpatialPartsWithTheSameTriangles) {
+  Scene s;
+  Mesh grid;
+  constexpr int kN = 730;  // 729 x 729 x 2 = 1,062,882 triangles
+  for (int z = 0; z < kN; ++z)
+    for (int x = 0; x < kN; ++x) grid.positions.push_back({float(x), float((x * 7 + z * 3) % 5), float(z)});
+  for (int z = 0; z + 1 < kN; ++z)
+    for (int x = 0; x + 1 < kN; ++x) {
+      const uint32_t v = uint32_t(z * kN + x);
+      grid.indices.insert(grid.indices.end(), {v, v + kN, v + 1, v + 1, v + kN, v + kN + 1});
+    }
+  compute_normals(grid);
+  s.meshes.push_back(grid);
+  s.objects.push_back(Object{0, glm::dmat4(1.0), "grid"});
+  ASSERT_GT(s.triangle_count(), kMaxModelMeshTriangles);
+  const std::string path = (dir_ / "grid.ply").string();
+  occtest::write_ply(s, path, true, false);
+  const Scene r = load_model(path);
+  ASSERT_GE(r.meshes.size(), 2u);
+  EXPECT_EQ(r.objects.size(), r.meshes.size());
+  EXPECT_EQ(r.triangle_count(), s.triangle_count());
+  for (const Mesh& m : r.meshes) EXPECT_LE(m.indices.size() / 3, kMaxModelMeshTriangles);
+  EXPECT_EQ(r.bounds().min, s.bounds().min);
+  EXPECT_EQ(r.bounds().max, s.bounds().max);
+  std::vector<glm::vec3> a = world_positions(s), b = world_positions(r);
+  auto less = [](const glm::vec3& p, const glm::vec3& q) { return std::tie(p.x, p.y, p.z) < std::tie(q.x, q.y, q.z); };
+  std::sort(a.begin(), a.end(), less);
+  std::sort(b.begin(), b.end(), less);
+  EXPECT_TRUE(a == b);  // the same corners (the triangles, as sets of corners)
 }
 
 // A file cut anywhere is an error, never a scene with part of the file: binary and ASCII (whose
