@@ -110,13 +110,17 @@ int main(int argc, char** argv) {
     cli.group(occ::CliGroup::expert);
     occlusion_option(cli, o);
     cli.group(occ::CliGroup::output);
-    cli.option("web", &o.web, "[ADDR:]PORT",
+    cli.custom("web", "[ADDR:]PORT[,tls=CERT.pem:KEY.pem|,tls=self-signed]", "",
                "serve a page that shows the frames and lets the user drive as --window does (mouse, wheel, keys, "
                "touch): http://ADDR:PORT/ (ADDR default 127.0.0.1; PORT 0: a free one); the drive and view-only URLs, "
-               "with their tokens, are printed at start");
-    cli.option("web-tls", &o.web_tls, "CERT:KEY",
-               "--web over https/wss: CERT.pem:KEY.pem (a PEM certificate chain and its key), or self-signed (a fresh "
-               "pair for localhost made at start, its fingerprint printed)");
+               "with their tokens, are printed at start. ,tls=: https/wss with a PEM certificate chain and its key, "
+               "or self-signed (a fresh pair for localhost made at start, its fingerprint printed)",
+               [&o](const std::string& v) {
+                 const size_t at = v.find(",tls=");
+                 o.web = v.substr(0, at);
+                 o.web_tls = at == std::string::npos ? "" : v.substr(at + 5);
+                 if (o.web.empty()) throw occ::InputError("--web '" + v + "': expected [ADDR:]PORT[,tls=...]");
+               });
     cli.group(occ::CliGroup::cluster);
     cli.option("lookahead", &o.lookahead, 1, 64,
                "cameras sent ahead of the displayed frame (lockstep: the latency in frames; latest: the most frames "
@@ -129,7 +133,6 @@ int main(int argc, char** argv) {
       o.record = (std::filesystem::path(o.out) / "path.csv").string();
     }
     if (o.window && !o.web.empty()) throw occ::InputError("--web: not with --window (one display)");
-    if (!o.web_tls.empty() && o.web.empty()) throw occ::InputError("--web-tls needs --web");
     if (!o.web.empty()) occ::parse_web_options(o.web, o.web_tls);  // a bad --web fails before the scene loads
     if (o.path.empty()) o.path = o.viewer() ? "interactive" : "walk:60";
     if (o.path == "interactive" && !o.viewer()) throw occ::InputError("--path interactive needs --window or --web");

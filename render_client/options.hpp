@@ -43,7 +43,7 @@ struct ClientOptions {
   // --window or --web (viewer.hpp)
   bool window = false;
   std::string web;      // --web [ADDR:]PORT (web_server.hpp); empty: off
-  std::string web_tls;  // --web-tls CERT.pem:KEY.pem|self-signed
+  std::string web_tls;  // --web's tls= CERT.pem:KEY.pem|self-signed
   bool viewer() const { return window || !web.empty(); }  // a user watches and drives
   // OUT/path.csv with --out (main.cpp): every camera shown (--window, --web), or the path
   // (generated or read), as a path CSV

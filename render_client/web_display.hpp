@@ -16,7 +16,7 @@
 
 namespace occ {
 
-// Starts the server (throws InputError naming --web or --web-tls) and prints its URLs.
+// Starts the server (throws InputError naming --web or --web's tls=) and prints its URLs.
 std::unique_ptr<FrameDisplay> make_web_display(const ClientOptions& o);
 
 // The window event the viewer handles for a page's input (a wheel of N notches: one event of

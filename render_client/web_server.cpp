@@ -40,7 +40,7 @@ WebOptions parse_web_options(const std::string& web, const std::string& tls) {
   o.port = e.port;
   o.tls = tls;
   if (!tls.empty() && tls != "self-signed" && tls.find(':') == std::string::npos)
-    throw InputError("--web-tls '" + tls + "': expected CERT.pem:KEY.pem or self-signed");
+    throw InputError("--web ,tls='" + tls + "': expected CERT.pem:KEY.pem or self-signed");
   return o;
 }
 

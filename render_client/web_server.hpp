@@ -27,7 +27,7 @@ struct WebOptions {
   std::string tls;    // empty (http), "self-signed", or "CERT.pem:KEY.pem"
 };
 
-// --web [ADDR:]PORT and --web-tls; throws InputError naming the flag.
+// --web [ADDR:]PORT and --web's tls=; throws InputError naming the flag.
 WebOptions parse_web_options(const std::string& web, const std::string& tls);
 
 class WebServer {
@@ -35,7 +35,7 @@ class WebServer {
   // Called on the server's thread for each valid input of a drive page.
   using InputHandler = std::function<void(const WebInput&)>;
 
-  // Binds (throws InputError naming --web when it cannot, --web-tls for a bad pair), starts the
+  // Binds (throws InputError naming --web when it cannot, --web's tls= for a bad pair), starts the
   // server thread and prints both URLs on stderr.
   WebServer(const WebOptions& o, InputHandler on_input);
   ~WebServer();  // stops the thread; every connection is closed

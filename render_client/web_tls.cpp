@@ -22,7 +22,7 @@ using Key = std::unique_ptr<EVP_PKEY, decltype(&EVP_PKEY_free)>;
 using Cert = std::unique_ptr<X509, decltype(&X509_free)>;
 
 void check(bool ok, const char* what) {
-  if (!ok) throw InputError(std::string("--web-tls self-signed: ") + what + " failed");
+  if (!ok) throw InputError(std::string("--web ,tls=self-signed: ") + what + " failed");
 }
 
 void add_alt_names(X509* x) {
@@ -85,14 +85,14 @@ ssl::context make_tls_context(const std::string& spec) {
   const size_t colon = spec.find(':');
   const std::string cert = spec.substr(0, colon), key = spec.substr(colon + 1);
   for (const std::string& f : {cert, key})
-    if (!std::ifstream(f)) throw InputError("--web-tls '" + spec + "': cannot read '" + f + "'");
+    if (!std::ifstream(f)) throw InputError("--web ,tls='" + spec + "': cannot read '" + f + "'");
   boost::system::error_code ec;
   ctx.use_certificate_chain_file(cert, ec);
-  if (ec) throw InputError("--web-tls '" + spec + "': certificate '" + cert + "': " + ec.message());
+  if (ec) throw InputError("--web ,tls='" + spec + "': certificate '" + cert + "': " + ec.message());
   ctx.use_private_key_file(key, ssl::context::pem, ec);
-  if (ec) throw InputError("--web-tls '" + spec + "': key '" + key + "': " + ec.message());
+  if (ec) throw InputError("--web ,tls='" + spec + "': key '" + key + "': " + ec.message());
   if (SSL_CTX_check_private_key(ctx.native_handle()) != 1)
-    throw InputError("--web-tls '" + spec + "': the key does not match the certificate");
+    throw InputError("--web ,tls='" + spec + "': the key does not match the certificate");
   return ctx;
 }
 

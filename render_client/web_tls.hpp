@@ -1,4 +1,4 @@
-// --web-tls: the TLS context of the --web server (https and wss), from a PEM certificate and key
+// --web's tls=: the TLS context of the --web server (https and wss), from a PEM certificate and key
 // or, for "self-signed", a fresh P-256 key and a certificate for localhost made at start (its
 // SHA-256 fingerprint is printed, for the user to compare with what the browser shows).
 #pragma once
@@ -8,7 +8,7 @@
 
 namespace occ {
 
-// spec: "CERT.pem:KEY.pem" or "self-signed". Throws InputError naming --web-tls and the file.
+// spec: "CERT.pem:KEY.pem" or "self-signed". Throws InputError naming --web's tls= and the file.
 boost::asio::ssl::context make_tls_context(const std::string& spec);
 
 }  // namespace occ

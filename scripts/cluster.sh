@@ -38,7 +38,7 @@
 # and any movement key takes over. It implies --camera-mode latest (unless given) and no overall
 # time limit (unless OCC_MAX_SECONDS is set). --record FILE.csv copies the flight (OUT/path.csv,
 # every camera shown) there as a path.
-# --web [ADDR:]PORT (and --web-tls CERT.pem:KEY.pem|self-signed) is the same in a browser: the
+# --web [ADDR:]PORT[,tls=CERT.pem:KEY.pem|,tls=self-signed] is the same in a browser: the
 # render client serves the page; its URLs, with their tokens, are in render_client.log.
 # --node-raster-threads N (default 0): llvmpipe's rasteriser threads in each switch node
 # (LP_NUM_THREADS for the nodes only). 0 rasterises on the node's own thread: its work is many
@@ -89,7 +89,6 @@ while [ $# -gt 0 ]; do
     --host-cpus) occ_need_value "$@"; host_cpus=$2; shift 2 ;;
     --window) viewer=1; rvg_only+=("$1"); shift ;;
     --web) occ_need_value "$@"; viewer=1; rvg_only+=("$1" "$2"); shift 2 ;;
-    --web-tls) occ_need_value "$@"; rvg_only+=("$1" "$2"); shift 2 ;;
     --record) occ_need_value "$@"; record=$2; shift 2 ;;
     -h|--help) occ_usage; exit 0 ;;
     *) occ_route_flag "$@"; shift $occ_shift ;;

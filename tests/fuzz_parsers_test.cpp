@@ -54,11 +54,12 @@ TEST_P(ParserFuzz, MutatedSeedsAreRejectedOrUsable) {
   EXPECT_GT(accepted, 0u) << "some mutations stay valid: the readers' accepting paths run too";
 }
 
-INSTANTIATE_TEST_SUITE_P(Readers, ParserFuzz, ::testing::Values("gltf", "camera_path", "scene_cache", "lod_cache", "web_input"),
+INSTANTIATE_TEST_SUITE_P(Readers, ParserFuzz,
+                         ::testing::Values("gltf", "camera_path", "scene_cache", "lod_cache", "ply", "obj", "web_input"),
                          [](const auto& info) { return std::string(info.param); });
 
 TEST(ParserFuzz, EveryHarnessIsTested) {
-  EXPECT_EQ(targets().size(), 5u);
+  EXPECT_EQ(targets().size(), 7u);
   for (const Target& t : targets()) EXPECT_EQ(find_target(t.name), &t);
   EXPECT_EQ(find_target("nope"), nullptr);
 }

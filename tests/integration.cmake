@@ -26,3 +26,6 @@ add_dependencies(launcher_test switch_node render_client frame_diff)
 # scripts/cluster.sh --hosts over ssh, three namespaces with their own sshd (root, sshd)
 occ_test(hosts_test integration LOCK netns LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_hosts_test.cpp)
 add_dependencies(hosts_test switch_node render_client frame_diff)
+# model files (PLY, OBJ, STL): the shared glTF scenes written out render the glTF's frames; cluster == reference
+occ_test(formats_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_formats_test.cpp)
+add_dependencies(formats_cluster_test switch_node render_client frame_diff)

@@ -50,10 +50,10 @@ TEST(Cli, RenderClientBadInputGetsOneNamedError) {
   expect_one_error(run({ref, "--occlusion", "alternate:0"}, "alternate0"), {"--occlusion '0'", "1..1000"});
   expect_one_error(run({ref, "--images", "jpeg"}, "images_word"), {"--images 'jpeg'"});
   expect_one_error(run({ref, "--web", "host:nope"}, "web"), {"--web 'host:nope'"});
-  expect_one_error(run({ref, "--web-tls", "self-signed"}, "webtls"), {"--web-tls needs --web"});
+  expect_one_error(run({ref, "--web", ",tls=self-signed"}, "webtls"), {"--web ',tls=self-signed'"});
   expect_one_error(run({ref, "--web", "0", "--window"}, "webwin"), {"--web", "--window"});
-  expect_one_error(run({ref, "--scene", "city:2x2:1:2:1", "--web", "0", "--web-tls",
-                        "/nonexistent/c.pem:/nonexistent/k.pem"}, "webcert"), {"--web-tls", "/nonexistent/c.pem"});
+  expect_one_error(run({ref, "--scene", "city:2x2:1:2:1", "--web",
+                        "0,tls=/nonexistent/c.pem:/nonexistent/k.pem"}, "webcert"), {"tls=", "/nonexistent/c.pem"});
   expect_one_error(run({ref, "--scene", "city:2x2:1:2:1", "--web", "10.255.255.1:0"}, "webbind"),
                    {"--web '10.255.255.1:0'", "cannot listen"});
 }

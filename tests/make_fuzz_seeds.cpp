@@ -6,6 +6,11 @@
 //   scene_cache/  walls.scene (the fixture), features.scene (features.gltf: materials, images)
 //   lod_cache/    walls.lod (the fixture's LODs)
 //   web_input/    input_N.txt: one render_client --web input message each, every kind (format_web_input)
+//   ply/          walls.ply, walls_ascii.ply (the fixture through model_files.hpp's writer, with
+//                 normals and colours), by_hand.ply (ASCII: a quad, float colours, a list in the
+//                 vertex element, an element of its own)
+//   obj/          walls.obj (the fixture through model_files.hpp's writer, without its MTL),
+//                 by_hand.obj (groups, a quad, texture coordinates, negative indices, a line)
 // Usage: make_fuzz_seeds DIR (the checked-in seeds are in tests/fuzz/). Run it again when a cache
 // format version changes: the seeds test (tests/fuzz_parsers_test.cpp) fails on stale seeds.
 #include <unistd.h>
@@ -24,6 +29,7 @@
 #include "common/lod/lod_cache.hpp"
 #include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
+#include "model_files.hpp"
 #include "render_client/tools/scene_export.hpp"
 
 namespace fs = std::filesystem;
@@ -219,6 +225,30 @@ void caches(const fs::path& root, const fs::path& gltf_dir) {
   must(lod.save((root / "lod_cache" / "walls.lod").string()));
 }
 
+void models(const fs::path& root, const fs::path& tmp) {
+  const Scene& s = fixture().scene;
+  occtest::write_ply(s, (root / "ply" / "walls.ply").string(), true, true);
+  occtest::write_ply(s, (root / "ply" / "walls_ascii.ply").string(), false, true);
+  write_text(root / "ply" / "by_hand.ply",
+             "ply\nformat ascii 1.0\ncomment written by hand\nelement vertex 4\nproperty float x\n"
+             "property float y\nproperty float z\nproperty list uchar int extra\nproperty float red\n"
+             "property float green\nproperty float blue\nelement face 1\nproperty list uchar int vertex_indices\n"
+             "element camera 1\nproperty float view_px\nend_header\n"
+             "0 0 0 0 1 0 0\n1 0 0 1 7 0 1 0\n1 1 0 2 7 7 0 0 1\n0 1 0 0 0.5 0.5 0.5\n4 0 1 2 3\n2.5\n");
+  occtest::write_obj(s, (tmp / "walls.obj").string());
+  std::string obj;
+  {
+    std::ifstream in(tmp / "walls.obj");
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("mtllib", 0) != 0 && line.rfind("usemtl", 0) != 0) obj += line + "\n";
+  }
+  write_text(root / "obj" / "walls.obj", obj);
+  write_text(root / "obj" / "by_hand.obj",
+             "# written by hand\ng front\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n"
+             "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/1/1\ng back\nv 0 0 -1\nv 1 0 -1\nv 1 1 -1\n"
+             "f -1//1 -2//1 -3//1\nl 1 2\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -229,13 +259,15 @@ int main(int argc, char** argv) {
   try {
     const fs::path root = argv[1];
     const fs::path tmp = fs::temp_directory_path() / ("occ_seeds." + std::to_string(::getpid()));
-    for (const char* d : {"gltf", "camera_path", "scene_cache", "lod_cache", "web_input"}) fs::create_directories(root / d);
+    for (const char* d : {"gltf", "camera_path", "scene_cache", "lod_cache", "ply", "obj", "web_input"})
+      fs::create_directories(root / d);
     fs::create_directories(tmp);
     walls_gltf(root / "gltf", tmp);
     features_gltf(root / "gltf", tmp);
     camera_paths(root / "camera_path");
     caches(root, root / "gltf");
     web_inputs(root / "web_input");
+    models(root, tmp);
     fs::remove_all(tmp);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

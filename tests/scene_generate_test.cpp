@@ -154,7 +154,8 @@ TEST(Specs, BadSpecsSayWhatIsWrong) {
       {"layout:2x2", "expected layout:NXxNZ:path"},
       {"cityscape", "unknown scene"},
       {"", "unknown scene"},
-      {"scene.obj", "unknown scene; expected path.gltf, path.glb, city"},
+      {"scene.xyz", "unknown scene; expected path.gltf, path.glb, a model file (.ply, .obj"},
+      {"scene.obj", "scene.obj: cannot open file"},
       {"missing.glb", "missing.glb: cannot open file"},
   };
   for (const auto& [spec, words] : cases)

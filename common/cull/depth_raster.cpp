@@ -235,17 +235,27 @@ bool DepthRaster::run(const glm::dmat4& clip_from_object, std::span<const glm::v
 
 std::vector<uint32_t> DepthRaster::adjacency(std::span<const glm::vec3> positions, std::span<const uint32_t> indices) {
   // Corners welded by position (bit for bit): meshes split at normals or texture seams still join.
+  // Only the vertices these indices use, in ascending order (a cluster of a mesh of millions of
+  // vertices costs its own size): verts[k] has the weld id ids[k].
+  std::vector<uint32_t> verts;
+  verts.reserve(indices.size());
+  for (uint32_t v : indices)
+    if (v < positions.size()) verts.push_back(v);
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
   std::unordered_map<uint64_t, uint32_t> weld;
-  std::vector<uint32_t> id(positions.size());
-  for (size_t v = 0; v < positions.size(); ++v) {
+  std::vector<uint32_t> ids(verts.size());
+  for (size_t k = 0; k < verts.size(); ++k) {
+    const uint32_t v = verts[k];
     uint32_t b[3];
     std::memcpy(b, &positions[v], sizeof b);
     const uint64_t h = (uint64_t(b[0]) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(b[1]) * 0xC2B2AE3D27D4EB4Full) ^
                        (uint64_t(b[2]) * 0x165667B19E3779F9ull);
     // Collisions of the hash are told apart by position below (a collision only loses adjacency).
-    id[v] = weld.emplace(h, uint32_t(v)).first->second;
-    if (positions[id[v]] != positions[v]) id[v] = uint32_t(v);
+    ids[k] = weld.emplace(h, v).first->second;
+    if (positions[ids[k]] != positions[v]) ids[k] = v;
   }
+  const auto id_of = [&](uint32_t v) { return ids[size_t(std::lower_bound(verts.begin(), verts.end(), v) - verts.begin())]; };
   // Each undirected edge (welded) -> the first corner starting it and how many do; an edge of
   // exactly two triangles joins them.
   struct Seen {
@@ -258,17 +268,17 @@ std::vector<uint32_t> DepthRaster::adjacency(std::span<const glm::vec3> position
   auto valid = [&](size_t c) { return indices[c] < positions.size() && indices[next(c)] < positions.size(); };
   for (size_t c = 0; c < n; ++c) {
     if (!valid(c)) continue;
-    Seen& e = edges[key(id[indices[c]], id[indices[next(c)]])];
+    Seen& e = edges[key(id_of(indices[c]), id_of(indices[next(c)]))];
     if (e.count++ == 0) e.corner = uint32_t(c);
   }
   std::vector<uint32_t> across(n, kNone);
   for (size_t c = 0; c < n; ++c) {
     if (!valid(c)) continue;
-    const Seen& e = edges[key(id[indices[c]], id[indices[next(c)]])];
+    const Seen& e = edges[key(id_of(indices[c]), id_of(indices[next(c)]))];
     if (e.count != 2 || e.corner == c) continue;
     const size_t oc = e.corner;
     // Consistent winding: the other triangle runs the edge the other way.
-    const uint32_t reversed = id[indices[oc]] == id[indices[next(c)]] ? kReversed : 0u;
+    const uint32_t reversed = id_of(indices[oc]) == id_of(indices[next(c)]) ? kReversed : 0u;
     across[c] = indices[next(next(oc))] | reversed;
     across[oc] = indices[next(next(c))] | reversed;
   }

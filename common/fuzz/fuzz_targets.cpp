@@ -18,6 +18,8 @@
 #include "common/lod/lod_cache.hpp"
 #include "common/lod/lod_select.hpp"
 #include "common/mapped_file.hpp"
+#include "common/scene/obj_reader.hpp"
+#include "common/scene/ply_reader.hpp"
 #include "common/scene/scene_cache.hpp"
 #include "common/scene/scene_io.hpp"
 #include "common/web_input.hpp"
@@ -113,19 +115,22 @@ void check_names_file(const InputError& e, const std::string& path) {
   if (std::string_view(e.what()).rfind(path, 0) != 0) fail("error does not start with the file name", e.what());
 }
 
-Verdict gltf(std::span<const uint8_t> input) {
-  const std::string path = write_input("input", input);  // no extension: glTF or GLB by its magic
+// A scene file reader's contract on `input` written as the file `name`: InputError naming the
+// file, or a scene that keeps the Scene contract before and after the hierarchy build.
+Verdict scene_file(const char* name, std::span<const uint8_t> input, Scene (*read)(const std::string&),
+                   const char* reader) {
+  const std::string path = write_input(name, input);
   Scene s;
   try {
     MuteCerr mute;
-    s = load_gltf(path);
+    s = read(path);
   } catch (const InputError& e) {
     check_names_file(e, path);
     return Verdict::Rejected;
   } catch (const std::exception& e) {
-    fail("load_gltf threw something other than InputError", e.what());
+    fail((std::string(reader) + " threw something other than InputError").c_str(), e.what());
   }
-  if (auto p = scene_problem(s); !p.empty()) fail("load_gltf accepted a broken scene", p);
+  if (auto p = scene_problem(s); !p.empty()) fail((std::string(reader) + " accepted a broken scene").c_str(), p);
   (void)s.bounds();
   (void)s.content_hash();
   const Hierarchy h = Hierarchy::build(s, kFixtureBuild);  // what a host does next (splits clusters)
@@ -133,6 +138,11 @@ Verdict gltf(std::span<const uint8_t> input) {
   if (h.size() == 0) fail("no hierarchy nodes");
   return Verdict::Accepted;
 }
+
+// No extension: glTF or GLB by its magic.
+Verdict gltf(std::span<const uint8_t> input) { return scene_file("input", input, load_gltf, "load_gltf"); }
+Verdict ply(std::span<const uint8_t> input) { return scene_file("input.ply", input, load_ply, "load_ply"); }
+Verdict obj(std::span<const uint8_t> input) { return scene_file("input.obj", input, load_obj, "load_obj"); }
 
 Verdict camera_path(std::span<const uint8_t> input) {
   const std::string path = write_input("input.csv", input);
@@ -263,11 +273,8 @@ Verdict web_input(std::span<const uint8_t> input) {
   return Verdict::Accepted;
 }
 
-constexpr Target kTargets[] = {{"gltf", gltf},
-                               {"camera_path", camera_path},
-                               {"scene_cache", scene_cache},
-                               {"lod_cache", lod_cache},
-                               {"web_input", web_input}};
+constexpr Target kTargets[] = {{"gltf", gltf},   {"camera_path", camera_path}, {"scene_cache", scene_cache},
+                               {"lod_cache", lod_cache}, {"ply", ply}, {"obj", obj}, {"web_input", web_input}};
 
 }  // namespace
 

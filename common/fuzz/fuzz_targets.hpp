@@ -1,5 +1,6 @@
-// Fuzz harnesses for the readers of files other people make: glTF/GLB scenes, camera-path
-// CSVs, the binary scene and LOD caches, and the input messages of render_client --web's page. Each harness takes one input's bytes, hands them to
+// Fuzz harnesses for the readers of files other people make: glTF/GLB, PLY and OBJ scenes,
+// camera-path CSVs, the binary scene and LOD caches, and the input messages of render_client
+// --web's page. Each harness takes one input's bytes, hands them to
 // the reader through its public entry (a file in a private temporary folder, as a host reads
 // it), and checks the reader's contract:
 //   - bad input is rejected with one non-empty error (InputError naming the file for glTF and
@@ -32,11 +33,11 @@ namespace occ::fuzz {
 enum class Verdict { Accepted, Rejected };
 
 struct Target {
-  const char* name;  // gltf, camera_path, scene_cache, lod_cache, web_input (= its seed folder)
+  const char* name;  // gltf, camera_path, scene_cache, lod_cache, ply, obj, web_input (= its seed folder)
   Verdict (*run)(std::span<const uint8_t> input);
 };
 
-// The five harnesses, and the one named `name` (nullptr when none is).
+// The seven harnesses, and the one named `name` (nullptr when none is).
 std::span<const Target> targets();
 const Target* find_target(std::string_view name);
 

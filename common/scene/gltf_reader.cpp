@@ -435,20 +435,6 @@ class GltfReader {
     return out;
   }
 
-  // Zero-length normals (a NORMAL attribute may have them) would shade as NaN: replace them by
-  // the computed smooth normal of their vertex.
-  static void repair_normals(Mesh& mesh) {
-    bool bad = false;
-    for (const glm::vec3& n : mesh.normals) bad |= !(glm::dot(n, n) > 1e-12f);
-    if (!bad) return;
-    Mesh computed;
-    computed.positions = mesh.positions;
-    computed.indices = mesh.indices;
-    compute_normals(computed);
-    for (size_t v = 0; v < mesh.normals.size(); ++v)
-      if (!(glm::dot(mesh.normals[v], mesh.normals[v]) > 1e-12f)) mesh.normals[v] = computed.normals[v];
-  }
-
   // Scene material for glTF material `index` (-1: the glTF default material: single-sided, white
   // in glTF, drawn here in the per-object hashed colour like material-less generated scenes).
   uint32_t material(int index, const std::string& where) {

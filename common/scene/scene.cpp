@@ -8,8 +8,8 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <span>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "common/hash.hpp"
 
@@ -172,6 +172,18 @@ void compute_normals(Mesh& mesh) {
   }
 }
 
+void repair_normals(Mesh& mesh) {
+  bool bad = false;
+  for (const glm::vec3& n : mesh.normals) bad |= !(glm::dot(n, n) > 1e-12f);
+  if (!bad) return;
+  Mesh computed;
+  computed.positions = mesh.positions;
+  computed.indices = mesh.indices;
+  compute_normals(computed);
+  for (size_t v = 0; v < mesh.normals.size(); ++v)
+    if (!(glm::dot(mesh.normals[v], mesh.normals[v]) > 1e-12f)) mesh.normals[v] = computed.normals[v];
+}
+
 namespace {
 
 // Removes, in place and keeping the others' order, the triangles (a, b, c) for which
@@ -256,19 +268,58 @@ bool corners_alike(const Mesh& m, uint32_t u, uint32_t v) {
 }  // namespace
 
 uint64_t drop_repeated_triangles(Mesh& mesh, bool either_winding) {
-  std::unordered_map<std::array<uint32_t, 9>, std::array<uint32_t, 3>, KeyBitsHash> first;
-  first.reserve(mesh.indices.size() / 3);
-  return remove_triangles_if(mesh, [&](uint32_t a, uint32_t b, uint32_t c) {
+  // The key of the triangle at indices[3t..3t+3), in the winding that compares.
+  auto key_of = [&](size_t t) {
+    const uint32_t a = mesh.indices[3 * t], b = mesh.indices[3 * t + 1], c = mesh.indices[3 * t + 2];
     TriangleKey key = triangle_key(mesh, a, b, c);
     if (either_winding) {
       TriangleKey reversed = triangle_key(mesh, a, c, b);
       if (reversed.bits < key.bits) key = reversed;
     }
-    const auto [at, fresh] = first.try_emplace(key.bits, key.vertices);
-    bool repeat = !fresh;
-    for (int k = 0; k < 3 && repeat; ++k) repeat = corners_alike(mesh, at->second[k], key.vertices[k]);
-    return repeat;
-  });
+    return key;
+  };
+  // An open-addressing table of the first triangle of each key, by its place among the kept
+  // triangles (kept triangles never move again) beside the high half of its key's hash: 8 bytes
+  // a slot, a key recomputed to compare only where the hashes agree.
+  const size_t tris = mesh.indices.size() / 3;
+  size_t slots = 16;
+  while (slots < 2 * tris) slots *= 2;
+  constexpr uint64_t kEmpty = ~uint64_t(0);
+  std::vector<uint64_t> table(slots, kEmpty);
+  size_t kept = 0;
+  // Keys and hashes a batch at a time, their slots prefetched: the table is far larger than the
+  // caches, and the loads of a batch overlap.
+  constexpr size_t kBatch = 32;
+  TriangleKey keys[kBatch];
+  uint64_t hashes[kBatch];
+  for (size_t t = 0; t < tris; ++t) {
+    if (t % kBatch == 0)
+      for (size_t i = 0; i < kBatch && t + i < tris; ++i) {
+        keys[i] = key_of(t + i);
+        hashes[i] = KeyBitsHash{}(keys[i].bits);
+        __builtin_prefetch(&table[hashes[i] & (slots - 1)]);
+      }
+    const TriangleKey& key = keys[t % kBatch];
+    bool repeat = false;
+    const uint64_t h = hashes[t % kBatch], tag = h >> 32 << 32;
+    for (size_t s = h & (slots - 1);; s = (s + 1) & (slots - 1)) {
+      if (table[s] == kEmpty) {
+        table[s] = tag | kept;
+        break;
+      }
+      if ((table[s] >> 32 << 32) != tag) continue;
+      const TriangleKey first = key_of(table[s] & 0xffffffffu);
+      if (first.bits != key.bits) continue;
+      repeat = true;
+      for (int k = 0; k < 3 && repeat; ++k) repeat = corners_alike(mesh, first.vertices[k], key.vertices[k]);
+      break;
+    }
+    if (repeat) continue;
+    std::copy_n(mesh.indices.begin() + std::ptrdiff_t(3 * t), 3, mesh.indices.begin() + std::ptrdiff_t(3 * kept));
+    ++kept;
+  }
+  mesh.indices.resize(3 * kept);
+  return tris - kept;
 }
 
 namespace {
@@ -310,6 +361,35 @@ void remap_vertices(Mesh& m, const std::vector<unsigned int>& remap, size_t kept
   apply(m.normals);
   apply(m.uvs);
   apply(m.colors);
+}
+
+// Meshes of more vertices than this have their clusters ordered for the vertex cache by
+// optimize_clusters_for_vertex_cache.
+constexpr size_t kLocalVertexCacheAbove = size_t(1) << 16;
+
+// meshopt_optimizeVertexCache on each range of triangles, with the range's vertices renumbered
+// 0..k-1 in their order for the call: its cost is then the range's, not the mesh's vertex count
+// (a scan of millions of triangles in thousands of clusters). The order it gives may differ from
+// a call with the mesh's numbers (the scene cache's version 7 marks the change).
+void optimize_clusters_for_vertex_cache(Mesh& m, const std::vector<std::pair<size_t, size_t>>& ranges) {
+  constexpr uint32_t kNone = 0xffffffffu;
+  std::vector<uint32_t> local(m.positions.size(), kNone), used, tmp;
+  for (auto [b, e] : ranges) {
+    const std::span<uint32_t> idx(m.indices.data() + 3 * b, 3 * (e - b));
+    used.clear();
+    for (uint32_t v : idx)
+      if (local[v] == kNone) {
+        local[v] = 0;
+        used.push_back(v);
+      }
+    std::sort(used.begin(), used.end());
+    for (size_t k = 0; k < used.size(); ++k) local[used[k]] = uint32_t(k);
+    tmp.resize(idx.size());
+    for (size_t i = 0; i < idx.size(); ++i) tmp[i] = local[idx[i]];
+    meshopt_optimizeVertexCache(tmp.data(), tmp.data(), tmp.size(), used.size());
+    for (size_t i = 0; i < idx.size(); ++i) idx[i] = used[tmp[i]];
+    for (uint32_t v : used) local[v] = kNone;
+  }
 }
 
 }  // namespace
@@ -361,9 +441,14 @@ void split_mesh_clusters(Scene& scene, uint32_t max_triangles) {
     // Each cluster's triangles in vertex cache order (meshoptimizer): llvmpipe shades a vertex
     // again whenever its index misses a small direct-mapped cache of recent indices, and the
     // order above (or a file's own) may reuse vertices far apart.
-    for (auto [b, e] : ranges)
-      meshopt_optimizeVertexCache(m.indices.data() + 3 * b, m.indices.data() + 3 * b, 3 * (e - b),
-                                  m.positions.size());
+    // A big mesh's clusters one at a time with their own vertex numbers (the call's cost grows
+    // with the vertex count it is given, once per cluster).
+    if (m.positions.size() > kLocalVertexCacheAbove)
+      optimize_clusters_for_vertex_cache(m, ranges);
+    else
+      for (auto [b, e] : ranges)
+        meshopt_optimizeVertexCache(m.indices.data() + 3 * b, m.indices.data() + 3 * b, 3 * (e - b),
+                                    m.positions.size());
     // Then the vertices renumbered in the order the triangles first use them (meshoptimizer's
     // vertex fetch order): a cache keyed by the index finds neighbouring triangles' vertices at
     // neighbouring numbers instead of colliding. Same triangles, same order, same vertex values:

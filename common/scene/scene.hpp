@@ -153,6 +153,9 @@ Mesh read_mapped_mesh(const Scene& scene, uint32_t m);
 
 // Smooth per-vertex normals from area-weighted face normals (for meshes without NORMAL).
 void compute_normals(Mesh& mesh);
+// Zero-length normals (a file's normals may have them) would shade as NaN: replaces them by the
+// computed smooth normal of their vertex.
+void repair_normals(Mesh& mesh);
 
 // Removes the triangles whose three positions are collinear (repeated indices, coincident or
 // collinear vertices: an exactly zero cross product), or collinear at the precision of their float

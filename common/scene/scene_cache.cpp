@@ -11,15 +11,16 @@
 #include "common/cache_files.hpp"
 #include "common/mapped_file.hpp"
 #include "common/scene/gltf_reader.hpp"
+#include "common/scene/model_reader.hpp"
 #include "common/scene/plant.hpp"
 
 namespace occ {
 
 namespace {
 
-constexpr uint32_t kSceneCacheVersion = 6;  // 2: welded vertices, vertex cache order; 3: fetch order;
+constexpr uint32_t kSceneCacheVersion = 7;  // 2: welded vertices, vertex cache order; 3: fetch order;
                                             // 4: the structure ahead of the arrays; 5: repeated triangles;
-                                            // 6: flat meshes
+                                            // 6: flat meshes; 7: big meshes' clusters ordered one by one
 constexpr char kMagic[8] = {'O', 'C', 'C', 'S', 'C', 'N', '\r', '\n'};
 constexpr size_t kHead = CacheHeader::kSize;
 
@@ -425,7 +426,8 @@ struct SceneCacheIo {
 };
 
 bool scene_cache_applies(const std::string& spec) {
-  return spec.rfind("plant:", 0) == 0 || (is_gltf_path(spec) && spec.rfind("layout:", 0) != 0);
+  if (spec.rfind("layout:", 0) == 0) return false;
+  return spec.rfind("plant:", 0) == 0 || is_gltf_path(spec) || is_model_path(spec);
 }
 
 uint64_t scene_array_bytes(const Scene& s) {
@@ -441,13 +443,16 @@ std::string scene_cache_path(const std::string& cache_dir, const std::string& sp
   return p.substr(0, p.size() - 4) + ".scene";
 }
 
-uint64_t scene_cache_key(const std::string& spec, const BuildParams& params) {
+uint64_t scene_cache_key(const std::string& spec, const BuildParams& params, UpAxis up) {
   Hasher k;
   k.u32(kSceneCacheVersion);
   k.u32(plant::kGeneratorVersion);
   k.u32(kGltfReaderVersion);
+  if (up != UpAxis::Y) k.u32(0x5a5550u);  // "ZUP": Y-up keys stay those of the builds before --up
+  const bool model = !is_gltf_path(spec) && is_model_path(spec);
+  if (model) k.u32(kModelReaderVersion);
   k.str(spec);
-  if (is_gltf_path(spec)) {  // the same relative path from another folder is another file
+  if (is_gltf_path(spec) || model) {  // the same relative path from another folder is another file
     std::error_code ec;
     k.str(std::filesystem::weakly_canonical(spec, ec).string());
   }

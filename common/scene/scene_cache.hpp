@@ -13,11 +13,11 @@
 // the whole payload in memory). Read from a memory mapping, every size checked before it is
 // trusted, the parsed pages dropped as it goes (mapped_file.hpp). No GL.
 //
-// `plant:` specs and glTF files are cached: the other generated scenes are instanced and load in
-// well under a second. The key covers the spec (a file's canonical path too), the hierarchy
-// parameters, the cache format, plant::kGeneratorVersion and kGltfReaderVersion (bump them when
-// the generator's or the reader's output changes). The structure also lists the files a glTF
-// scene was read from (Scene::files: path, size, modification time): a file that changed or is
+// `plant:` specs, glTF and other model files (model_reader.hpp) are cached: the other generated
+// scenes are instanced and load in well under a second. The key covers the spec (a file's
+// canonical path too), the hierarchy parameters, --up, the cache format, plant::kGeneratorVersion,
+// kGltfReaderVersion and kModelReaderVersion (bump them when the generator's or a reader's output
+// changes). The structure also lists the files a file's scene was read from (Scene::files: path, size, modification time): a file that changed or is
 // gone makes the cache stale.
 #pragma once
 #include <optional>
@@ -25,6 +25,7 @@
 
 #include "common/scene/hierarchy.hpp"
 #include "common/scene/scene.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace occ {
 
@@ -37,7 +38,8 @@ struct CachedScene {
 bool scene_cache_applies(const std::string& spec);
 // DIR/<scene name>-<hash of spec>.scene (DIR as for lod_cache_path).
 std::string scene_cache_path(const std::string& cache_dir, const std::string& spec);
-uint64_t scene_cache_key(const std::string& spec, const BuildParams& params);
+// `up` (--up) is part of the key: the cache holds the scene turned.
+uint64_t scene_cache_key(const std::string& spec, const BuildParams& params, UpAxis up = UpAxis::Y);
 
 // Writes atomically; returns an error message or nullopt. The scene's geometry must not be
 // released.

@@ -14,6 +14,7 @@
 
 #include "common/cli.hpp"
 #include "common/error.hpp"
+#include "common/scene/model_reader.hpp"
 #include "common/scene/plant.hpp"
 #include "common/scene/structures.hpp"
 
@@ -148,15 +149,26 @@ Scene load_scene(const std::string& spec) {
     scene = plant::generate_plant(plant::PlantParams{*m, 1});
   } else if (is_gltf_path(spec)) {
     scene = load_gltf(spec);
+  } else if (is_model_path(spec)) {
+    scene = load_model(spec);
   } else {
     throw InputError("--scene '" + spec +
-                     "': unknown scene; expected path.gltf, path.glb, city[:BXxBZ[:N[:F[:D]]]] "
+                     "': unknown scene; expected path.gltf, path.glb, a model file (.ply, .obj, .stl, .fbx, .dae, .3ds, .off, "
+                     "...), city[:BXxBZ[:N[:F[:D]]]] "
                      "(blocks, buildings per block side, max floors, detail), layout:NXxNZ:path.gltf|.glb, "
                      "plant:M (M million triangles), hard:walls[:N], hard:exit[:N], hard:span, hard:degenerate, "
                      "hard:cracks[:N], bridge[:N], office[:N], pipes[:N] or offset:DX,DY,DZ:<spec>");
   }
   scene.source = spec;
   return scene;
+}
+
+void apply_up_axis(Scene& scene, UpAxis up) {
+  if (up == UpAxis::Y) return;
+  glm::dmat4 r(1.0);
+  r[1] = glm::dvec4(0, 0, -1, 0);  // y -> -z
+  r[2] = glm::dvec4(0, 1, 0, 0);   // z -> y
+  for (Object& o : scene.objects) o.transform = r * o.transform;
 }
 
 }  // namespace occ

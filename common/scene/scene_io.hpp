@@ -1,6 +1,7 @@
 // Making scenes: the --scene spec, and the table of contents of the scene sources it names. Every
 // failure throws InputError naming the file or spec and the place at fault.
 //   gltf_reader.hpp   load_gltf: glTF 2.0 files (.gltf/.glb)
+//   model_reader.hpp  load_model: PLY, OBJ, STL, FBX, COLLADA and the other files Assimp reads
 //   city.hpp          generate_city: the procedural city
 //   layout.hpp        layout_grid: grid layouts of copies of an asset
 //   plant.hpp         plant::generate_plant: the procedural industrial plant
@@ -18,6 +19,7 @@ namespace occ {
 
 // --scene spec:
 //   path.gltf | path.glb                 a glTF file
+//   path.ply | .obj | .stl | .fbx | .dae | .3ds | .off | ...   a model file (model_reader.hpp)
 //   city[:BXxBZ[:N[:F[:D]]]]             generate_city (blocks, buildings/side, max floors, detail)
 //   layout:NXxNZ:path                    layout_grid of a glTF asset
 //   plant:M                              plant::generate_plant (plant.hpp): an industrial hall of
@@ -37,5 +39,12 @@ namespace occ {
 //                    0 .. 24 mm and T-junctions, mm cubes behind the seams, a sub-pixel field
 // Throws InputError for unknown specs and bad numbers.
 Scene load_scene(const std::string& spec);
+
+// The axis a scene's data points up (--up): Y as glTF and our scenes, or Z as CAD tools and many
+// scans export.
+enum class UpAxis : uint8_t { Y, Z };
+// Turns a Z-up scene Y-up: every object's transform rotated -90 degrees about X ((x, y, z) ->
+// (x, z, -y)); nothing for Y.
+void apply_up_axis(Scene& scene, UpAxis up);
 
 }  // namespace occ

@@ -26,12 +26,15 @@ namespace occ {
 void add_scene_options(Cli& cli, SceneOptions& o) {
   cli.group(CliGroup::scene);
   cli.option("scene", &o.spec, "SPEC",
-             "scene: file.gltf|file.glb, city[:BXxBZ[:N[:F[:D]]]] (generated), plant:M (M million triangles, "
+             "scene: file.gltf|file.glb, a model file (.ply .obj .stl .fbx .dae .3ds .off ...), city[:BXxBZ[:N[:F[:D]]]] (generated), plant:M (M million triangles, "
              "unique meshes), layout:NXxNZ:file, bridge[:N], office[:N], pipes[:N] (structures: N spans, bays, "
              "modules), hard:KIND[:N] (hard cases)");
+  cli.choice<UpAxis>("up", &o.up, {{"y", UpAxis::Y}, {"z", UpAxis::Z}},
+                     "the axis the scene's data points up: y (glTF), z (CAD tools, scans): turned to y");
   cli.option("lod-cache", &o.lod_cache, "DIR",
-             "LOD/HLOD and scene cache folder: plant:M and glTF scenes and their hierarchy are kept there in binary (a "
-             "glTF's rebuilt when any of its files changed) (default $XDG_CACHE_HOME/occswitch or ~/.cache/occswitch)");
+             "LOD/HLOD and scene cache folder: plant:M, glTF and model file scenes and their hierarchy are kept "
+             "there in binary (a file's rebuilt when any of its files changed) (default $XDG_CACHE_HOME/occswitch "
+             "or ~/.cache/occswitch)");
   cli.option("geometry-budget", &o.geometry_budget, "MB|auto|all",
              "GPU memory for geometry: scenes with a scene cache stream their meshes and LODs from it within MB "
              "(plant:M always, a glTF where larger), the least recently drawn evicted; other scenes stream from "
@@ -100,12 +103,13 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
   char buf[768];
   const bool use_cache = scene_cache_applies(opts.spec);
   // Read lazily (the arrays left in the cache, streamed within the budget): a plant always under
-  // a budget (its start reads the structure only), a glTF scene where its arrays exceed it (else
-  // it is read whole, as fast, and the switch nodes can look for sealed objects in it).
+  // a budget (its start reads the structure only), a glTF or model file's scene where its arrays
+  // exceed it (else it is read whole, as fast, and the switch nodes can look for sealed objects in it).
   const uint64_t budget = geometry_budget_bytes(opts);
-  const uint64_t lazy_above = budget == 0 ? UINT64_MAX : is_gltf_path(opts.spec) ? budget : 0;
+  const bool file = use_cache && opts.spec.rfind("plant:", 0) != 0;
+  const uint64_t lazy_above = budget == 0 ? UINT64_MAX : file ? budget : 0;
   const std::string cache_path = use_cache ? scene_cache_path(opts.lod_cache, opts.spec) : "";
-  const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build) : 0;
+  const uint64_t cache_key = use_cache ? scene_cache_key(opts.spec, opts.build, opts.up) : 0;
   std::optional<CachedScene> cached;
   std::optional<CacheBuildLock> building;  // held from a failed read to the written cache
   if (use_cache) {
@@ -127,6 +131,7 @@ LoadedScene load_and_build(const SceneOptions& opts, const std::string& who, boo
     t1 = t2 = std::chrono::steady_clock::now();
   } else {
     ls.scene = load_scene(opts.spec);
+    apply_up_axis(ls.scene, opts.up);
     t1 = std::chrono::steady_clock::now();
     ls.hierarchy = Hierarchy::build(ls.scene, opts.build);
     t2 = std::chrono::steady_clock::now();

@@ -8,6 +8,7 @@
 #include "common/scene/hierarchy.hpp"
 #include "common/lod/lod.hpp"
 #include "common/scene/scene.hpp"
+#include "common/scene/scene_io.hpp"
 
 namespace occ {
 
@@ -16,6 +17,7 @@ struct SceneOptions {
   BuildParams build;
   LodParams lod;
   std::string lod_cache;  // --lod-cache DIR ("" = the default cache folder, see lod_cache.hpp)
+  UpAxis up = UpAxis::Y;    // --up y|z: the axis the scene's data points up (apply_up_axis)
   std::string geometry_budget = "auto";  // --geometry-budget MB|auto|all (geometry_budget_bytes)
 };
 
@@ -36,7 +38,7 @@ struct LoadedScene {
 };
 
 // With a budget (geometry_budget_bytes > 0) a scene that has a scene cache is read lazily (a
-// plant:M always, a glTF scene where its arrays are larger than the budget): its
+// plant:M always, a glTF or model file's scene where its arrays are larger than the budget): its
 // meshes' and LODs' arrays stay in the mapped caches (Scene::mapped, LodData::mapped) and are
 // streamed to the GPU as frames need them; a cache built now is written first, then read so.
 // Loads/generates the scene and builds the hierarchy, or reads both from the scene cache

@@ -10,7 +10,7 @@
 //     the reference renderer renders for the camera the page reports;
 //   - the view-only page gets the frames but its drag moves nothing;
 //   - the stop button ends the cluster, every process with status 0;
-//   - the reference renderer serves the page over https/wss with --web-tls self-signed.
+//   - the reference renderer serves the page over https/wss with --web 0,tls=self-signed.
 // Usage: node browser_test.js SOURCE_DIR BIN_DIR. Exit 0 pass, 1 fail, 77 skipped (no chromium).
 "use strict";
 const fs = require("fs");
@@ -195,13 +195,13 @@ async function main() {
   await overTls();
 }
 
-// The reference renderer with --web-tls self-signed: the page and its frames over https/wss.
+// The reference renderer with --web 0,tls=self-signed: the page and its frames over https/wss.
 async function overTls() {
   cluster = null;
   clusterExit = null;  // until() watches the cluster: it has ended
   let err = "";
-  const ref = spawn(path.join(bin, "render_client"), ["--scene", SCENE, ...VIEW, "--web", "0",
-                    "--web-tls", "self-signed"], { stdio: ["ignore", "ignore", "pipe"] });
+  const ref = spawn(path.join(bin, "render_client"), ["--scene", SCENE, ...VIEW, "--web",
+                    "0,tls=self-signed"], { stdio: ["ignore", "ignore", "pipe"] });
   ref.stderr.on("data", d => { err += d; });
   let status = null;
   ref.on("exit", c => { status = c; });

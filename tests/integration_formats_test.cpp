@@ -1,0 +1,90 @@
+// Model files other than glTF end to end: the shared glTF scenes written out as OBJ and PLY
+// (model_files.hpp) render the glTF's frames in the reference renderer (sponza_lod4 is left out:
+// it has no material, and glTF's default material is single-sided where a model file without
+// materials is drawn double-sided), and the three real
+// processes at tau 0 render the reference's frames on a model of each reader (PLY, OBJ, STL
+// through Assimp).
+#include <gtest/gtest.h>
+
+#include "cluster_run.hpp"
+#include "common/scene/scene_io.hpp"
+#include "model_files.hpp"
+
+using namespace occtest;
+
+namespace {
+
+const std::vector<std::string> kView = {"--width", "192", "--height", "144"};
+
+// frame_diff with `flags`; its summary line and the frames that differ in *summary.
+int diff(const fs::path& a, const fs::path& b, const std::vector<std::string>& flags, std::string* summary) {
+  const Outcome d = frame_diff(a, b, flags);
+  *summary = diff_summary(d.log) + differing_frames(d.log);
+  return d.code;
+}
+
+// A shared glTF scene and whether its PLY can draw it as the glTF does (PLY has no materials:
+// opaque vertex colours, double-sided; the duplex has BLEND glass and single-sided walls).
+struct SharedCase {
+  const char* gltf;
+  bool ply;
+};
+
+class SharedSceneAsModel : public ::testing::TestWithParam<SharedCase> {};
+
+// The glTF, its OBJ and its PLY (vertex colours: its base colours) along the glTF's walk (saved:
+// a walk follows the scene's bounds, and those of a rotated object's box are looser than its
+// baked vertices'): the frames equal, bar the cluster tests' tolerance of a pixel in ten thousand
+// (the baked vertices are rounded to float once more: 1 pixel in 20 frames of the engine), with
+// PLY's colours within one level (the base colours as bytes).
+TEST_P(SharedSceneAsModel, ObjAndPlyRenderTheGltfFrames) {
+  if (!have_shared()) GTEST_SKIP() << "../shared/scenes not found";
+  const std::string gltf = std::string(OCC_SHARED_DIR) + "/scenes/" + GetParam().gltf;
+  const fs::path dir = fresh_dir(fs::path(gltf).stem().string() + "_as_models");
+  const occ::Scene s = occ::load_scene(gltf);
+  const std::string obj = (dir / "scene.obj").string(), ply = (dir / "scene.ply").string();
+  write_obj(s, obj);
+  write_ply(s, ply, true, true);
+  const std::vector<std::string> flags = {"--width", "192", "--height", "144", "--lod-cache", (dir / "cache").string()};
+  const std::string walk = (dir / "gltf" / "path.csv").string();  // the cameras the glTF run showed
+  const Outcome g = run_reference(dir / "gltf", gltf, "walk:20", flags);
+  ASSERT_EQ(g.code, 0) << g.log;
+  for (const auto& [name, scene] : {std::pair{"obj", obj}, {"ply", ply}}) {
+    if (name == std::string("ply") && !GetParam().ply) continue;
+    const Outcome r = run_reference(dir / name, scene, walk, flags);
+    ASSERT_EQ(r.code, 0) << r.log;
+  }
+  std::string summary;
+  EXPECT_EQ(diff(dir / "gltf", dir / "obj", {"--max-fraction", "0.0001"}, &summary), 0) << "OBJ: " << summary;
+  EXPECT_NE(summary.find("frames=20"), std::string::npos) << summary;
+  if (!GetParam().ply) return;
+  EXPECT_EQ(diff(dir / "gltf", dir / "ply", {"--threshold", "1", "--max-fraction", "0.0001"}, &summary), 0)
+      << "PLY: " << summary;
+  EXPECT_NE(summary.find("frames=20"), std::string::npos) << summary;
+}
+
+INSTANTIATE_TEST_SUITE_P(Shared, SharedSceneAsModel,
+                         ::testing::Values(SharedCase{"2CylinderEngine/2CylinderEngine.gltf", true},
+                                           SharedCase{"duplex/Duplex_A_20110505.gltf", false}),
+                         [](const auto& info) { return fs::path(info.param.gltf).stem().string().substr(0, 8); });
+
+class ModelCluster : public ::testing::TestWithParam<const char*> {};
+
+// plant:0.3 written as a model file: the cluster at tau 0 renders the reference's frames.
+TEST_P(ModelCluster, WalkEqualsReference) {
+  const std::string ext = GetParam();
+  const fs::path dir = fresh_dir("model_cluster_" + ext);
+  const std::string file = (dir / ("plant." + ext)).string();
+  const occ::Scene s = occ::load_scene("plant:0.3");
+  if (ext == "ply") write_ply(s, file, true, true);
+  else if (ext == "obj") write_obj(s, file);
+  else write_stl(s, file);
+  ClusterOptions o(file, "walk:30", kView);
+  o.all = {"--lod-cache", (dir / "cache").string()};
+  expect_cluster_equals_reference(dir, o, kView, 30);
+}
+
+INSTANTIATE_TEST_SUITE_P(Readers, ModelCluster, ::testing::Values("ply", "obj", "stl"),
+                         [](const auto& info) { return std::string(info.param); });
+
+}  // namespace
