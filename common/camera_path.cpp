@@ -94,8 +94,9 @@ std::vector<Camera> from_csv(const std::string& file, const Aabb& b, const Viewp
     for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
     const size_t max_columns = 13 + 4 * Sections::kMax;
     if (f.size() != 11 && (f.size() < 13 || f.size() > max_columns || (f.size() - 13) % 4 != 0))
-      throw InputError(file + ": line " + std::to_string(line) + ": expected 11 or 13 columns, or 13 and 4 a section plane "
-                       "(at most " + std::to_string(Sections::kMax) + "), got " + std::to_string(f.size()));
+      throw InputError(file + ": line " + std::to_string(line) + ": expected 11 or 13 columns, got " +
+                       std::to_string(f.size()) + " (or 13 and 4 a section plane, at most " +
+                       std::to_string(Sections::kMax) + ")");
     double v[13 + 4 * Sections::kMax];
     static const char* kPlane[] = {"section_a", "section_b", "section_c", "section_d"};
     for (size_t i = 0; i < f.size(); ++i) v[i] = parse_field(file, line, i < 13 ? kColumns[i] : kPlane[(i - 13) % 4], f[i]);

@@ -70,6 +70,55 @@ TEST(CameraPath, CsvRoundTripsThroughSave) {
   }
 }
 
+// Section planes ride in the path's rows (four columns each after near and far): saved and read
+// back exactly, normalised; a row with a partial plane or a seventh one is one named error.
+TEST(CameraPath, SectionPlanesRoundTripAndBadOnesAreNamed) {
+  auto path = load_camera_path("orbit:3", kBounds, kVp);
+  path[1].sections.add({0, 0, 2, -1}, "test");
+  path[1].sections.add({1, 0, 0, 5}, "test");
+  const std::string f = write_tmp("cut.csv", "");
+  save_camera_path(f, path);
+  const auto again = load_camera_path(f, kBounds, kVp);
+  ASSERT_EQ(again.size(), 3u);
+  EXPECT_EQ(again[0].sections.count, 0);
+  ASSERT_EQ(again[1].sections.count, 2);
+  EXPECT_EQ(again[1].sections.planes[0].n, glm::dvec3(0, 0, 1));
+  EXPECT_DOUBLE_EQ(again[1].sections.planes[0].d, -0.5);
+  EXPECT_TRUE(again[1].sections == path[1].sections);
+  std::string row = "0,0,1,5,0,0,0,0,1,0,60,0.1,100";
+  EXPECT_NE(error_of(write_tmp("part.csv", row + ",1,0,0\n")).find("4 a section plane"), std::string::npos);
+  EXPECT_NE(error_of(write_tmp("zero.csv", row + ",0,0,0,1\n")).find("non-zero finite normal"), std::string::npos);
+  for (int k = 0; k < 7; ++k) row += ",0,1,0," + std::to_string(k);
+  EXPECT_NE(error_of(write_tmp("seven.csv", row + "\n")).find("expected 11 or 13 columns"), std::string::npos);
+}
+
+// Sections::parse and the box tests culling uses: a box is removed only beyond the margin, kept
+// whole only beyond it; Frustum::classify with the planes as cuts agrees.
+TEST(Sections, ParseAndTheBoxTestsAreConservative) {
+  EXPECT_EQ(Sections::parse("1,2,3,-4.5", "--x"), glm::dvec4(1, 2, 3, -4.5));
+  for (const char* bad : {"1,2,3", "1,2,3,4,5", "a,0,0,1", "1,,0,1", "", "1,0,0,inf"})
+    EXPECT_THROW(Sections::parse(bad, "--x"), InputError) << bad;
+  Sections s;
+  s.add({0, 1, 0, -2}, "t");  // keeps y >= 2
+  const glm::dvec3 eye(0, 10, 0);
+  Aabb below{{0, 0, 0}, {1, 1, 1}}, across{{0, 1, 0}, {1, 3, 1}}, above{{0, 3, 0}, {1, 4, 1}};
+  Aabb touching{{0, 1, 0}, {1, 2, 1}};  // its top face on the plane: not surely removed
+  EXPECT_TRUE(s.removes(below, eye));
+  EXPECT_FALSE(s.removes(across, eye));
+  EXPECT_FALSE(s.removes(touching, eye));
+  EXPECT_TRUE(s.keeps_all(above, eye));
+  EXPECT_FALSE(s.keeps_all(across, eye));
+  Camera cam = Camera::look_at(eye, {0, 0, 0}, {0, 0, -1}, 60, 1, 0.1, 100);
+  cam.sections = s;
+  const Frustum fr = cam.frustum();
+  EXPECT_EQ(fr.classify(below), Containment::Outside);
+  EXPECT_NE(fr.classify(across), Containment::Outside);
+  EXPECT_NE(fr.classify(across), Containment::Inside);
+  Sections six;
+  for (int k = 0; k < Sections::kMax; ++k) six.add({1, 0, 0, double(k)}, "t");
+  EXPECT_THROW(six.add({1, 0, 0, 0}, "t"), InputError);
+}
+
 TEST(CameraPath, BadSpecsAndRowsNameTheProblem) {
   EXPECT_NE(error_of("walk:0").find("frame count"), std::string::npos);
   EXPECT_NE(error_of("orbit:x").find("frame count"), std::string::npos);

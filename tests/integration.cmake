@@ -29,3 +29,6 @@ add_dependencies(hosts_test switch_node render_client frame_diff)
 # model files (PLY, OBJ, STL): the shared glTF scenes written out render the glTF's frames; cluster == reference
 occ_test(formats_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_formats_test.cpp)
 add_dependencies(formats_cluster_test switch_node render_client frame_diff)
+# Section planes: every method against brute force with the same planes.
+occ_test(sections_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_sections_test.cpp)
+add_dependencies(sections_test switch_node render_client frame_diff)

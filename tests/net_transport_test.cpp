@@ -344,10 +344,10 @@ TEST_F(Handshake, WrongProtocolVersionIsRefusedNamingBothVersions) {
   peer.join();
   ASSERT_FALSE(result);
   EXPECT_TRUE(contains(result.error(),
-                       "hello: unsupported protocol version 1 (this build speaks 8)"))
+                       "hello: unsupported protocol version 1 (this build speaks 9)"))
       << result.error();
   EXPECT_EQ(bye_reason(peer_saw),
-            "protocol error: hello: unsupported protocol version 1 (this build speaks 8)");
+            "protocol error: hello: unsupported protocol version 1 (this build speaks 9)");
   EXPECT_EQ(log.snapshot().size(), 1u);
 }
 

@@ -41,6 +41,10 @@ std::vector<Message> sample_messages() {
   cam.far_dist = 1e5;
   cam.viewport_width_px = 1920;
   cam.viewport_height_px = 1080;
+  cam.section_count = 2;  // a cut: x >= 3 and -y >= -1e6
+  const double planes[2][4] = {{1, 0, 0, -3}, {0, -1, 0, 1e6}};
+  for (int i = 0; i < 2; ++i)
+    for (int k = 0; k < 4; ++k) cam.sections[i][k] = planes[i][k];
 
   NodeDiff diff{7, {1, 2, 3, 0xffffffffu, 100000}, {4, 5}};
   NodeDiff only_removed{8, {}, {9, 10, 11}};

@@ -56,11 +56,26 @@ TEST(Wire, EncodedSizesMatchTheDocumentedLayout) {
   named.occlusion_backend = "cpu";
   EXPECT_EQ(encode(named).size(), 6u + 81u + 3u + 3u);
   EXPECT_EQ(encode(Proof{}).size(), 6u + 32u);
-  EXPECT_EQ(encode(Camera{}).size(), 6u + 101u);
+  EXPECT_EQ(encode(Camera{}).size(), 6u + 102u);
   Camera frustum_only;
   frustum_only.occlusion = 0;
-  EXPECT_EQ(encode(frustum_only)[6 + 100], 0);  // occlusion, the last byte
+  EXPECT_EQ(encode(frustum_only)[6 + 100], 0);  // occlusion
   EXPECT_EQ(encode(Camera{})[6 + 100], 1);
+  EXPECT_EQ(encode(Camera{})[6 + 101], 0);  // no section planes
+  Camera cut;
+  cut.section_count = 1;
+  cut.sections[0][1] = 1;  // keeps y >= 0
+  EXPECT_EQ(encode(cut).size(), 6u + 102u + 32u);
+  EXPECT_EQ(encode(cut)[6 + 101], 1);
+  EXPECT_EQ(decode(encode(cut)).value(), Message{cut});
+  cut.section_count = 7;
+  std::vector<uint8_t> seven = encode(Camera{});
+  seven[6 + 101] = 7;
+  EXPECT_FALSE(decode(seven));
+  Camera bent;
+  bent.section_count = 1;
+  bent.sections[0][0] = 2;  // not a unit normal
+  EXPECT_FALSE(decode(encode(bent)));
   EXPECT_EQ(encode(NodeDiff{1, {1, 2, 3}, {4}}).size(), 6u + 12u + 16u);
   EXPECT_EQ(encode(EndOfFrame{}).size(), 6u + 68u);
   EXPECT_EQ(encode(Bye{"bye"}).size(), 6u + 2u + 3u);
@@ -111,7 +126,7 @@ TEST(Wire, FieldsAreLittleEndianAtTheirDocumentedOffsets) {
   cam.frame = 0x01020304;
   cam.eye[0] = 1.0;  // 0x3ff0000000000000
   const auto c = encode(cam);
-  EXPECT_EQ(field(c, 2, 4), 101u);  // payload length
+  EXPECT_EQ(field(c, 2, 4), 102u);  // payload length
   EXPECT_EQ(field(c, 6, 4), 0x01020304u);
   EXPECT_EQ(field(c, 6 + 4, 8), 0x3ff0000000000000ULL);
 
@@ -184,7 +199,7 @@ TEST(Wire, CorruptedHeaderFieldsAreRejected) {
   }
   auto wrong_size = bytes;
   put_u32(wrong_size, 2, 99);
-  EXPECT_EQ(decode_error(wrong_size), "camera: payload of 99 bytes, expected 101");
+  EXPECT_EQ(decode_error(wrong_size), "camera: payload of 99 bytes, expected 102..294");
   auto huge = encode(NodeDiff{});
   put_u32(huge, 2, 0xffffffffu);
   EXPECT_EQ(decode_error(huge), "node_diff payload too large: 4294967295 bytes (maximum 1048576)");
@@ -208,22 +223,22 @@ TEST(Wire, BadMagicAndVersionAreRejectedNamingBothValues) {
   auto bad_version = bytes;
   put_u16(bad_version, 10, 1);  // the version before EndOfFrame carried CPU times
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 1 (this build speaks 8)");
+            "hello: unsupported protocol version 1 (this build speaks 9)");
   put_u16(bad_version, 10, 3);  // the cluster key without Resync
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 3 (this build speaks 8)");
+            "hello: unsupported protocol version 3 (this build speaks 9)");
   put_u16(bad_version, 10, 4);  // cameras without the occlusion byte
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 4 (this build speaks 8)");
+            "hello: unsupported protocol version 4 (this build speaks 9)");
   put_u16(bad_version, 10, 5);  // cameras whose occlusion byte is 0 or 1 only
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 5 (this build speaks 8)");
+            "hello: unsupported protocol version 5 (this build speaks 9)");
   put_u16(bad_version, 10, 6);  // cameras whose occlusion byte may be 2 (selected occluders, retired)
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 6 (this build speaks 8)");
+            "hello: unsupported protocol version 6 (this build speaks 9)");
   put_u16(bad_version, 10, 7);  // hellos without the occlusion back end
   EXPECT_EQ(decode_error(bad_version),
-            "hello: unsupported protocol version 7 (this build speaks 8)");
+            "hello: unsupported protocol version 7 (this build speaks 9)");
 }
 
 TEST(Wire, HelloRejectsUnknownRoleOversizedViewportAndBadNames) {
