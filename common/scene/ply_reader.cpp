@@ -78,7 +78,7 @@ Header parse_header(const std::string& file, const uint8_t* data, size_t size) {
   bool format_seen = false;
   for (;;) {
     ++line_no;
-    const void* nl = std::memchr(data + at, '\n', size - at);
+    const void* nl = at < size ? std::memchr(data + at, '\n', size - at) : nullptr;  // data: null when empty
     if (!nl) fail("the file ends inside the header (no end_header line): truncated or not PLY");
     const size_t end = size_t(static_cast<const uint8_t*>(nl) - data);
     const std::string_view line(reinterpret_cast<const char*>(data + at), end - at);
