@@ -220,6 +220,10 @@ std::string peer_name(const tcp::socket& s) {
 
 void start_web_session(tcp::socket socket, WebShared& shared, boost::asio::ssl::context* tls) {
   std::string peer = peer_name(socket);
+  // A frame's last segment must not wait for the page's delayed ACK of the one before (Nagle):
+  // that held frames back by up to tens of ms (scripts/web_bench.js, docs/web.md).
+  beast::error_code ignored;
+  socket.set_option(tcp::no_delay(true), ignored);
   if (tls) {
     using S = beast::ssl_stream<beast::tcp_stream>;
     std::make_shared<Session<S>>(S(beast::tcp_stream(std::move(socket)), *tls), shared, std::move(peer))->start();

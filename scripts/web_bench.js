@@ -15,6 +15,8 @@
 //   shown             fps / cluster fps: the share of the cluster's frames each page showed
 //   in render_client  of the latency, the part from the input's arrival at the render client to
 //                     its frame encoded (median): the rest is the way there and back and the page
+//   page ms           of the latency, the page's part: a frame's arrival to it drawn (decode and
+//                     draw, and the wait for the frame before it), median over the drag
 //   render ms         the cluster's own latency (its camera sent to the frame shown), median over
 //                     the drag's frames, one frame interval, and the link's round trip as the page
 //                     measures it ("SEQ ping" to its pong, median over the drag): the target is
@@ -109,7 +111,8 @@ async function run(browser, [w, h], n) {
   // A drag, an event every 33 ms: the latency of each.
   const lat0 = await page.evaluate(() => occ.latencies.length), render0 = await page.evaluate(() => occ.render.length),
         server0 = await page.evaluate(() => occ.server.length),
-        rtt0 = await page.evaluate(() => occ.rtts.length);
+        rtt0 = await page.evaluate(() => occ.rtts.length),
+        draw0 = await page.evaluate(() => occ.drawMs.length);
   await page.mouse.move(w / 2, h / 2);
   await page.mouse.down();
   for (let i = 0, t = Date.now(); Date.now() - t < opt.seconds * 500; ++i) {
@@ -120,10 +123,10 @@ async function run(browser, [w, h], n) {
   await page.mouse.up();
   await until("the still frame after the drag", () => page.evaluate(k => occ.stills > k, stills), 120000);
   if (opt.screenshot && !fs.existsSync(opt.screenshot)) await page.screenshot({ path: opt.screenshot });
-  const r = await page.evaluate((k, m, j, k0) => ({ latencies: occ.latencies.slice(k), encode: occ.encode,
+  const r = await page.evaluate((k, m, j, k0, d0) => ({ latencies: occ.latencies.slice(k), encode: occ.encode,
                                                   render: occ.render.slice(m), server: occ.server.slice(j),
-                                                  rtts: occ.rtts.slice(k0) }),
-                                 lat0 + 1, render0, server0 + 1, rtt0);
+                                                  rtts: occ.rtts.slice(k0), draw: occ.drawMs.slice(d0) }),
+                                 lat0 + 1, render0, server0 + 1, rtt0, draw0);
   await page.evaluate(() => document.getElementById("stop").click());
   for (const p of pages) await p.close();
   await until("the cluster to exit", () => exited !== null, 120000);
@@ -133,7 +136,7 @@ async function run(browser, [w, h], n) {
   return { size: w + "x" + h, n, jpeg: median(r.encode.jpeg), png: median(r.encode.png), fps, cluster: rendered,
            kbit: s1.reduce((a, s, i) => a + (s.bytes - s0[i].bytes), 0) * 8 / 1000 / n / secs,
            lat: median(r.latencies), lat95: p95(r.latencies), render: median(r.render), server: median(r.server),
-           rtt: median(r.rtts), status: exited };
+           rtt: median(r.rtts), draw: median(r.draw), status: exited };
 }
 
 async function main() {
@@ -147,11 +150,11 @@ async function main() {
   }
   const f = (v, d) => (isNaN(v) ? "-" : v.toFixed(d));
   console.log("| viewport | watchers | jpeg ms | png ms | fps (each page) | cluster fps | shown | kbit/s (each page) | " +
-              "latency ms median / p95 | in render_client | render ms + one frame + rtt |");
-  console.log("|---|---|---|---|---|---|---|---|---|---|---|");
+              "latency ms median / p95 | in render_client | page ms | render ms + one frame + rtt |");
+  console.log("|---|---|---|---|---|---|---|---|---|---|---|---|");
   for (const r of rows)
     console.log(`| ${r.size} | ${r.n} | ${f(r.jpeg, 1)} | ${f(r.png, 0)} | ${f(r.fps, 1)} | ${f(r.cluster, 1)} | ` +
-                `${f(r.fps / r.cluster, 2)} | ${f(r.kbit, 0)} | ${f(r.lat, 0)} / ${f(r.lat95, 0)} | ${f(r.server, 0)} | ` +
+                `${f(r.fps / r.cluster, 2)} | ${f(r.kbit, 0)} | ${f(r.lat, 0)} / ${f(r.lat95, 0)} | ${f(r.server, 0)} | ${f(r.draw, 0)} | ` +
                 `${f(r.render, 0)} + ${f(1000 / r.cluster, 0)} + ${f(r.rtt, 0)} |`);
   if (rows.some(r => r.status !== 0)) throw new Error("a cluster exited with a status other than 0: see " + opt.out);
 }
