@@ -59,6 +59,42 @@ inline bool every_mesh_has_normals(const occ::Scene& s) {
   return true;
 }
 
+// The scene as the writers write it: every object's vertices and normals baked as above, each
+// object with a mesh of its own and the identity transform, materials kept; one_mesh: every
+// object's triangles in one mesh of one object, without material (a PLY or STL without colours as
+// its reader gets it). Written as glTF (save_gltf), it is what a model file of `s` renders to the
+// pixel: the frames of `s` itself differ where its transforms round otherwise (a baked vertex or
+// normal is rounded to float once, the renderer's float model-view matrix times the mesh's float
+// vertex is not) and, for one_mesh, where coincident faces of two objects are drawn in another
+// order (one mesh draws in cluster order, objects front to back).
+inline occ::Scene baked(const occ::Scene& s, bool one_mesh) {
+  occ::Scene b;
+  b.source = s.source + " (baked)";
+  if (!one_mesh) b.materials = s.materials;
+  for (const occ::Object& o : s.objects) {
+    const occ::Mesh& m = s.meshes[o.mesh];
+    if (!one_mesh || b.meshes.empty()) {
+      b.meshes.emplace_back();
+      b.meshes.back().name = one_mesh ? "baked" : m.name;
+      b.meshes.back().material = one_mesh ? occ::kNoMaterial : m.material;
+      b.meshes.back().flat = m.flat;
+      b.objects.push_back({uint32_t(b.meshes.size() - 1), glm::dmat4(1.0), one_mesh ? "baked" : o.name});
+    }
+    occ::Mesh& out = b.meshes.back();
+    out.flat = out.flat || m.flat;
+    const ToWorld world(o);
+    const uint32_t base = uint32_t(out.positions.size());
+    for (uint32_t v = 0; v < m.positions.size(); ++v) {
+      const WorldVertex w = world(m, v);
+      out.positions.push_back(w.p);
+      out.normals.push_back(w.n);
+    }
+    for (size_t t = 0; t + 2 < m.indices.size(); t += 3)
+      for (int k = 0; k < 3; ++k) out.indices.push_back(base + world.corner(&m.indices[t], k));
+  }
+  return b;
+}
+
 class File {
  public:
   File(const std::string& path, const char* mode) : f_(std::fopen(path.c_str(), mode)), path_(path) {
@@ -141,8 +177,9 @@ inline void write_ply(const occ::Scene& s, const std::string& path, bool binary,
   f.close();
 }
 
-// path (.obj) and its MTL beside it (path with .mtl).
-inline void write_obj(const occ::Scene& s, const std::string& path) {
+// path (.obj) and its MTL beside it (path with .mtl); materials false: no `usemtl` (every object
+// reads back in its per-object colour, double-sided).
+inline void write_obj(const occ::Scene& s, const std::string& path, bool materials = true) {
   const bool normals = every_mesh_has_normals(s);
   const std::string mtl = path.substr(0, path.rfind('.')) + ".mtl";
   {
@@ -161,7 +198,7 @@ inline void write_obj(const occ::Scene& s, const std::string& path) {
     const occ::Mesh& m = s.meshes[o.mesh];
     std::fprintf(f.get(), "o object%zu\n", oi);
     const occ::Material* mat = s.material_of(o.mesh);
-    if (mat && !mat->object_color) std::fprintf(f.get(), "usemtl m%u\n", m.material);
+    if (materials && mat && !mat->object_color) std::fprintf(f.get(), "usemtl m%u\n", m.material);
     const ToWorld world(o);
     for (uint32_t v = 0; v < m.positions.size(); ++v) {
       const WorldVertex w = world(m, v);
