@@ -26,7 +26,8 @@ struct Kind {
 constexpr Kind kKinds[] = {{"kd", WebInput::Kind::key_down, 1},    {"ku", WebInput::Kind::key_up, 1},
                            {"bd", WebInput::Kind::button_down, 3}, {"bu", WebInput::Kind::button_up, 3},
                            {"mv", WebInput::Kind::motion, 2},      {"wh", WebInput::Kind::wheel, 1},
-                           {"blur", WebInput::Kind::blur, 0},      {"quit", WebInput::Kind::quit, 0}};
+                           {"blur", WebInput::Kind::blur, 0},      {"quit", WebInput::Kind::quit, 0},
+                           {"ping", WebInput::Kind::ping, 0}};
 
 // Words separated by single spaces; empty words (leading, trailing or double spaces) fail.
 bool split(std::string_view s, std::vector<std::string_view>& out) {
@@ -78,7 +79,7 @@ std::variant<WebInput, std::string> parse_web_input(std::string_view msg) {
   } else if (in.kind == K::wheel) {
     if (!integer(w[2], -100, 100, &v) || v == 0) return bad("wheel notches", w[2]);
     in.notches = int(v);
-  } else if (in.kind != K::blur && in.kind != K::quit) {
+  } else if (kind->args > 0) {
     const size_t xy = in.kind == K::motion ? 2 : 3;
     if (xy == 3) {
       if (!integer(w[2], 1, 3, &v)) return bad("button", w[2]);
@@ -94,8 +95,9 @@ std::variant<WebInput, std::string> parse_web_input(std::string_view msg) {
 
 std::string format_web_input(const WebInput& in) {
   std::string s = std::to_string(in.seq) + " ";
+  size_t args = 0;
   for (const Kind& k : kKinds)
-    if (k.kind == in.kind) s += k.name;
+    if (k.kind == in.kind) s += k.name, args = k.args;
   using K = WebInput::Kind;
   auto num = [&](int v) { s += " " + std::to_string(v); };
   if (in.kind == K::key_down || in.kind == K::key_up) {
@@ -103,7 +105,7 @@ std::string format_web_input(const WebInput& in) {
       if (k.key == in.key) s += std::string(" ") + k.name;
   } else if (in.kind == K::wheel) {
     num(in.notches);
-  } else if (in.kind != K::blur && in.kind != K::quit) {
+  } else if (args > 0) {
     if (in.kind != K::motion) num(in.button);
     num(in.x);
     num(in.y);

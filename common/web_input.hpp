@@ -8,6 +8,8 @@
 //   SEQ wh N                       wheel or pinch: N notches, + faster, - slower (N != 0)
 //   SEQ blur                       the page lost focus: every key released
 //   SEQ quit                       stop render_client (as the window's close button)
+//   SEQ ping                       the page measures its round trip: the server answers with the
+//                                  text message {"pong":SEQ} (not an event of the viewer)
 // SEQ: the page's event number, 1 .. 2^31 - 1, for the latency it measures (event to the frame
 // whose camera includes it). X, Y: -100000 .. 100000, N: -100 .. 100. At most kMaxInputBytes.
 #pragma once
@@ -24,7 +26,7 @@ inline constexpr size_t kMaxInputBytes = 64;
 enum class WebKey { none, w, a, s, d, q, e, f, r, p, o, up, down, left, right, shift };
 
 struct WebInput {
-  enum class Kind { key_down, key_up, button_down, button_up, motion, wheel, blur, quit };
+  enum class Kind { key_down, key_up, button_down, button_up, motion, wheel, blur, quit, ping };
   uint32_t seq = 0;
   Kind kind = Kind::blur;
   WebKey key = WebKey::none;   // key_down, key_up: never none

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <stdexcept>
 
@@ -62,8 +63,9 @@ class WebDisplay : public FrameDisplay {
       std::cerr << "render_client: web: frame " << f.index << " not sent: " << e.what() << "\n";
       return;
     }
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    const std::string header = web_frame_header(f, enc.format(), img.width, img.height, ms);
+    const auto t1 = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+    const std::string header = web_frame_header(f, enc.format(), img.width, img.height, ms, input_ms(f.input_seq, t1));
     auto message = std::make_shared<std::string>();
     const uint32_t n = uint32_t(header.size());
     for (int i = 0; i < 4; ++i) message->push_back(char((n >> (8 * i)) & 0xff));
@@ -84,10 +86,21 @@ class WebDisplay : public FrameDisplay {
   }
 
  private:
+  // The time from the arrival of input `seq` to `now` (its first frame, encoded); -1 when the
+  // frame brings no new input. Arrivals up to `seq` are forgotten.
+  double input_ms(uint32_t seq, std::chrono::steady_clock::time_point now) {
+    std::lock_guard<std::mutex> lock(mu_);
+    const auto it = arrived_.find(seq);
+    const double ms = it == arrived_.end() ? -1.0 : std::chrono::duration<double, std::milli>(now - it->second).count();
+    arrived_.erase(arrived_.begin(), arrived_.upper_bound(seq));
+    return ms;
+  }
+
   // Server thread: one input, as window events (a wheel of N notches: N button events).
   void push(const WebInput& in) {
     {
       std::lock_guard<std::mutex> lock(mu_);
+      if (in.seq > 0 && arrived_.size() < kMaxArrivals) arrived_.emplace(in.seq, std::chrono::steady_clock::now());
       const WindowEvent ev = to_window_event(in);
       const int repeat = in.kind == WebInput::Kind::wheel ? std::abs(in.notches) : 1;
       for (int i = 0; i < repeat; ++i) events_.push_back(ev);
@@ -100,6 +113,8 @@ class WebDisplay : public FrameDisplay {
   int wake_[2] = {-1, -1};
   std::mutex mu_;
   std::vector<WindowEvent> events_;  // from the server thread, taken by poll()
+  static constexpr size_t kMaxArrivals = 4096;  // inputs not yet in a frame sent (the oldest kept)
+  std::map<uint32_t, std::chrono::steady_clock::time_point> arrived_;  // input seq -> its arrival
   std::string last_camera_;
   bool last_was_png_ = false;
   std::unique_ptr<WebServer> server_;  // last: stopped first
@@ -142,20 +157,22 @@ WindowEvent to_window_event(const WebInput& in) {
     case K::wheel: ev = {T::button_down, WinKey::other, in.notches > 0 ? 4 : 5}; break;
     case K::blur: break;
     case K::quit: ev = {T::close}; break;
+    case K::ping: break;  // the session answers it; never handed to the viewer
   }
   ev.seq = in.seq;
   return ev;
 }
 
-std::string web_frame_header(const ShownFrame& f, const char* format, int width, int height, double encode_ms) {
+std::string web_frame_header(const ShownFrame& f, const char* format, int width, int height, double encode_ms,
+                             double input_ms) {
   const HudStats& h = f.stats;
   const double culled = h.leaves ? 100.0 * (1.0 - double(h.visible) / double(h.leaves)) : 0.0;
   char nums[512];
   std::snprintf(nums, sizeof nums,
                 "\"frame\":%u,\"seq\":%u,\"width\":%d,\"height\":%d,\"fps\":%.2f,\"frame_ms\":%.2f,\"latency_ms\":%.2f,"
-                "\"visible\":%zu,\"leaves\":%zu,\"culled_pct\":%.2f,\"triangles\":%llu,\"tau\":%g,\"encode_ms\":%.3f",
+                "\"visible\":%zu,\"leaves\":%zu,\"culled_pct\":%.2f,\"triangles\":%llu,\"tau\":%g,\"encode_ms\":%.3f,\"input_ms\":%.2f",
                 f.index, f.input_seq, width, height, f.fps, f.frame_ms, h.latency_ms, h.visible, h.leaves, culled,
-                static_cast<unsigned long long>(h.triangles), h.tau, encode_ms);
+                static_cast<unsigned long long>(h.triangles), h.tau, encode_ms, input_ms);
   return std::string("{\"format\":") + json_string(format) + "," + nums + ",\"mode\":" + json_string(h.mode) +
          ",\"camera\":" + json_string(camera_csv_fields(f.camera)) + ",\"hud\":" + json_string(f.hud) + "}";
 }

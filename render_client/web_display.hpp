@@ -23,7 +23,10 @@ std::unique_ptr<FrameDisplay> make_web_display(const ClientOptions& o);
 // button 4 or 5, repeated N times by the caller; blur: focus_out; quit: close), with its seq.
 WindowEvent to_window_event(const WebInput& in);
 
-// The JSON header of a frame message (web_display.hpp) for `f`, image `format`, encode time.
-std::string web_frame_header(const ShownFrame& f, const char* format, int width, int height, double encode_ms);
+// The JSON header of a frame message (web_display.hpp) for `f`, image `format`, encode time, and
+// input_ms: the render client's share of the latency, from the arrival of input f.input_seq to
+// this frame encoded (-1: the frame brings no new input).
+std::string web_frame_header(const ShownFrame& f, const char* format, int width, int height, double encode_ms,
+                             double input_ms);
 
 }  // namespace occ

@@ -2,6 +2,7 @@
 
 #include <openssl/crypto.h>
 
+#include <deque>
 #include <iostream>
 #include <optional>
 #include <variant>
@@ -127,19 +128,19 @@ class Session : public WebWatcher, public std::enable_shared_from_this<Session<S
 
   void on_open() {
     sh_.watchers.push_back(this->shared_from_this());
-    hello_ = std::string("{\"role\":\"") + (role_ == Role::drive ? "drive" : "view") + "\"}";
+    texts_.push_back(std::string("{\"role\":\"") + (role_ == Role::drive ? "drive" : "view") + "\"}");
     frame_ = sh_.last;
     write_next();
     read_input();
   }
 
-  // One write at a time: the hello (text) first, then the newest frame.
+  // One write at a time: text messages (the hello, pongs) first, in order, then the newest frame.
   void write_next() {
     if (!ws_ || writing_ || closed_) return;
     std::shared_ptr<const std::string> m;
-    if (hello_) {
-      m = std::make_shared<const std::string>(std::move(*hello_));
-      hello_.reset();
+    if (!texts_.empty()) {
+      m = std::make_shared<const std::string>(std::move(texts_.front()));
+      texts_.pop_front();
       ws_->text(true);
     } else if (frame_) {
       m = std::move(frame_);
@@ -179,7 +180,14 @@ class Session : public WebWatcher, public std::enable_shared_from_this<Session<S
     if (!ws_->got_text()) return close("binary input message");
     auto parsed = parse_web_input(text);
     if (auto* why = std::get_if<std::string>(&parsed)) return close(*why);
-    if (role_ == Role::drive && sh_.on_input) sh_.on_input(std::get<WebInput>(parsed));
+    const WebInput& in = std::get<WebInput>(parsed);
+    if (in.kind == WebInput::Kind::ping) {  // any page may measure its round trip
+      if (texts_.size() >= kMaxPongs) return close("pings faster than they are answered");
+      texts_.push_back("{\"pong\":" + std::to_string(in.seq) + "}");
+      write_next();
+    } else if (role_ == Role::drive && sh_.on_input) {
+      sh_.on_input(in);
+    }
     read_input();
   }
 
@@ -196,7 +204,8 @@ class Session : public WebWatcher, public std::enable_shared_from_this<Session<S
   std::optional<http::request_parser<http::empty_body>> parser_;
   std::optional<websocket::stream<Stream>> ws_;
   Role role_ = Role::none;
-  std::optional<std::string> hello_;
+  static constexpr size_t kMaxPongs = 64;
+  std::deque<std::string> texts_;  // text messages to write before the next frame
   std::shared_ptr<const std::string> frame_;
   bool writing_ = false, closed_ = false;
 };

@@ -204,7 +204,8 @@ void web_inputs(const fs::path& dir) {
                              {5, K::button_up, WebKey::none, 3, 0, 0},
                              {6, K::wheel, WebKey::none, 0, 0, 0, -2},
                              {7, K::blur},
-                             {2147483647, K::quit}};
+                             {2147483647, K::quit},
+                             {8, K::ping}};
   for (const WebInput& in : inputs) write_text(dir / ("input_" + std::to_string(in.seq % 100) + ".txt"), format_web_input(in));
 }
 

@@ -80,11 +80,12 @@ TEST(WebFrames, TheHeaderCarriesACameraThatReplaysExactly) {
   f.input_seq = 99;
   f.stats.visible = 3;
   f.stats.leaves = 4;
-  const std::string h = web_frame_header(f, "png", 128, 96, 1.5);
+  const std::string h = web_frame_header(f, "png", 128, 96, 1.5, 7.25);
   const std::string row = camera_csv_fields(f.camera);
   EXPECT_NE(h.find("\"format\":\"png\""), std::string::npos) << h;
   EXPECT_NE(h.find("\"frame\":12,\"seq\":99,\"width\":128,\"height\":96"), std::string::npos) << h;
   EXPECT_NE(h.find("\"culled_pct\":25.00"), std::string::npos) << h;
+  EXPECT_NE(h.find("\"encode_ms\":1.500,\"input_ms\":7.25"), std::string::npos) << h;
   EXPECT_NE(h.find("\"camera\":\"" + row + "\""), std::string::npos) << h;
   // The row, as a --path file, gives back the same camera (so the reference renders that frame).
   const std::string file = temp_file("occ_web_cam_") + ".csv";

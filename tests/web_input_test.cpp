@@ -29,10 +29,11 @@ TEST(WebInput, EveryKindReadsAsItsEvent) {
   EXPECT_EQ(ok("11 wh -3").notches, -3);
   EXPECT_EQ(ok("12 blur").kind, WebInput::Kind::blur);
   EXPECT_EQ(ok("13 quit").kind, WebInput::Kind::quit);
+  EXPECT_EQ(ok("14 ping").kind, WebInput::Kind::ping);
 }
 
 TEST(WebInput, FormattedMessagesReadBack) {
-  for (const char* m : {"1 kd up", "2 bu 3 0 0", "3 mv -100000 100000", "4 wh 100", "5 blur", "6 quit"})
+  for (const char* m : {"1 kd up", "2 bu 3 0 0", "3 mv -100000 100000", "4 wh 100", "5 blur", "6 quit", "7 ping"})
     EXPECT_EQ(format_web_input(ok(m)), m);
 }
 
