@@ -13,6 +13,7 @@ PKGS=(
   libssl-dev                                               # cluster key: HMAC-SHA256 (OpenSSL libcrypto)
   libtinygltf-dev nlohmann-json3-dev libstb-dev            # glTF 2.0 loading (+ PNG via stb)
   libassimp-dev libtinyobjloader-dev                       # STL, FBX, COLLADA, ...; OBJ (PLY: our reader)
+  assimp-utils                                             # tests: `assimp export` writes their FBX files
   libmeshoptimizer-dev                                     # simplifier for LOD/HLOD
   libgtest-dev libgmock-dev                                # tests
   gnuplot-nox                                              # plots in benchmarks

@@ -27,7 +27,8 @@ add_dependencies(launcher_test switch_node render_client frame_diff)
 occ_test(hosts_test integration LOCK netns LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_hosts_test.cpp)
 add_dependencies(hosts_test switch_node render_client frame_diff)
 # model files (PLY, OBJ, STL): the shared glTF scenes written out render the glTF's frames; cluster == reference
-occ_test(formats_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_formats_test.cpp)
+occ_test(formats_cluster_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_formats_test.cpp
+  ${PROJECT_SOURCE_DIR}/render_client/tools/scene_export.cpp)
 add_dependencies(formats_cluster_test switch_node render_client frame_diff)
 # Section planes: every method against brute force with the same planes.
 occ_test(sections_test integration LIBS occ_common SOURCES ${CMAKE_CURRENT_SOURCE_DIR}/integration_sections_test.cpp)

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -57,6 +58,42 @@ inline bool every_mesh_has_normals(const occ::Scene& s) {
   for (const occ::Mesh& m : s.meshes)
     if (m.flat) return false;
   return true;
+}
+
+// The scene as the writers write it: every object's vertices and normals baked as above, each
+// object with a mesh of its own and the identity transform, materials kept; one_mesh: every
+// object's triangles in one mesh of one object, without material (a PLY or STL without colours as
+// its reader gets it). Written as glTF (save_gltf), it is what a model file of `s` renders to the
+// pixel: the frames of `s` itself differ where its transforms round otherwise (a baked vertex or
+// normal is rounded to float once, the renderer's float model-view matrix times the mesh's float
+// vertex is not) and, for one_mesh, where coincident faces of two objects are drawn in another
+// order (one mesh draws in cluster order, objects front to back).
+inline occ::Scene baked(const occ::Scene& s, bool one_mesh) {
+  occ::Scene b;
+  b.source = s.source + " (baked)";
+  if (!one_mesh) b.materials = s.materials;
+  for (const occ::Object& o : s.objects) {
+    const occ::Mesh& m = s.meshes[o.mesh];
+    if (!one_mesh || b.meshes.empty()) {
+      b.meshes.emplace_back();
+      b.meshes.back().name = one_mesh ? "baked" : m.name;
+      b.meshes.back().material = one_mesh ? occ::kNoMaterial : m.material;
+      b.meshes.back().flat = m.flat;
+      b.objects.push_back({uint32_t(b.meshes.size() - 1), glm::dmat4(1.0), one_mesh ? "baked" : o.name});
+    }
+    occ::Mesh& out = b.meshes.back();
+    out.flat = out.flat || m.flat;
+    const ToWorld world(o);
+    const uint32_t base = uint32_t(out.positions.size());
+    for (uint32_t v = 0; v < m.positions.size(); ++v) {
+      const WorldVertex w = world(m, v);
+      out.positions.push_back(w.p);
+      out.normals.push_back(w.n);
+    }
+    for (size_t t = 0; t + 2 < m.indices.size(); t += 3)
+      for (int k = 0; k < 3; ++k) out.indices.push_back(base + world.corner(&m.indices[t], k));
+  }
+  return b;
 }
 
 class File {
@@ -141,8 +178,9 @@ inline void write_ply(const occ::Scene& s, const std::string& path, bool binary,
   f.close();
 }
 
-// path (.obj) and its MTL beside it (path with .mtl).
-inline void write_obj(const occ::Scene& s, const std::string& path) {
+// path (.obj) and its MTL beside it (path with .mtl); materials false: no `usemtl` (every object
+// reads back in its per-object colour, double-sided).
+inline void write_obj(const occ::Scene& s, const std::string& path, bool materials = true) {
   const bool normals = every_mesh_has_normals(s);
   const std::string mtl = path.substr(0, path.rfind('.')) + ".mtl";
   {
@@ -161,7 +199,7 @@ inline void write_obj(const occ::Scene& s, const std::string& path) {
     const occ::Mesh& m = s.meshes[o.mesh];
     std::fprintf(f.get(), "o object%zu\n", oi);
     const occ::Material* mat = s.material_of(o.mesh);
-    if (mat && !mat->object_color) std::fprintf(f.get(), "usemtl m%u\n", m.material);
+    if (materials && mat && !mat->object_color) std::fprintf(f.get(), "usemtl m%u\n", m.material);
     const ToWorld world(o);
     for (uint32_t v = 0; v < m.positions.size(); ++v) {
       const WorldVertex w = world(m, v);
@@ -204,6 +242,18 @@ inline void write_stl(const occ::Scene& s, const std::string& path) {
     }
   }
   f.close();
+}
+
+// `in` (any file Assimp reads: DAE, glTF, OBJ, ...) written as ASCII FBX 7.5 at `out` by Assimp's
+// own exporter (`assimp export IN OUT -ffbxa`, Debian assimp-utils: scripts/setup.sh), so that FBX
+// is tested without shipping one. ASCII, as Assimp 5.2 refuses its own binary FBX ("FBX-Tokenize
+// (offset 0x1ef) block offset is out of range"). Whether it wrote `out` (false without assimp).
+inline bool assimp_export_fbx(const std::string& in, const std::string& out) {
+  const std::string cmd = "assimp export '" + in + "' '" + out + "' -ffbxa >'" + out + ".log' 2>&1";
+  if (std::system(cmd.c_str()) != 0) return false;
+  std::FILE* f = std::fopen(out.c_str(), "rb");
+  if (f) std::fclose(f);
+  return f != nullptr;
 }
 
 }  // namespace occtest

@@ -1,6 +1,6 @@
 // Model files other than glTF (model_reader.hpp): PLY through our reader (ASCII, binary of both
-// byte orders, polygons, colours, other elements), OBJ, STL, OFF and COLLADA through Assimp (node
-// tree, transforms, instancing, materials), --up z; bad and truncated files (one InputError naming
+// byte orders, polygons, colours, other elements), OBJ, STL, OFF, COLLADA and FBX through Assimp
+// (node tree, transforms, instancing, materials), --up z; bad and truncated files (one InputError naming
 // the file and what is wrong, never half a scene); the scene cache of a model file.
 #include <gtest/gtest.h>
 
@@ -266,35 +266,70 @@ TEST_F(ModelFiles, StlAndOffWithoutMaterialsGetTheObjectColour) {
   EXPECT_EQ(e.rfind(cut + ": ", 0), 0u) << e;
 }
 
-// A COLLADA file's node tree: a parent translated by x = 10, a child under it rotated 90 degrees
-// about z and instancing the same triangle as the parent: two objects, one mesh.
-TEST_F(ModelFiles, ColladaNodeTreeTransformsAndInstancing) {
-  const std::string dae = write("tree.dae", R"(<?xml version="1.0" encoding="utf-8"?>
+// A COLLADA node tree: a parent translated by x = 10, a child under it rotated 90 degrees about z
+// and instancing the same triangle as the parent (material "red", diffuse (0.8, 0.1, 0.1)).
+const char* const kTreeDae = R"(<?xml version="1.0" encoding="utf-8"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
   <asset><unit name="meter" meter="1"/><up_axis>Y_UP</up_axis></asset>
+  <library_effects><effect id="red-fx"><profile_COMMON><technique sid="t"><lambert>
+    <diffuse><color>0.8 0.1 0.1 1</color></diffuse></lambert></technique></profile_COMMON></effect></library_effects>
+  <library_materials><material id="red" name="red"><instance_effect url="#red-fx"/></material></library_materials>
   <library_geometries><geometry id="tri" name="tri"><mesh>
     <source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
       <technique_common><accessor source="#pa" count="3" stride="3"><param name="X" type="float"/>
       <param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
     <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
-    <triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+    <triangles count="1" material="m"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
   </mesh></geometry></library_geometries>
   <library_visual_scenes><visual_scene id="s">
-    <node id="parent" name="parent"><translate>10 0 0</translate><instance_geometry url="#tri"/>
-      <node id="child" name="child"><rotate>0 0 1 90</rotate><instance_geometry url="#tri"/></node>
+    <node id="parent" name="parent"><translate>10 0 0</translate><instance_geometry url="#tri"><bind_material>
+      <technique_common><instance_material symbol="m" target="#red"/></technique_common></bind_material></instance_geometry>
+      <node id="child" name="child"><rotate>0 0 1 90</rotate><instance_geometry url="#tri"><bind_material>
+        <technique_common><instance_material symbol="m" target="#red"/></technique_common></bind_material></instance_geometry></node>
     </node>
   </visual_scene></library_visual_scenes>
   <scene><instance_visual_scene url="#s"/></scene>
-</COLLADA>)");
-  const Scene r = load_model(dae);
-  ASSERT_EQ(r.objects.size(), 2u);
-  EXPECT_EQ(r.meshes.size(), 1u);
-  EXPECT_EQ(r.objects[0].mesh, r.objects[1].mesh);
+</COLLADA>)";
+
+// The tree above as read from `path`: two objects of one mesh, placed by the node tree, red.
+void expect_tree(const Scene& r, const std::string& path) {
+  ASSERT_EQ(r.objects.size(), 2u) << path;
+  EXPECT_EQ(r.meshes.size(), 1u) << path;
+  EXPECT_EQ(r.objects[0].mesh, r.objects[1].mesh) << path;
+  EXPECT_EQ(r.objects[0].name, "parent") << path;
+  EXPECT_EQ(r.objects[1].name, "child") << path;
   std::vector<glm::vec3> p = world_positions(r);
-  ASSERT_EQ(p.size(), 6u);
+  ASSERT_EQ(p.size(), 6u) << path;
   auto near = [](glm::vec3 a, glm::vec3 b) { return glm::length(a - b) < 1e-5f; };
-  EXPECT_TRUE(near(p[1], {11, 0, 0})) << p[1].x << " " << p[1].y;  // parent: (1,0,0) + 10
-  EXPECT_TRUE(near(p[4], {10, 1, 0})) << p[4].x << " " << p[4].y;  // child: (1,0,0) turned to (0,1,0), + 10
+  EXPECT_TRUE(near(p[1], {11, 0, 0})) << path << ": " << p[1].x << " " << p[1].y;  // parent: (1,0,0) + 10
+  EXPECT_TRUE(near(p[4], {10, 1, 0})) << path << ": " << p[4].x << " " << p[4].y;  // child: (1,0,0) turned to (0,1,0), + 10
+  const Material* m = r.material_of(r.objects[0].mesh);
+  ASSERT_NE(m, nullptr) << path;
+  EXPECT_EQ(m->name, "red") << path;
+  EXPECT_EQ(m->base_color, glm::vec4(0.8f, 0.1f, 0.1f, 1.0f)) << path;
+}
+
+TEST_F(ModelFiles, ColladaNodeTreeTransformsAndInstancing) {
+  const std::string dae = write("tree.dae", kTreeDae);
+  expect_tree(load_model(dae), dae);
+}
+
+// The same tree written as FBX by Assimp's exporter (model_files.hpp): the same objects, places
+// and material; the file cut at the end of any line, or within one, is one error naming the file.
+TEST_F(ModelFiles, FbxNodeTreeMaterialsAndEveryCutIsAnError) {
+  const std::string dae = write("tree.dae", kTreeDae), fbx = (dir_ / "tree.fbx").string();
+  ASSERT_TRUE(occtest::assimp_export_fbx(dae, fbx)) << "assimp export failed (Debian assimp-utils, scripts/setup.sh): "
+                                                    << read(fbx + ".log");
+  expect_tree(load_model(fbx), fbx);
+  const std::string whole = read(fbx);
+  std::vector<size_t> cuts = {whole.size() / 3, whole.size() / 2, whole.size() - 2};
+  for (size_t at = whole.find('\n'); at + 1 < whole.size(); at = whole.find('\n', at + 1)) cuts.push_back(at + 1);
+  for (const size_t n : cuts) {
+    const std::string cut = write("cut.fbx", whole.substr(0, n));
+    const std::string e = error_of(cut);
+    EXPECT_EQ(e.rfind(cut + ": ", 0), 0u) << "cut at byte " << n << " of " << whole.size() << ": " << e;
+  }
+  EXPECT_GT(cuts.size(), 100u);
 }
 
 TEST_F(ModelFiles, BadObjFbxDaeStlFilesNameTheFile) {
